@@ -1,0 +1,203 @@
+"""Build the model of one experiment: one axis moves, the others are locked (paper eqs. 5-6).
+
+Locking edits the MJCF with MjSpec:
+- `rigid` (default): each other axis is welded at its angle (its link body is rotated about
+  the joint axis and both joints are removed), exactly the reduced model of eqs. (5)-(6);
+- `brake`: only the other motors are held (what a real robot's brakes do); their links keep
+  their hinge and the joint spring, referred to the braked motor angle, so they stay elastic.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from bench.effects import HiddenEffect, apply_to_spec
+from models import Axis, ModelStructureError, find_axes, load_model, model_path, torque_limit
+from models.truth import AxisTruth, axis_truth
+
+LOCKS = ("rigid", "brake")
+
+
+@dataclass(frozen=True)
+class ExperimentModel:
+    """The compiled single-axis model with what the experiment needs to know about it."""
+
+    model: mujoco.MjModel
+    axis: Axis              # indices in `model`
+    truth: AxisTruth        # ground truth in the locked configuration
+    center: float           # link angle the experiment is centred on [rad]
+    qpos_init: np.ndarray   # static equilibrium at `center`
+    tau0: float             # motor torque holding that equilibrium [N m]
+    tau_max: float
+    source: Path
+    lock: str
+    config: dict[str, float]
+
+
+def _rotate_body(body: mujoco.MjsBody, pos: np.ndarray, quat: np.ndarray,
+                 jpos: np.ndarray, jaxis: np.ndarray, angle: float) -> None:
+    """Bake a hinge rotation `angle` about (jpos, jaxis) into the body's frame."""
+    qrot = np.zeros(4)
+    mujoco.mju_axisAngle2Quat(qrot, jaxis, angle)
+    moved = np.zeros(3)
+    mujoco.mju_rotVecQuat(moved, jpos, qrot)
+    delta = np.zeros(3)
+    mujoco.mju_rotVecQuat(delta, jpos - moved, quat)
+    newquat = np.zeros(4)
+    mujoco.mju_mulQuat(newquat, quat, qrot)
+    body.alt.type = mujoco.mjtOrientation.mjORIENTATION_QUAT
+    body.pos = pos + delta
+    body.quat = newquat
+
+
+def _slide_body(body: mujoco.MjsBody, pos: np.ndarray, quat: np.ndarray, jaxis: np.ndarray,
+                dist: float) -> None:
+    delta = np.zeros(3)
+    mujoco.mju_rotVecQuat(delta, jaxis * dist, quat)
+    body.alt.type = mujoco.mjtOrientation.mjORIENTATION_QUAT
+    body.pos = pos + delta
+    body.quat = quat
+
+
+def full_qpos(model: mujoco.MjModel, axes: list[Axis], config: dict[str, float]) -> np.ndarray:
+    """qpos of the full model with each link at config[axis] (default 0) and each motor at
+    its link's angle (the spring deflection is settled later, on the reduced model)."""
+    known = {a.name for a in axes}
+    unknown = set(config) - known
+    if unknown:
+        raise ModelStructureError(f"no axis named {', '.join(sorted(unknown))} "
+                                  f"(axes: {', '.join(a.name for a in axes)})")
+    qpos = model.qpos0.copy()
+    for a in axes:
+        angle = config.get(a.name, 0.0)
+        qpos[a.link_qpos] = angle
+        qpos[a.motor_qpos] = angle
+    return qpos
+
+
+def _static_equilibrium(model: mujoco.MjModel, axis: Axis, qpos: np.ndarray,
+                        tau_extra: float = 0.0) -> tuple[np.ndarray, float]:
+    """Settle the moving axis' motor so that the spring holds the link at rest (eq. 5 with
+    qd = qdd = 0) and return (qpos, tau0) with tau0 the holding motor torque."""
+    data = mujoco.MjData(model)
+    qpos = qpos.copy()
+
+    def residual(qm: float) -> float:
+        data.qpos[:] = qpos
+        data.qpos[axis.motor_qpos] = qm
+        data.qvel[:] = 0.0
+        mujoco.mj_forward(model, data)
+        return float(data.qfrc_passive[axis.link_dof] - data.qfrc_bias[axis.link_dof])
+
+    # Secant iterations from the linear-spring guess qm = q + Q / K; the residual is piecewise
+    # linear in qm (dead bands included), so this converges in a few steps.
+    K = float(model.tendon_stiffness[axis.tendon]) or 1.0
+    a = float(qpos[axis.link_qpos])
+    ra = residual(a)
+    b = a - ra / K + 1e-9
+    for _ in range(60):
+        rb = residual(b)
+        if abs(rb) < 1e-9 * max(1.0, abs(ra)) or rb == ra:
+            break
+        a, b, ra = b, b - rb * (b - a) / (rb - ra), rb
+    qpos[axis.motor_qpos] = b
+    data.qpos[:] = qpos
+    data.qvel[:] = 0.0
+    mujoco.mj_forward(model, data)
+    tau0 = -float(data.qfrc_passive[axis.motor_dof] - data.qfrc_bias[axis.motor_dof]) + tau_extra
+    return qpos, tau0
+
+
+def build_experiment_model(model: str | Path = "prototype", joint: str | None = None,
+                           config: dict[str, float] | None = None, center: float | None = None,
+                           lock: str = "rigid", effect: HiddenEffect | None = None,
+                           substeps: int = 1, sample_rate_hz: float = 350.87,
+                           tau_max: float | None = None) -> ExperimentModel:
+    """Compile the experiment model of axis `joint` (default: the first axis).
+
+    `config` gives the locked angles of the other axes (default 0); `center` the link angle
+    the chirp is centred on (default: the rest position q0 of eq. 17, shifted by the hidden
+    `gravity` effect's offset). Raises ModelStructureError for a model that does not follow
+    the axis convention and ValueError for bad arguments.
+    """
+    if lock not in LOCKS:
+        raise ValueError(f"lock must be one of {', '.join(LOCKS)}, got {lock!r}")
+    if substeps < 1:
+        raise ValueError(f"substeps must be >= 1, got {substeps}")
+    full, axes, path = load_model(model)
+    names = [a.name for a in axes]
+    joint = joint or names[0]
+    if joint not in names:
+        raise ModelStructureError(f"{path}: no axis '{joint}' (axes: {', '.join(names)})")
+    config = dict(config or {})
+    moving = axes[names.index(joint)]
+    qpos_full = full_qpos(full, axes, config)
+    truth = axis_truth(full, moving, qpos_full)
+    if center is None:
+        center = truth.q0 + (effect.strength if effect and effect.name == "gravity" else 0.0)
+    config[joint] = center
+    qpos_full = full_qpos(full, axes, config)
+
+    # Static torque each braked link needs (spring referred to the braked motor angle).
+    data = mujoco.MjData(full)
+    data.qpos[:] = qpos_full
+    mujoco.mj_forward(full, data)
+    hold = {a.name: float(data.qfrc_bias[a.link_dof]) for a in axes}
+
+    spec = mujoco.MjSpec.from_file(str(path))
+    for a in axes:
+        if a.name == joint:
+            continue
+        spec.delete(spec.actuator(f"{a.name}_motor"))
+        spec.delete(spec.tendon(f"{a.name}_spring"))
+        hardening = spec.tendon(f"{a.name}_hardening")
+        if hardening is not None:
+            spec.delete(hardening)
+        spec.delete(spec.body(full.body(full.jnt_bodyid[a.motor_joint]).name))
+        link = spec.joint(a.name)
+        angle = config.get(a.name, 0.0)
+        if lock == "rigid":
+            bid = full.jnt_bodyid[a.link_joint]
+            body = spec.body(full.body(bid).name)
+            if int(full.jnt_type[a.link_joint]) == int(mujoco.mjtJoint.mjJNT_HINGE):
+                _rotate_body(body, full.body_pos[bid].copy(), full.body_quat[bid].copy(),
+                             full.jnt_pos[a.link_joint].copy(), full.jnt_axis[a.link_joint].copy(),
+                             angle)
+            else:
+                _slide_body(body, full.body_pos[bid].copy(), full.body_quat[bid].copy(),
+                            full.jnt_axis[a.link_joint].copy(), angle)
+            spec.delete(link)
+        else:
+            K = float(full.tendon_stiffness[a.tendon])
+            link.stiffness[0] = K
+            link.springref = angle + hold[a.name] / K
+    if effect is not None:
+        apply_to_spec(spec, joint, effect, float(full.tendon_stiffness[moving.tendon]))
+    T = 1.0 / sample_rate_hz
+    spec.option.timestep = T / substeps
+    try:
+        reduced = spec.compile()
+    except ValueError as err:
+        raise ModelStructureError(f"{path}: the experiment model does not compile: {err}") from None
+    axis = [a for a in find_axes(reduced, str(path)) if a.name == joint][0]
+    qpos = reduced.qpos0.copy()
+    for j in range(reduced.njnt):
+        name = reduced.joint(j).name
+        base = name[: -len("_motor")] if name.endswith("_motor") else name
+        if base in config:
+            qpos[reduced.jnt_qposadr[j]] = config[base]
+    offset = effect.strength if effect is not None and effect.name == "offset" else 0.0
+    qpos, tau0 = _static_equilibrium(reduced, axis, qpos, offset)
+    if tau_max is None:
+        tau_max = torque_limit(full, moving)
+    if tau_max is None:
+        # No ctrlrange: allow ten times the static and rigid-body chirp torque scale.
+        tau_max = 10.0 * max(abs(tau0), (truth.Jm + truth.JL) * (2 * math.pi * truth.f1_hz) ** 2 * 0.05, 1.0)
+    return ExperimentModel(model=reduced, axis=axis, truth=truth, center=float(center),
+                           qpos_init=qpos, tau0=tau0, tau_max=float(tau_max), source=path,
+                           lock=lock, config=config)

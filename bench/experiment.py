@@ -1,0 +1,169 @@
+"""One virtual identification experiment: a joint tracks a chirp, the others are locked.
+
+Per control tick k (period T = 1 / 350.87 s by default):
+  1. the encoders sample the motor and link angles (quantised);
+  2. the CONTRACT section 2 controller computes tau_m[k] from the motor encoder;
+  3. the log records (t_k, q_m, q, tau_m, q_ref);
+  4. the rotor receives tau_m[k] + current-loop noise (+ bench-loop effects), held over the
+     tick (zero-order hold) while MuJoCo integrates `substeps` steps.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import mujoco
+import numpy as np
+
+from bench.axes import ExperimentModel, build_experiment_model
+from bench.controller import Gains, PIController, gains_rule
+from bench.effects import HiddenEffect, LoopEffects
+from bench.reference import Chirp
+from bench.sensors import Sensors
+from identification.log import Log
+
+SAMPLE_RATE_HZ = 350.87  # the paper's acquisition rate
+DEFAULT_SUBSTEPS = 1      # RK4; see README "Substeps" for the convergence check
+
+
+class SimulationError(RuntimeError):
+    """The simulation diverged or MuJoCo raised a warning: names the joint, time and reason."""
+
+
+@dataclass(frozen=True)
+class ExperimentResult:
+    """The log and the true signals behind it (for tests and plots)."""
+
+    log: Log
+    q_m_true: np.ndarray
+    q_true: np.ndarray
+    tau_applied: np.ndarray
+    saturated: int
+    experiment: ExperimentModel = field(repr=False)
+
+
+def _fmt(x: float) -> str:
+    return f"{x:.10g}"
+
+
+def run_experiment(model: str | Path = "prototype", joint: str | None = None, *,
+                   duration: float = 60.0, seed: int = 0, chirp: Chirp | None = None,
+                   amplitude: float | None = None, config: dict[str, float] | None = None,
+                   lock: str = "rigid", effect: HiddenEffect | None = None,
+                   sensors: Sensors | None = None, gains: Gains | None = None,
+                   substeps: int = DEFAULT_SUBSTEPS, sample_rate_hz: float = SAMPLE_RATE_HZ,
+                   tau_max: float | None = None,
+                   progress: Callable[[float], None] | None = None) -> ExperimentResult:
+    """Run one closed-loop chirp experiment and return its log (CONTRACT section 1).
+
+    Same arguments and seed, same log, bit for bit. Raises SimulationError when the state
+    diverges, ModelStructureError for a model off the axis convention, ValueError for bad
+    arguments.
+    """
+    exp = build_experiment_model(model, joint, config=config, lock=lock, effect=effect,
+                                 substeps=substeps, sample_rate_hz=sample_rate_hz,
+                                 tau_max=tau_max)
+    m, ax, truth = exp.model, exp.axis, exp.truth
+    T = 1.0 / sample_rate_hz
+    if chirp is None:
+        chirp = default_chirp(exp, duration, amplitude)
+    sensors = sensors or Sensors.default(truth.gear_ratio)
+    gains = gains or gains_rule(truth.Jm, truth.JL, truth.K, exp.tau_max, T)
+    n = int(round(chirp.duration * sample_rate_hz)) + 1
+    t = np.arange(n) * T
+    q_ref = chirp(t)
+    rng = np.random.default_rng(seed)
+    noise = sensors.torque_noise(rng, n)
+
+    d = mujoco.MjData(m)
+    d.qpos[:] = exp.qpos_init
+    mujoco.mj_forward(m, d)
+    loop = LoopEffects(effect, truth.FVm, truth.FSm, truth.gear_ratio)
+    ctrl = PIController(gains, T, exp.tau0)
+    q_m = np.empty(n)
+    q = np.empty(n)
+    tau = np.empty(n)
+    q_m_true = np.empty(n)
+    q_true = np.empty(n)
+    tau_app = np.empty(n)
+    qpos, qvel, ctrl_arr = d.qpos, d.qvel, d.ctrl
+    im, il, dm, act = ax.motor_qpos, ax.link_qpos, ax.motor_dof, ax.actuator
+    quant_m, quant_l = sensors.motor_quantizer(), sensors.link_quantizer()
+    step = mujoco.mj_step
+    q_ref_list = q_ref.tolist()
+    noise_list = noise.tolist()
+    every = max(1, n // 100)
+    for k in range(n):
+        qm_k = qpos[im]
+        ql_k = qpos[il]
+        if not (abs(qm_k) < 1e6 and abs(ql_k) < 1e6):
+            raise SimulationError(
+                f"joint {ax.name}: the simulation diverged at t = {k * T:.4f} s "
+                f"(q_m = {qm_k:.3g} rad): unstable gains or too large a timestep")
+        meas_m = quant_m(qm_k)
+        meas_l = quant_l(ql_k)
+        u = ctrl.step(meas_m, q_ref_list[k])
+        applied = u + noise_list[k]
+        if loop.active:
+            applied += loop.torque(qm_k, qvel[dm])
+        q_m[k], q[k], tau[k] = meas_m, meas_l, u
+        q_m_true[k], q_true[k], tau_app[k] = qm_k, ql_k, applied
+        ctrl_arr[act] = applied
+        step(m, d, substeps)
+        if progress is not None and k % every == 0:
+            progress(k / n)
+    for w in range(len(d.warning)):
+        if d.warning[w].number:
+            raise SimulationError(
+                f"joint {ax.name}: MuJoCo warning {mujoco.mjtWarning(w).name} "
+                f"({d.warning[w].number} times, last at t = {d.time:.4f} s)")
+    meta = {"sample_rate_hz": _fmt(sample_rate_hz), "gravity": _fmt(truth.g)}
+    meta.update(gains.to_meta())
+    meta.update({
+        "joint": ax.name, "source": f"jointbench virtual experiment, model {exp.source.name}",
+        "seed": str(seed), "lock": lock, "substeps": str(substeps),
+        "integrator": mujoco.mjtIntegrator(m.opt.integrator).name,
+        "chirp": f"{chirp.method} {chirp.f0:g}-{chirp.f1:g} Hz, amplitude {chirp.amplitude:g} rad, "
+                 f"{chirp.duration:g} s, taper {chirp.taper:g} s",
+        "locked_config": " ".join(f"{k}={v:.6g}" for k, v in exp.config.items()),
+        "saturated_samples": str(ctrl.saturated),
+    })
+    if truth.gear_ratio is not None:
+        meta["gear_ratio"] = _fmt(truth.gear_ratio)
+    meta.update(sensors.to_meta())
+    for key, value in truth.as_dict().items():
+        if key not in ("g", "gear_ratio"):
+            meta[f"truth_{key}"] = _fmt(value)
+    meta["truth_center"] = _fmt(exp.center)
+    meta["truth_effect"] = "none"
+    if effect is not None:
+        meta.update(effect.to_meta())
+    log = Log(t=t, q_m=q_m, tau_m=tau, q=q, q_ref=q_ref, meta=meta)
+    return ExperimentResult(log=log, q_m_true=q_m_true, q_true=q_true, tau_applied=tau_app,
+                            saturated=ctrl.saturated, experiment=exp)
+
+
+def default_chirp(exp: ExperimentModel, duration: float = 60.0,
+                  amplitude: float | None = None) -> Chirp:
+    """The default reference: a logarithmic 0.05-30 Hz chirp around the motor's rest angle,
+    amplitude 0.05 rad, with the acceleration capped so that the rigid-body torque
+    (Jm + JL) A (2 pi f)^2 stays under a fifth of the torque limit (the rest is left for
+    friction, gravity and the resonance)."""
+    t = exp.truth
+    return Chirp(duration=duration, amplitude=amplitude or 0.05,
+                 center=float(exp.qpos_init[exp.axis.motor_qpos]),
+                 max_acceleration=0.2 * exp.tau_max / (t.Jm + t.JL))
+
+
+def stderr_progress(label: str) -> Callable[[float], None]:
+    """A one-line progress indicator on stderr (for long runs from the command line)."""
+    def show(frac: float) -> None:
+        sys.stderr.write(f"\r{label}: {100 * frac:5.1f} %")
+        if frac >= 0.99:
+            sys.stderr.write("\n")
+        sys.stderr.flush()
+    return show

@@ -1,0 +1,136 @@
+"""Least squares with the paper's statistics (section 3.1, section 4).
+
+    X^ = argmin ||y - W X||,  sigma^2 = ||rho||^2 / (r - Np),  C = sigma^2 (W^T W)^-1,
+    2 sigma_i and %sigma_ri = 100 sigma_i / |X^_i|.
+
+Before solving, the columns are scaled to unit norm and the singular values checked: the
+parameters the data cannot identify (structural or data rank deficiency) are named and left
+out, never returned as numbers.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+COND_LIMIT = 1e8  # scaled condition number beyond which a direction counts as unidentified
+
+
+class NotIdentifiable(ValueError):
+    """No parameter can be estimated from the data (no excitation at all)."""
+
+
+@dataclass(frozen=True)
+class LSResult:
+    """Estimate, covariance and the paper's statistics; `unidentifiable` names the parameters
+    dropped by the rank check (their entries in X, sigma are NaN)."""
+
+    names: tuple[str, ...]
+    X: np.ndarray
+    sigma: np.ndarray
+    cov: np.ndarray
+    sigma2: float
+    residual: np.ndarray
+    r: int
+    cond: float
+    unidentifiable: tuple[str, ...]
+    reasons: dict[str, str]
+
+    @property
+    def rel_sigma_pct(self) -> np.ndarray:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return 100.0 * self.sigma / np.abs(self.X)
+
+    def value(self, name: str) -> float:
+        return float(self.X[self.names.index(name)])
+
+    def std(self, name: str) -> float:
+        return float(self.sigma[self.names.index(name)])
+
+    @property
+    def rms(self) -> float:
+        return float(np.sqrt(np.mean(self.residual ** 2)))
+
+
+def _unidentified(Ws: np.ndarray, names: tuple[str, ...]) -> dict[str, str]:
+    """Parameters spanned by the near-null directions of the column-scaled W."""
+    _, sv, Vt = np.linalg.svd(Ws, full_matrices=False)
+    if sv[0] == 0:
+        return {n: "its column is zero: the data does not excite it" for n in names}
+    reasons = {}
+    for k in np.flatnonzero(sv < sv[0] / COND_LIMIT):
+        v = np.abs(Vt[k])
+        involved = [names[i] for i in np.flatnonzero(v > 0.3 * v.max())]
+        for i in np.flatnonzero(v > 0.3 * v.max()):
+            if names[i] in reasons:
+                continue
+            if len(involved) == 1:
+                reasons[names[i]] = ("its column is (nearly) zero: the data does not excite it "
+                                     f"(singular value ratio {sv[k] / sv[0]:.1e})")
+            else:
+                others = ", ".join(n for n in involved if n != names[i])
+                reasons[names[i]] = (f"its column is (nearly) a combination of {others}: "
+                                     f"only their combination is identifiable "
+                                     f"(singular value ratio {sv[k] / sv[0]:.1e})")
+    return reasons
+
+
+def least_squares(W: np.ndarray, y: np.ndarray, names: tuple[str, ...],
+                  weights: np.ndarray | None = None) -> LSResult:
+    """Solve eq. (21) for X with the paper's statistics. `weights` scales each row (weighted
+    least squares, for example 1/sigma per equation block). Raises NotIdentifiable when no
+    parameter is excited, ValueError on shape mismatch."""
+    W = np.asarray(W, dtype=float)
+    y = np.asarray(y, dtype=float)
+    if W.ndim != 2 or W.shape[0] != len(y) or W.shape[1] != len(names):
+        raise ValueError(f"W is {W.shape}, y has {len(y)} rows and there are {len(names)} names")
+    Ww, yw = (W, y) if weights is None else (W * weights[:, None], y * weights)
+    norms = np.linalg.norm(Ww, axis=0)
+    live = norms > 0
+    reasons = {names[i]: "its column is zero: the data does not excite it"
+               for i in np.flatnonzero(~live)}
+    if live.any():
+        Ws = Ww[:, live] / norms[live]
+        live_names = tuple(n for n, ok in zip(names, live) if ok)
+        reasons.update(_unidentified(Ws, live_names))
+    keep = np.array([n not in reasons for n in names])
+    if not keep.any():
+        raise NotIdentifiable("no parameter is identifiable from this data: "
+                              + "; ".join(f"{n}: {why}" for n, why in reasons.items()))
+    r, Np = W.shape[0], int(keep.sum())
+    if r <= Np:
+        raise NotIdentifiable(f"{r} equations for {Np} parameters: too few samples")
+    Wk = Ww[:, keep]
+    scale = np.linalg.norm(Wk, axis=0)
+    Xs, *_ = np.linalg.lstsq(Wk / scale, yw, rcond=None)
+    Xk = Xs / scale
+    rho = yw - Wk @ Xk
+    sigma2 = float(rho @ rho) / (r - Np)
+    Ws = Wk / scale
+    cov_s = sigma2 * np.linalg.inv(Ws.T @ Ws)
+    cov_k = cov_s / np.outer(scale, scale)
+    X = np.full(len(names), np.nan)
+    X[keep] = Xk
+    cov = np.full((len(names), len(names)), np.nan)
+    cov[np.ix_(keep, keep)] = cov_k
+    sv = np.linalg.svd(Ws, compute_uv=False)
+    residual = y - np.nan_to_num(W[:, keep] @ Xk) if weights is not None else rho
+    return LSResult(names=tuple(names), X=X, sigma=np.sqrt(np.diag(cov)), cov=cov, sigma2=sigma2,
+                    residual=residual, r=r, cond=float(sv[0] / sv[-1]),
+                    unidentifiable=tuple(n for n in names if n in reasons), reasons=reasons)
+
+
+def block_weighted(W: np.ndarray, y: np.ndarray, names: tuple[str, ...],
+                   block: np.ndarray) -> LSResult:
+    """Weighted least squares over equation blocks (motor and link equations of eq. 13): an
+    ordinary solution gives each block's residual sigma, then every row is weighted by
+    1 / sigma of its block, so that torque (N m) and link (N m, from encoder noise) residuals
+    count by their own noise level."""
+    first = least_squares(W, y, names)
+    weights = np.ones(len(y))
+    for b in np.unique(block):
+        rows = block == b
+        s = np.sqrt(np.mean(first.residual[rows] ** 2))
+        weights[rows] = 1.0 / s if s > 0 else 1.0
+    return least_squares(W, y, names, weights=weights)

@@ -1,0 +1,118 @@
+"""Data processing of section 3.2: zero-phase Butterworth, central differences (eq. 22),
+zero-order-hold alignment of the torque, and the parallel decimation of y and W."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import signal
+
+PAPER_WN = 176.0       # rad/s, the Butterworth frequency used in section 4
+PAPER_ND = 26          # decimation factor used in section 4
+PAPER_RATE = 350.87    # Hz, the prototype's acquisition rate
+
+
+@dataclass(frozen=True)
+class FilterSettings:
+    """The bandpass chain: Butterworth order `m` and frequency `wn` [rad/s], decimation `Nd`,
+    at sample period `ts` [s]; `edge` decimated samples dropped at each end."""
+
+    wn: float
+    m: int
+    Nd: int
+    ts: float
+    edge: int = 3
+
+    def __post_init__(self):
+        nyquist = np.pi / self.ts
+        if not 0 < self.wn < nyquist:
+            raise ValueError(f"Butterworth frequency wn = {self.wn:g} rad/s must lie in "
+                             f"(0, {nyquist:.4g}) rad/s, the Nyquist frequency at this rate")
+        if self.m < 1:
+            raise ValueError(f"Butterworth order m must be >= 1, got {self.m}")
+        if self.Nd < 1:
+            raise ValueError(f"decimation factor Nd must be >= 1, got {self.Nd}")
+
+    @property
+    def decimated_cutoff_hz(self) -> float:
+        """Cutoff of scipy.signal.decimate's anti-alias filter: 0.8 of the new Nyquist."""
+        return 0.8 / (2 * self.ts * self.Nd)
+
+    def min_samples(self, nd: int) -> int:
+        """Fewest raw samples the chain needs: the edges, the derivatives and 10 rows left."""
+        return self.Nd * (2 * self.edge + 10) + 2 * nd + 1
+
+
+def lowpass(x: np.ndarray, wn: float, ts: float, m: int = 4) -> np.ndarray:
+    """Zero-phase Butterworth of order m at wn [rad/s] (forward and reverse, eq. 25)."""
+    sos = signal.butter(m, wn * ts / np.pi, output="sos")
+    return signal.sosfiltfilt(sos, x)
+
+
+def central_difference(x: np.ndarray, ts: float) -> np.ndarray:
+    """Eq. (22): (x[k+1] - x[k-1]) / (2 ts); the two end samples are NaN (undefined)."""
+    out = np.full_like(x, np.nan, dtype=float)
+    out[1:-1] = (x[2:] - x[:-2]) / (2.0 * ts)
+    return out
+
+
+def derivatives(x: np.ndarray, ts: float, nd: int) -> list[np.ndarray]:
+    """[x, x', ..., x^(nd)] by repeated central differences (eq. 22); NaN where undefined."""
+    out = [np.asarray(x, dtype=float)]
+    for _ in range(nd):
+        out.append(central_difference(out[-1], ts))
+    return out
+
+
+def zoh_align(tau: np.ndarray) -> np.ndarray:
+    """The torque at the sampling instants of a zero-order-hold command.
+
+    tau[k] is held over [t_k, t_k+1) while positions are samples at t_k; the band-limited
+    torque acting at t_k is the mean of the values held on either side, (tau[k-1] + tau[k]) / 2.
+    Pairing raw tau[k] with positions at t_k shifts the torque by half a sample.
+    """
+    tau = np.asarray(tau, dtype=float)
+    out = tau.copy()
+    out[1:] = 0.5 * (tau[1:] + tau[:-1])
+    return out
+
+
+def decimate_parallel(y: np.ndarray, W: np.ndarray, settings: FilterSettings
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Lowpass and resample y and every column of W by Nd (scipy.signal.decimate, zero phase),
+    then drop the samples spoiled by the filters at both ends and any row with NaN.
+
+    Returns (y_d, W_d, index) where `index` holds the raw sample index of each kept row.
+    """
+    n = len(y)
+    valid = np.all(np.isfinite(W), axis=1) & np.isfinite(y)
+    first, last = np.argmax(valid), n - np.argmax(valid[::-1])
+    sl = slice(first, last)
+    if settings.Nd > 1:
+        yd = signal.decimate(y[sl], settings.Nd, zero_phase=True)
+        Wd = signal.decimate(W[sl], settings.Nd, axis=0, zero_phase=True)
+    else:
+        yd, Wd = y[sl].copy(), W[sl].copy()
+    index = first + np.arange(len(yd)) * settings.Nd
+    e = settings.edge
+    keep = slice(e, len(yd) - e)
+    yd, Wd, index = yd[keep], Wd[keep], index[keep]
+    ok = np.all(np.isfinite(Wd), axis=1) & np.isfinite(yd)
+    return yd[ok], Wd[ok], index[ok]
+
+
+def default_settings(rate_hz: float, f1_hz: float | None = None, m: int = 4) -> FilterSettings:
+    """The paper's settings (wn = 176 rad/s, Nd = 26) at its rate 350.87 Hz; at another rate,
+    wn from eq. (28) and Nd from f1: the decimated cutoff 0.8 Fs / (2 Nd) placed at
+    5.4 / 3.9 f1, the paper's ratio."""
+    ts = 1.0 / rate_hz
+    if abs(rate_hz / PAPER_RATE - 1.0) < 0.01:
+        return FilterSettings(wn=PAPER_WN, m=m, Nd=PAPER_ND, ts=ts)
+    if f1_hz is None:
+        raise ValueError("at a sample rate other than 350.87 Hz the filter is derived from the "
+                         "first mode: give f1 (Hz) or explicit wn and Nd")
+    from identification.design import design_bandpass
+    wn = min(design_bandpass(f1_hz, nd=2, m=m).wn_rad_s, 0.8 * np.pi * rate_hz)
+    Nd = max(1, int(round(0.8 * rate_hz / (2 * f1_hz * 5.4 / 3.9))))
+    return FilterSettings(wn=wn, m=m, Nd=Nd, ts=ts)

@@ -1,0 +1,106 @@
+"""Identification models: the sampled, filtered and decimated y = W X of eq. (21).
+
+- `joint_motor`: eq. (13), both encoders, X = (Jm FVm FSm K JL MX MY FV FS).
+- `motor_only`: eqs. (18)-(20), motor encoder only, X = (X1 ... X7). `corrected=True` adds
+  the columns the printed eq. (18) drops: eq. (14) carries FSm sign(qm') into q, so q' and q''
+  carry the band-limited derivatives s' and s'' of s = sign(qm'); substituting into eq. (5)
+  gives X8 s'' + X9 s' with X8 = JL FSm / K = X1 X7 and X9 = FV FSm / K = X2 X7. It also
+  keeps gravity, which the paper neglects: the columns g cos qm, g sin qm carry X10 = MX / c
+  and X11 = MY / c, where c = 1 + G / K and G is the gravity stiffness (identification/physical.py
+  derives it); neglecting it biases every X by G / K (2.6 % on the prototype).
+- `rigid`: eq. (6) with q = qm plus an offset, X = (J FV FS offset) (CONTRACT section 3).
+
+Every signal goes through the same zero-phase Butterworth before differentiation, so the
+linear relation survives the filtering (section 3.2).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from identification.filtering import (FilterSettings, decimate_parallel, derivatives, lowpass,
+                                      zoh_align)
+from identification.log import Log, LogError
+
+JOINT_MOTOR = ("Jm", "FVm", "FSm", "K", "JL", "MX", "MY", "FV", "FS")
+MOTOR_ONLY = ("X1", "X2", "X3", "X4", "X5", "X6", "X7")
+MOTOR_ONLY_CORRECTED = MOTOR_ONLY + ("X8", "X9", "X10", "X11")
+RIGID = ("J", "FV", "FS", "offset")
+MODELS = ("joint-motor", "motor-only", "rigid")
+
+
+@dataclass(frozen=True)
+class Regressor:
+    """Rows of y = W X after filtering and decimation.
+
+    `block` labels each row with its equation (0: motor eq. 6 or 20, 1: link eq. 5);
+    `index` is the raw sample index of the row.
+    """
+
+    model: str
+    names: tuple[str, ...]
+    y: np.ndarray
+    W: np.ndarray
+    block: np.ndarray
+    index: np.ndarray
+    settings: FilterSettings
+
+
+def _filtered(x: np.ndarray, s: FilterSettings, nd: int) -> list[np.ndarray]:
+    return derivatives(lowpass(x, s.wn, s.ts, s.m), s.ts, nd)
+
+
+def _sign(x: np.ndarray) -> np.ndarray:
+    out = np.sign(x)
+    out[~np.isfinite(x)] = np.nan
+    return out
+
+
+def joint_motor(log: Log, s: FilterSettings) -> Regressor:
+    """Eq. (13): y = (tau_m, 0), rows of eq. (10); gravity g cos q, g sin q from the log's g."""
+    if log.q is None:
+        raise LogError("the joint-motor model needs the link position column 'q'", log.path,
+                       column="q")
+    qm = _filtered(log.q_m, s, 2)
+    q = _filtered(log.q, s, 2)
+    tau = lowpass(zoh_align(log.tau_m), s.wn, s.ts, s.m)
+    g = log.gravity
+    n = len(log.t)
+    zero = np.zeros(n)
+    defl = qm[0] - q[0]
+    W1 = np.column_stack([qm[2], qm[1], _sign(qm[1]), defl, zero, zero, zero, zero, zero])
+    W2 = np.column_stack([zero, zero, zero, -defl, q[2], g * np.cos(q[0]), g * np.sin(q[0]),
+                          q[1], _sign(q[1])])
+    y1, W1, i1 = decimate_parallel(tau, W1, s)
+    y2, W2, i2 = decimate_parallel(zero, W2, s)
+    return Regressor("joint-motor", JOINT_MOTOR, np.concatenate([y1, y2]), np.vstack([W1, W2]),
+                     np.r_[np.zeros(len(y1), int), np.ones(len(y2), int)], np.r_[i1, i2], s)
+
+
+def motor_only(log: Log, s: FilterSettings, corrected: bool = True) -> Regressor:
+    """Eqs. (18)-(20): y = tau_m, D = (-tau'', -tau', qm'''', qm''', qm'', qm', sign(qm'))
+    [+ (s'', s', g cos qm, g sin qm) when corrected]."""
+    qm = _filtered(log.q_m, s, 4)
+    tau = _filtered(zoh_align(log.tau_m), s, 2)
+    sgn = _sign(qm[1])
+    cols = [-tau[2], -tau[1], qm[4], qm[3], qm[2], qm[1], sgn]
+    names = MOTOR_ONLY
+    if corrected:
+        ds = _filtered(np.nan_to_num(sgn), s, 2)
+        g = log.gravity
+        cols += [ds[2], ds[1], g * np.cos(qm[0]), g * np.sin(qm[0])]
+        names = MOTOR_ONLY_CORRECTED
+    y, W, idx = decimate_parallel(tau[0], np.column_stack(cols), s)
+    return Regressor("motor-only" if corrected else "motor-only-printed", names, y, W,
+                     np.zeros(len(y), int), idx, s)
+
+
+def rigid(log: Log, s: FilterSettings) -> Regressor:
+    """tau_m = J qm'' + FV qm' + FS sign(qm') + offset (CONTRACT section 3)."""
+    qm = _filtered(log.q_m, s, 2)
+    tau = lowpass(zoh_align(log.tau_m), s.wn, s.ts, s.m)
+    W = np.column_stack([qm[2], qm[1], _sign(qm[1]), np.ones(len(log.t))])
+    y, W, idx = decimate_parallel(tau, W, s)
+    return Regressor("rigid", RIGID, y, W, np.zeros(len(y), int), idx, s)

@@ -1,0 +1,181 @@
+"""Plots of the bandpass design, Pham, Gautier, Poignet 2001, section 3.2.
+
+pyplot is imported inside the functions and no backend is chosen here: the caller picks
+it (e.g. Agg for headless runs) before the first plot.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from identification.design import butterworth_magnitude, central_difference_magnitude
+
+if TYPE_CHECKING:
+    import matplotlib.figure
+
+__all__ = ["Figure1Setup", "figure1_setup", "plot_figure1", "save_figure_atomic"]
+
+
+@dataclass(frozen=True)
+class Figure1Setup:
+    """Parameters of the paper's Figure 1.
+
+    Attributes:
+        wn: Butterworth cutoff (rad/s). The paper does not state it and its picture is
+            lost in the text we have; 100 rad/s, a decade below ws/2, is an assumption.
+        ts: sampling period (s); ws/2 = pi / Ts = 1e3 rad/s as stated in section 3.2.
+        m: forward Butterworth order (the figure's caption says m = 2).
+    """
+
+    wn: float
+    ts: float
+    m: int
+
+
+def figure1_setup() -> Figure1Setup:
+    """Default parameters for Figure 1: wn = 100 rad/s (assumed), ws/2 = 1e3 rad/s, m = 2."""
+    return Figure1Setup(wn=100.0, ts=math.pi / 1.0e3, m=2)
+
+
+def save_figure_atomic(fig: matplotlib.figure.Figure, path: str | os.PathLike[str]) -> Path:
+    """Save ``fig`` as PNG at ``path`` atomically.
+
+    Writes a temporary file in the destination directory then ``os.replace`` s it, so a
+    reader never sees a half-written PNG (os.replace is atomic on one filesystem).
+
+    Raises:
+        OSError: if the directory does not exist or is not writable.
+    """
+    dest = Path(path)
+    fd, tmp_name = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=".tmp", dir=dest.parent or ".")
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fig.savefig(fh, format="png")
+        os.replace(tmp_name, dest)
+    except BaseException:
+        # Do not leave temporary files behind on failure.
+        try:
+            os.unlink(tmp_name)
+        except FileNotFoundError:
+            pass
+        raise
+    return dest
+
+
+def plot_figure1(
+    wn: float,
+    ts: float,
+    m: int = 2,
+    path: str | os.PathLike[str] | None = None,
+) -> matplotlib.figure.Figure:
+    """Reproduce Figure 1: magnitudes |H|, |D| and |F| = |H| |D| against w, log-log.
+
+    |H| is eq. (25) (forward-reverse Butterworth, order m), |D| is eq. (24) (central
+    difference), F = H D is the band-limited derivative filter. The frequency axis runs
+    from 1 rad/s to just below ws/2 = pi / Ts, where |D| vanishes (log axes cannot show 0).
+
+    Args:
+        wn: Butterworth cutoff (rad/s), > 0.
+        ts: sampling period Ts (s), > 0; the paper uses ws/2 = 1e3 rad/s, Ts = pi / 1e3.
+        m: forward Butterworth order, >= 1 (the paper: 2).
+        path: if given, the PNG is written there atomically.
+
+    Returns:
+        The matplotlib Figure.
+
+    Raises:
+        ValueError: if wn, ts or m is invalid (see identification.design).
+        OSError: if the PNG cannot be written.
+    """
+    import matplotlib.pyplot as plt
+
+    # Evaluate once so bad wn, m, ts raise ValueError before any figure is created.
+    butterworth_magnitude(0.0, wn, m)
+    central_difference_magnitude(0.0, ts)
+    nyquist = math.pi / float(ts)
+    # Stop just short of ws/2: |D(j ws/2)| = 0 has no logarithm.
+    w = np.logspace(0.0, math.log10(0.999 * nyquist), 1000)
+    h = butterworth_magnitude(w, wn, m)
+    d = central_difference_magnitude(w, ts)
+    f = h * d
+
+    fig, ax = plt.subplots(figsize=(7.0, 5.0))
+    ax.loglog(w, h, label=r"$|H(j\omega)|$ Butterworth, eq. (25)")
+    ax.loglog(w, d, label=r"$|D(j\omega)|$ central difference, eq. (24)")
+    ax.loglog(w, f, label=r"$|F(j\omega)| = |H||D|$ bandpass")
+    ax.loglog(w, w, ":", color="gray", label=r"$\omega$ (ideal derivative)")
+    ax.axvline(wn, color="k", lw=0.6, ls="--")
+    ax.annotate(r"$\omega_n$", (wn, 1e-3), xytext=(4, 0), textcoords="offset points")
+    ax.set_xlabel(r"$\omega$ (rad/s)")
+    ax.set_ylabel("magnitude")
+    ax.set_ylim(1e-4, 2.0 * nyquist)
+    ax.set_title(f"Figure 1: magnitude of filters (m = {m})")
+    ax.grid(True, which="both", lw=0.3)
+    ax.legend(loc="lower left")
+    fig.tight_layout()
+    if path is not None:
+        save_figure_atomic(fig, path)
+    return fig
+
+
+
+def plot_validation(t: np.ndarray, measured: np.ndarray, predicted: np.ndarray,
+                    rel_error_pct: float, path: str | os.PathLike[str] | None = None,
+                    title: str = "Figure 2: direct validation") -> "matplotlib.figure.Figure":
+    """Figure 2: measured and predicted motor torque on the decimated samples, with the
+    residual and the relative error 100 ||y - W X^|| / ||y||."""
+    import matplotlib.pyplot as plt
+
+    fig, (ax, axr) = plt.subplots(2, 1, figsize=(9.0, 6.0), sharex=True,
+                                  gridspec_kw={"height_ratios": [3, 1]})
+    ax.plot(t, measured, lw=1.0, label="measured $\\tau_m$")
+    ax.plot(t, predicted, lw=1.0, ls="--", label="predicted $W\\hat{X}$")
+    ax.set_ylabel("torque (N m)")
+    ax.set_title(f"{title} (relative error {rel_error_pct:.2f} %)")
+    ax.legend()
+    ax.grid(True, lw=0.3)
+    axr.plot(t, measured - predicted, lw=0.8, color="C3")
+    axr.set_ylabel("error (N m)")
+    axr.set_xlabel("t (s)")
+    axr.grid(True, lw=0.3)
+    fig.tight_layout()
+    if path is not None:
+        save_figure_atomic(fig, path)
+    return fig
+
+
+def plot_frf(f_hz: np.ndarray, measured: np.ndarray, models: dict[str, np.ndarray],
+             coherence: np.ndarray | None = None, f1_hz: float | None = None,
+             path: str | os.PathLike[str] | None = None,
+             title: str = "Frequency response q_m / tau_m") -> "matplotlib.figure.Figure":
+    """Bode magnitude and phase of the measured q_m / tau_m against model responses."""
+    import matplotlib.pyplot as plt
+
+    band = f_hz > 0
+    fig, (axm, axp) = plt.subplots(2, 1, figsize=(8.0, 6.5), sharex=True)
+    axm.loglog(f_hz[band], np.abs(measured[band]), ".", ms=3, label="measured (from the log)")
+    axp.semilogx(f_hz[band], np.degrees(np.angle(measured[band])), ".", ms=3)
+    for label, H in models.items():
+        axm.loglog(f_hz[band], np.abs(H[band]), lw=1.2, label=label)
+        axp.semilogx(f_hz[band], np.degrees(np.angle(H[band])), lw=1.2)
+    if f1_hz:
+        for a in (axm, axp):
+            a.axvline(f1_hz, color="k", ls="--", lw=0.6)
+    axm.set_ylabel("|q_m / tau_m| (rad / N m)")
+    axp.set_ylabel("phase (deg)")
+    axp.set_xlabel("f (Hz)")
+    axm.set_title(title)
+    axm.legend(fontsize=8)
+    for a in (axm, axp):
+        a.grid(True, which="both", lw=0.3)
+    fig.tight_layout()
+    if path is not None:
+        save_figure_atomic(fig, path)
+    return fig

@@ -1,0 +1,125 @@
+"""MJCF robots of jointbench and the code that reads their structure and ground truth.
+
+Axis convention (every joint of every shipped model, and any user model that wants to run):
+for an axis named X,
+  - hinge (or slide) `X`         the link joint: damping FV, frictionloss FS;
+  - hinge (or slide) `X_motor`   the rotor joint: armature Jm, damping FVm, frictionloss FSm;
+  - fixed tendon `X_spring`      length q_m - q (coef +1 on `X_motor`, -1 on `X`), stiffness K;
+  - motor actuator `X_motor`     the motor torque tau_m on `X_motor` (ctrlrange = torque limit);
+  - optional `<numeric name="X_gear_ratio">`.
+All values are referred to the joint side, as in the paper.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+MODELS_DIR = Path(__file__).resolve().parent
+SHIPPED = {"prototype": "prototype_axis.xml", "prototype_axis": "prototype_axis.xml",
+           "arm6": "arm6.xml"}
+
+
+class ModelStructureError(ValueError):
+    """An MJCF model that does not follow the jointbench axis convention."""
+
+
+def model_path(name: str | Path) -> Path:
+    """Path of a shipped model (`prototype`, `arm6`) or of a user's MJCF file."""
+    key = str(name)
+    if key in SHIPPED:
+        return MODELS_DIR / SHIPPED[key]
+    path = Path(name)
+    if not path.exists():
+        raise ModelStructureError(
+            f"{path}: no such model file (shipped models: {', '.join(sorted(set(SHIPPED) - {'prototype_axis'}))})")
+    return path
+
+
+@dataclass(frozen=True)
+class Axis:
+    """Indices of one flexible axis in a compiled model."""
+
+    name: str
+    link_joint: int
+    motor_joint: int
+    tendon: int
+    actuator: int
+    link_qpos: int
+    motor_qpos: int
+    link_dof: int
+    motor_dof: int
+
+
+def _name(model: mujoco.MjModel, obj: mujoco.mjtObj, index: int) -> str:
+    return mujoco.mj_id2name(model, obj, index) or ""
+
+
+def find_axes(model: mujoco.MjModel, source: str = "<model>") -> list[Axis]:
+    """The flexible axes of `model`, in tendon order. ModelStructureError names what is
+    missing or malformed when the model does not follow the axis convention."""
+    axes = []
+    for tid in range(model.ntendon):
+        tname = _name(model, mujoco.mjtObj.mjOBJ_TENDON, tid)
+        if not tname.endswith("_spring"):
+            continue
+        axis = tname[: -len("_spring")]
+        adr, num = model.tendon_adr[tid], model.tendon_num[tid]
+        wraps = {}
+        for w in range(adr, adr + num):
+            if int(model.wrap_type[w]) != int(mujoco.mjtWrap.mjWRAP_JOINT):
+                raise ModelStructureError(f"{source}: tendon '{tname}' must be a fixed tendon")
+            wraps[_name(model, mujoco.mjtObj.mjOBJ_JOINT, model.wrap_objid[w])] = model.wrap_prm[w]
+        expected = {f"{axis}_motor": 1.0, axis: -1.0}
+        if wraps != expected:
+            raise ModelStructureError(
+                f"{source}: tendon '{tname}' must couple joint '{axis}_motor' (coef 1) and "
+                f"joint '{axis}' (coef -1); it has {wraps or 'no joints'}")
+        jl = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, axis)
+        jm = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, f"{axis}_motor")
+        act = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, f"{axis}_motor")
+        if act < 0:
+            raise ModelStructureError(f"{source}: axis '{axis}' has no actuator '{axis}_motor'")
+        if model.actuator_trnid[act, 0] != jm:
+            raise ModelStructureError(
+                f"{source}: actuator '{axis}_motor' must drive joint '{axis}_motor'")
+        for j in (jl, jm):
+            if int(model.jnt_type[j]) not in (int(mujoco.mjtJoint.mjJNT_HINGE),
+                                             int(mujoco.mjtJoint.mjJNT_SLIDE)):
+                raise ModelStructureError(
+                    f"{source}: joint '{_name(model, mujoco.mjtObj.mjOBJ_JOINT, j)}' must be a hinge or slide")
+        axes.append(Axis(axis, jl, jm, tid, act, int(model.jnt_qposadr[jl]),
+                         int(model.jnt_qposadr[jm]), int(model.jnt_dofadr[jl]),
+                         int(model.jnt_dofadr[jm])))
+    if not axes:
+        raise ModelStructureError(
+            f"{source}: no flexible axis found: expected a fixed tendon 'X_spring' coupling "
+            "joints 'X_motor' and 'X', and an actuator 'X_motor' (see models/__init__.py)")
+    return axes
+
+
+def load_model(name: str | Path) -> tuple[mujoco.MjModel, list[Axis], Path]:
+    """Compile a shipped or user model and find its axes; ModelStructureError on failure."""
+    path = model_path(name)
+    try:
+        model = mujoco.MjModel.from_xml_path(str(path))
+    except ValueError as err:
+        raise ModelStructureError(f"{path}: MuJoCo cannot load it: {err}") from None
+    return model, find_axes(model, str(path)), path
+
+
+def gear_ratio(model: mujoco.MjModel, axis: str) -> float | None:
+    nid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_NUMERIC, f"{axis}_gear_ratio")
+    if nid < 0:
+        return None
+    return float(model.numeric_data[model.numeric_adr[nid]])
+
+
+def torque_limit(model: mujoco.MjModel, axis: Axis) -> float | None:
+    """The actuator's ctrlrange bound (symmetric limit), None when unlimited."""
+    if not model.actuator_ctrllimited[axis.actuator]:
+        return None
+    return float(np.max(np.abs(model.actuator_ctrlrange[axis.actuator])))

@@ -1,0 +1,82 @@
+"""Ground truth of an axis under the paper's names, read from the compiled MuJoCo model."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import mujoco
+import numpy as np
+
+from models import Axis, gear_ratio
+
+
+@dataclass(frozen=True)
+class AxisTruth:
+    """Parameters of eqs. (5)-(7) for one axis in one locked configuration (joint side, SI).
+
+    `JL` = M_jj(q_L) (eq. 5) from MuJoCo's mass matrix; `MX`, `MY` the first moments of eq. (7)
+    from MuJoCo's gravity torque; `q0` the rest position of eq. (17); `f1_hz` the locked first
+    mode sqrt(K (1/Jm + 1/JL)) / 2 pi.
+    """
+
+    K: float
+    Jm: float
+    JL: float
+    FVm: float
+    FSm: float
+    FV: float
+    FS: float
+    MX: float
+    MY: float
+    q0: float
+    f1_hz: float
+    g: float
+    gear_ratio: float | None
+
+    def as_dict(self) -> dict[str, float]:
+        return {k: v for k, v in asdict(self).items() if v is not None}
+
+
+def gravity_torque(model: mujoco.MjModel, data: mujoco.MjData, dof: int) -> float:
+    """Q of eq. (7) at the current qpos: the gravity part of qfrc_bias at `dof` (zero velocity)."""
+    data.qvel[:] = 0.0
+    mujoco.mj_forward(model, data)
+    return float(data.qfrc_bias[dof])
+
+
+def axis_truth(model: mujoco.MjModel, axis: Axis, qpos: np.ndarray) -> AxisTruth:
+    """Ground truth of `axis` with every joint at `qpos` (the other axes locked there)."""
+    data = mujoco.MjData(model)
+    data.qpos[:] = qpos
+    mujoco.mj_forward(model, data)
+    M = np.zeros((model.nv, model.nv))
+    mujoco.mj_fullM(model, data, M)
+    JL = float(M[axis.link_dof, axis.link_dof])
+    g = float(np.linalg.norm(model.opt.gravity))
+    if g > 0:
+        # Eq. (7) is A cos q + B sin q exactly when the other joints are fixed.
+        data.qpos[axis.link_qpos] = 0.0
+        MX = gravity_torque(model, data, axis.link_dof) / g
+        data.qpos[axis.link_qpos] = math.pi / 2
+        MY = gravity_torque(model, data, axis.link_dof) / g
+    else:
+        MX = MY = 0.0
+    scale = max(abs(MX), abs(MY))
+    if scale < 1e-12:
+        q0 = 0.0  # gravity acts on nothing along this axis: every position is a rest position
+    elif abs(MY) < 1e-12 * scale:
+        q0 = -math.copysign(math.pi / 2, MX)
+    else:
+        q0 = -math.atan(MX / MY)  # eq. (17)
+    Jm = float(model.dof_armature[axis.motor_dof])
+    K = float(model.tendon_stiffness[axis.tendon])
+    return AxisTruth(
+        K=K, Jm=Jm, JL=JL,
+        FVm=float(model.dof_damping[axis.motor_dof]),
+        FSm=float(model.dof_frictionloss[axis.motor_dof]),
+        FV=float(model.dof_damping[axis.link_dof]),
+        FS=float(model.dof_frictionloss[axis.link_dof]),
+        MX=MX, MY=MY, q0=q0,
+        f1_hz=math.sqrt(K * (1.0 / Jm + 1.0 / JL)) / (2 * math.pi), g=g,
+        gear_ratio=gear_ratio(model, axis.name))
