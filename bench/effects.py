@@ -87,7 +87,7 @@ def apply_to_spec(spec: mujoco.MjSpec, axis: str, effect: HiddenEffect, K: float
         # Dead band: the spring acts only beyond +-b (MuJoCo's two-valued springlength).
         tendon.springlength = [-effect.strength, effect.strength]
     elif effect.name == "spring_damping":
-        tendon.damping = effect.strength
+        tendon.damping[0] = effect.strength
     elif effect.name == "hardening":
         # A second spring stacked in parallel that engages beyond +-deflection.
         d = effect.option("deflection")

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 import sys
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable
 
@@ -69,13 +69,63 @@ def run_experiment(model: str | Path = "prototype", joint: str | None = None, *,
                                  tau_max=tau_max)
     m, ax, truth = exp.model, exp.axis, exp.truth
     T = 1.0 / sample_rate_hz
+    auto = chirp is None
     if chirp is None:
         chirp = default_chirp(exp, duration, amplitude)
-    sensors = sensors or Sensors.default(truth.gear_ratio)
+    sensors = sensors or Sensors.default(truth.gear_ratio, exp.tau_max)
     gains = gains or gains_rule(truth.Jm, truth.JL, truth.K, exp.tau_max, T)
+    reductions = 0
+    while True:
+        sim = _simulate(exp, chirp, sensors, gains, seed, substeps, sample_rate_hz, effect,
+                        progress)
+        # The default reference shrinks until nothing saturates: near the antiresonance
+        # sqrt(K / JL) the motor needs far more torque than the acceleration cap foresees.
+        if not auto or sim["ctrl"].saturated == 0 or reductions >= 6:
+            break
+        reductions += 1
+        chirp = replace(chirp, amplitude=0.7 * chirp.amplitude,
+                        max_acceleration=0.6 * chirp.max_acceleration)
+    ctrl, t, q_m, q, tau, q_ref = (sim[k] for k in ("ctrl", "t", "q_m", "q", "tau", "q_ref"))
+    meta = {"sample_rate_hz": _fmt(sample_rate_hz), "gravity": _fmt(truth.g)}
+    meta.update(gains.to_meta())
+    meta.update({
+        "joint": ax.name, "source": f"jointbench virtual experiment, model {exp.source.name}",
+        "seed": str(seed), "lock": lock, "substeps": str(substeps),
+        "integrator": mujoco.mjtIntegrator(m.opt.integrator).name,
+        "chirp": f"{chirp.method} {chirp.f0:g}-{chirp.f1:g} Hz, amplitude {chirp.amplitude:g} rad, "
+                 f"{chirp.duration:g} s, taper {chirp.taper:g} s",
+        "locked_config": " ".join(f"{k}={v:.6g}" for k, v in exp.config.items()),
+        "saturated_samples": str(ctrl.saturated),
+        "amplitude_reductions": str(reductions),
+    })
+    if truth.gear_ratio is not None:
+        meta["gear_ratio"] = _fmt(truth.gear_ratio)
+    meta.update(sensors.to_meta())
+    for key, value in truth.as_dict().items():
+        if key not in ("g", "gear_ratio"):
+            meta[f"truth_{key}"] = _fmt(value)
+    meta["truth_center"] = _fmt(exp.center)
+    meta["truth_effect"] = "none"
+    if effect is not None:
+        meta.update(effect.to_meta())
+    log = Log(t=t, q_m=q_m, tau_m=tau, q=q, q_ref=q_ref, meta=meta)
+    return ExperimentResult(log=log, q_m_true=sim["q_m_true"], q_true=sim["q_true"],
+                            tau_applied=sim["tau_app"], saturated=ctrl.saturated, experiment=exp)
+
+
+
+def _simulate(exp: ExperimentModel, chirp: Chirp, sensors: Sensors, gains: Gains, seed: int,
+              substeps: int, sample_rate_hz: float, effect: HiddenEffect | None,
+              progress: Callable[[float], None] | None) -> dict:
+    """The control loop of the module docstring; returns the sampled signals."""
+    m, ax, truth = exp.model, exp.axis, exp.truth
+    T = 1.0 / sample_rate_hz
     n = int(round(chirp.duration * sample_rate_hz)) + 1
     t = np.arange(n) * T
-    q_ref = chirp(t)
+    quant_m, quant_l = sensors.motor_quantizer(), sensors.link_quantizer()
+    # Start the reference at the measured motor angle: then e[0] = 0 and the logged
+    # tau_m[0] is the integrator's initial state, as CONTRACT section 2 reads it back.
+    q_ref = chirp(t) - chirp.center + quant_m(float(exp.qpos_init[ax.motor_qpos]))
     rng = np.random.default_rng(seed)
     noise = sensors.torque_noise(rng, n)
 
@@ -92,7 +142,6 @@ def run_experiment(model: str | Path = "prototype", joint: str | None = None, *,
     tau_app = np.empty(n)
     qpos, qvel, ctrl_arr = d.qpos, d.qvel, d.ctrl
     im, il, dm, act = ax.motor_qpos, ax.link_qpos, ax.motor_dof, ax.actuator
-    quant_m, quant_l = sensors.motor_quantizer(), sensors.link_quantizer()
     step = mujoco.mj_step
     q_ref_list = q_ref.tolist()
     noise_list = noise.tolist()
@@ -121,42 +170,20 @@ def run_experiment(model: str | Path = "prototype", joint: str | None = None, *,
             raise SimulationError(
                 f"joint {ax.name}: MuJoCo warning {mujoco.mjtWarning(w).name} "
                 f"({d.warning[w].number} times, last at t = {d.time:.4f} s)")
-    meta = {"sample_rate_hz": _fmt(sample_rate_hz), "gravity": _fmt(truth.g)}
-    meta.update(gains.to_meta())
-    meta.update({
-        "joint": ax.name, "source": f"jointbench virtual experiment, model {exp.source.name}",
-        "seed": str(seed), "lock": lock, "substeps": str(substeps),
-        "integrator": mujoco.mjtIntegrator(m.opt.integrator).name,
-        "chirp": f"{chirp.method} {chirp.f0:g}-{chirp.f1:g} Hz, amplitude {chirp.amplitude:g} rad, "
-                 f"{chirp.duration:g} s, taper {chirp.taper:g} s",
-        "locked_config": " ".join(f"{k}={v:.6g}" for k, v in exp.config.items()),
-        "saturated_samples": str(ctrl.saturated),
-    })
-    if truth.gear_ratio is not None:
-        meta["gear_ratio"] = _fmt(truth.gear_ratio)
-    meta.update(sensors.to_meta())
-    for key, value in truth.as_dict().items():
-        if key not in ("g", "gear_ratio"):
-            meta[f"truth_{key}"] = _fmt(value)
-    meta["truth_center"] = _fmt(exp.center)
-    meta["truth_effect"] = "none"
-    if effect is not None:
-        meta.update(effect.to_meta())
-    log = Log(t=t, q_m=q_m, tau_m=tau, q=q, q_ref=q_ref, meta=meta)
-    return ExperimentResult(log=log, q_m_true=q_m_true, q_true=q_true, tau_applied=tau_app,
-                            saturated=ctrl.saturated, experiment=exp)
-
+    return {"ctrl": ctrl, "t": t, "q_m": q_m, "q": q, "tau": tau, "q_ref": q_ref,
+            "q_m_true": q_m_true, "q_true": q_true, "tau_app": tau_app}
 
 def default_chirp(exp: ExperimentModel, duration: float = 60.0,
                   amplitude: float | None = None) -> Chirp:
     """The default reference: a logarithmic 0.05-30 Hz chirp around the motor's rest angle,
-    amplitude 0.05 rad, with the acceleration capped so that the rigid-body torque
-    (Jm + JL) A (2 pi f)^2 stays under a fifth of the torque limit (the rest is left for
-    friction, gravity and the resonance)."""
+    amplitude 0.1 rad, with the acceleration capped so that the rigid-body torque
+    (Jm + JL) A (2 pi f)^2 stays under 40 % of the torque limit (the rest is left for
+    friction, gravity and the resonance). Larger motion shrinks the share of the stick
+    phases at velocity reversals, where the Coulomb model sign(qm') is wrong."""
     t = exp.truth
-    return Chirp(duration=duration, amplitude=amplitude or 0.05,
+    return Chirp(duration=duration, amplitude=amplitude or 0.1,
                  center=float(exp.qpos_init[exp.axis.motor_qpos]),
-                 max_acceleration=0.2 * exp.tau_max / (t.Jm + t.JL))
+                 max_acceleration=0.4 * exp.tau_max / (t.Jm + t.JL))
 
 
 def stderr_progress(label: str) -> Callable[[float], None]:

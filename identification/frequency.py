@@ -19,15 +19,19 @@ class FRF:
     coherence: np.ndarray
 
 
-def measured_frf(log: Log, nperseg: int | None = None) -> FRF:
-    """q_m / tau_m from the log. With `q_ref` logged, the closed-loop (indirect) estimate
-    S(ref, q_m) / S(ref, tau_m), unbiased by the feedback; otherwise the H1 estimate."""
+def measured_frf(log: Log, nperseg: int | None = None, output: str = "q_m") -> FRF:
+    """`output` / tau_m from the log (`q_m`, or `q` the link). With `q_ref` logged, the
+    closed-loop (indirect) estimate S(ref, out) / S(ref, tau_m), unbiased by the feedback;
+    otherwise the H1 estimate."""
     fs = log.sample_rate_hz
     nperseg = nperseg or min(len(log), int(2 ** np.floor(np.log2(fs * 8))))
+    y = log.q_m if output == "q_m" else log.q
+    if y is None:
+        raise ValueError(f"the log has no column '{output}'")
     x = log.q_ref if log.q_ref is not None else log.tau_m
-    f, s_xq = signal.csd(x, log.q_m, fs=fs, nperseg=nperseg)
+    f, s_xq = signal.csd(x, y, fs=fs, nperseg=nperseg)
     _, s_xt = signal.csd(x, log.tau_m, fs=fs, nperseg=nperseg)
-    _, coh = signal.coherence(log.tau_m, log.q_m, fs=fs, nperseg=nperseg)
+    _, coh = signal.coherence(log.tau_m, y, fs=fs, nperseg=nperseg)
     return FRF(f, s_xq / s_xt, coh)
 
 
@@ -45,10 +49,18 @@ def model_frf(tf: control.TransferFunction, f_hz: np.ndarray) -> np.ndarray:
     return np.asarray(tf(2j * np.pi * np.asarray(f_hz)), dtype=complex).ravel()
 
 
-def first_mode_hz(frf: FRF, fmin: float = 0.5, fmax: float | None = None) -> float:
-    """The first resonance: the largest |q_m / tau_m| peak past the antiresonance dip, found
-    as the maximum of |H| f^2 (which flattens the rigid-body 1/f^2 slope) in [fmin, fmax]."""
-    fmax = fmax or frf.f_hz[-1] / 4
-    band = (frf.f_hz >= fmin) & (frf.f_hz <= fmax)
-    flat = np.abs(frf.H[band]) * frf.f_hz[band] ** 2
-    return float(frf.f_hz[band][np.argmax(flat)])
+def first_mode_hz(frf: FRF, fmin: float = 0.5, fmax: float = 20.0) -> float:
+    """The first resonance: the peak of |H| f^2 (which flattens the rigid-body 1/f^2 slope)
+    in [fmin, fmax], refined by a parabola through the peak and its neighbours on a log
+    scale. Use the link response q / tau_m = K / (s^2 (Jm JL s^2 + ... + K (Jm + JL))): its
+    peak is the mode itself, while q_m / tau_m carries the antiresonance zero sqrt(K / JL),
+    which pulls the peak of |H| f^2 up. Keep fmax inside the excited band."""
+    band = np.flatnonzero((frf.f_hz >= fmin) & (frf.f_hz <= fmax))
+    flat = np.log(np.abs(frf.H[band]) * frf.f_hz[band] ** 2)
+    k = int(np.argmax(flat))
+    if 0 < k < len(band) - 1:
+        a, b, c = flat[k - 1], flat[k], flat[k + 1]
+        shift = 0.5 * (a - c) / (a - 2 * b + c) if a - 2 * b + c != 0 else 0.0
+        df = frf.f_hz[1] - frf.f_hz[0]
+        return float(frf.f_hz[band[k]] + shift * df)
+    return float(frf.f_hz[band[k]])

@@ -72,7 +72,7 @@ def parameter_table(result: Identification, truth: dict[str, float] | None = Non
                 row += f"{'':>22}"
             else:
                 err = 100 * (x - tv) / abs(tv) if tv else float("nan")
-                row += f"{_num(tv)}{_num(err, 10)}"
+                row += f"{_num(tv)}{err:>10.3f}"
         lines.append(row)
     return "\n".join(lines)
 
@@ -94,7 +94,7 @@ def physical_table(result: Identification, truth: dict[str, float] | None = None
         row = f"{n:<10}{_num(v)}{_num(2 * s)}{_num(t3, 13)}{_num(PAPER_TABLE3.get(n, float('nan')))}"
         if truth and n in truth:
             tv = truth[n]
-            row += f"{_num(tv)}{_num(100 * (v - tv) / abs(tv), 10)}{_num(100 * (t3 - tv) / abs(tv), 10)}"
+            row += f"{_num(tv)}{100 * (v - tv) / abs(tv):>10.3f}{100 * (t3 - tv) / abs(tv):>10.3f}"
         lines.append(row)
     return "\n".join(lines)
 
