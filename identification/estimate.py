@@ -54,25 +54,31 @@ class LSResult:
 
 
 def _unidentified(Ws: np.ndarray, names: tuple[str, ...]) -> dict[str, str]:
-    """Parameters spanned by the near-null directions of the column-scaled W."""
-    _, sv, Vt = np.linalg.svd(Ws, full_matrices=False)
-    if sv[0] == 0:
-        return {n: "its column is zero: the data does not excite it" for n in names}
-    reasons = {}
-    for k in np.flatnonzero(sv < sv[0] / COND_LIMIT):
-        v = np.abs(Vt[k])
-        involved = [names[i] for i in np.flatnonzero(v > 0.3 * v.max())]
-        for i in np.flatnonzero(v > 0.3 * v.max()):
-            if names[i] in reasons:
-                continue
-            if len(involved) == 1:
-                reasons[names[i]] = ("its column is (nearly) zero: the data does not excite it "
-                                     f"(singular value ratio {sv[k] / sv[0]:.1e})")
-            else:
-                others = ", ".join(n for n in involved if n != names[i])
-                reasons[names[i]] = (f"its column is (nearly) a combination of {others}: "
-                                     f"only their combination is identifiable "
-                                     f"(singular value ratio {sv[k] / sv[0]:.1e})")
+    """Parameters to leave out, one per near-null direction of the column-scaled W: the one
+    with the largest share of that direction; the reason names the others in it (only their
+    combination is identifiable)."""
+    reasons: dict[str, str] = {}
+    live = list(range(len(names)))
+    while live:
+        _, sv, Vt = np.linalg.svd(Ws[:, live], full_matrices=False)
+        if sv[0] == 0:
+            for i in live:
+                reasons[names[i]] = "its column is zero: the data does not excite it"
+            break
+        if sv[-1] >= sv[0] / COND_LIMIT:
+            break
+        v = np.abs(Vt[-1])
+        worst = int(np.argmax(v))
+        others = [names[live[i]] for i in np.flatnonzero(v > 0.1 * v.max()) if i != worst]
+        ratio = sv[-1] / sv[0]
+        if others:
+            reasons[names[live[worst]]] = (
+                f"its column is (nearly) a combination of {', '.join(others)}: only their "
+                f"combination is identifiable (singular value ratio {ratio:.1e})")
+        else:
+            reasons[names[live[worst]]] = ("its column is (nearly) zero: the data does not "
+                                           f"excite it (singular value ratio {ratio:.1e})")
+        live.pop(worst)
     return reasons
 
 
