@@ -10,7 +10,7 @@ import numpy as np
 
 from bench.experiment import run_experiment
 from identification.filtering import default_settings
-from identification.frequency import first_mode_hz, measured_frf, model_frf, two_mass_tf
+from identification.frequency import FRF, first_mode_hz, measured_frf, model_frf, two_mass_tf
 from identification.identify import identify
 from identification.log import atomic_write_text, write_log
 from identification.report import (PAPER_TABLE1, PAPER_TABLE2, expected_x, parameter_table,
@@ -84,8 +84,10 @@ def run_demo(out: Path, duration: float = 60.0, seed: int = 1) -> int:
 
     f1_meas = first_mode_hz(measured_frf(log, output="q"))
     frf = measured_frf(log)
+    keep = frf.f_hz <= 25.0  # the chirp stops at 30 Hz: nothing to measure beyond
+    frf = FRF(frf.f_hz[keep], frf.H[keep], frf.coherence[keep])
     G = log.gravity * (truth["MY"] * np.cos(res.experiment.center)
-                      - truth["MX"] * np.sin(res.experiment.center))
+                       - truth["MX"] * np.sin(res.experiment.center))
     models = {
         "truth (two-mass model)": model_frf(two_mass_tf(truth["Jm"], truth["K"], truth["JL"],
                                                         truth["FVm"], truth["FV"], G), frf.f_hz),
@@ -93,10 +95,6 @@ def run_demo(out: Path, duration: float = 60.0, seed: int = 1) -> int:
             jm.physical["Jm"], jm.physical["K"], jm.physical["JL"], jm.physical["FVm"],
             jm.physical["FV"], G), frf.f_hz),
     }
-    keep = frf.f_hz <= 25.0  # the chirp stops at 30 Hz: nothing to measure beyond
-    frf_band = type(frf)(frf.f_hz[keep], frf.H[keep], frf.coherence[keep])
-    models = {k: v[keep] for k, v in models.items()}
-    frf = frf_band
     plot_frf(frf.f_hz, frf.H, models, frf.coherence, truth["f1_hz"], out / "frequency_response.png",
              title="Prototype axis: q_m / tau_m (closed-loop estimate from q_ref)")
     say(f"Measured frequency response: first mode at {f1_meas:.2f} Hz "

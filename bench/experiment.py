@@ -113,7 +113,6 @@ def run_experiment(model: str | Path = "prototype", joint: str | None = None, *,
                             tau_applied=sim["tau_app"], saturated=ctrl.saturated, experiment=exp)
 
 
-
 def _simulate(exp: ExperimentModel, chirp: Chirp, sensors: Sensors, gains: Gains, seed: int,
               substeps: int, sample_rate_hz: float, effect: HiddenEffect | None,
               progress: Callable[[float], None] | None) -> dict:
@@ -172,6 +171,7 @@ def _simulate(exp: ExperimentModel, chirp: Chirp, sensors: Sensors, gains: Gains
                 f"({d.warning[w].number} times, last at t = {d.time:.4f} s)")
     return {"ctrl": ctrl, "t": t, "q_m": q_m, "q": q, "tau": tau, "q_ref": q_ref,
             "q_m_true": q_m_true, "q_true": q_true, "tau_app": tau_app}
+
 
 def default_chirp(exp: ExperimentModel, duration: float = 60.0,
                   amplitude: float | None = None) -> Chirp:

@@ -27,7 +27,7 @@ class Sensors:
     torque_noise_std: float
 
     @classmethod
-    def default(cls, gear_ratio: float | None = None, tau_max: float = 40.0) -> "Sensors":
+    def default(cls, gear_ratio: float | None, tau_max: float) -> "Sensors":
         N = gear_ratio or 100.0
         return cls(motor_resolution=2 * math.pi / (2**17 * N),
                    link_resolution=2 * math.pi / 2**20, torque_noise_std=0.0125 * tau_max)
