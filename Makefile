@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test bench clean
+.PHONY: demo test bench bench-peers bench-campaign bench-diagnose clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -22,6 +22,18 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py
+
+# Peer methods side by side (mujoco.sysid needs MuJoCo's `sysid` extra) and the campaign
+# benchmark (200-run coverage, filter search); both print figures and assert nothing.
+bench-peers: $(STAMP)
+	$(BIN)/python -m pip install --quiet 'mujoco[sysid]>=4.0,<5'
+	$(BIN)/python benchmarks/peers.py
+
+bench-campaign: $(STAMP)
+	$(BIN)/python benchmarks/campaign.py
+
+bench-diagnose: $(STAMP)
+	$(BIN)/python benchmarks/diagnose_battery.py --per-effect 5
 
 clean:
 	rm -rf $(VENV) demo_out build *.egg-info

@@ -1,5 +1,9 @@
 """Build the model of one experiment: one axis moves, the others are locked (paper eqs. 5-6).
 
+Rigid axes (models/__init__.py: one joint `X` driven by actuator `X_motor`) are accepted too:
+moving, the motor torque drives the joint directly; locked, the joint is welded (`rigid`) or
+held by its brake, which for a rigid axis is the same thing.
+
 Locking edits the MJCF with MjSpec:
 - `rigid` (default): each other axis is welded at its angle (its link body is rotated about
   the joint axis and both joints are removed), exactly the reduced model of eqs. (5)-(6);
@@ -21,6 +25,9 @@ from models import Axis, ModelStructureError, find_axes, load_model, model_path,
 from models.truth import AxisTruth, axis_truth
 
 LOCKS = ("rigid", "brake")
+# Effects that act on the spring or split motor and link friction: meaningless on a rigid axis.
+RIGID_AXIS_REFUSES = ("backlash", "spring_damping", "hardening", "link_coulomb",
+                      "asymmetric_friction")
 
 
 @dataclass(frozen=True)
@@ -83,9 +90,18 @@ def full_qpos(model: mujoco.MjModel, axes: list[Axis], config: dict[str, float])
 def _static_equilibrium(model: mujoco.MjModel, axis: Axis, qpos: np.ndarray,
                         tau_extra: float = 0.0) -> tuple[np.ndarray, float]:
     """Settle the moving axis' motor so that the spring holds the link at rest (eq. 5 with
-    qd = qdd = 0) and return (qpos, tau0) with tau0 the holding motor torque."""
+    qd = qdd = 0) and return (qpos, tau0) with tau0 the holding motor torque. A rigid axis
+    stays where it is; tau0 holds gravity, passive forces and any passive actuator (offset)."""
     data = mujoco.MjData(model)
     qpos = qpos.copy()
+    if axis.rigid:
+        data.qpos[:] = qpos
+        data.qvel[:] = 0.0
+        data.ctrl[:] = 0.0
+        mujoco.mj_forward(model, data)
+        d = axis.motor_dof
+        tau0 = float(data.qfrc_bias[d] - data.qfrc_passive[d] - data.qfrc_actuator[d]) + tau_extra
+        return qpos, tau0
 
     def residual(qm: float) -> float:
         data.qpos[:] = qpos
@@ -138,6 +154,11 @@ def build_experiment_model(model: str | Path = "prototype", joint: str | None = 
     moving = axes[names.index(joint)]
     qpos_full = full_qpos(full, axes, config)
     truth = axis_truth(full, moving, qpos_full)
+    if moving.rigid and not (truth.Jm > 0 and truth.JL > 0):
+        raise ModelStructureError(
+            f"{path}: rigid axis '{joint}': give the rotor inertia as the armature of joint "
+            f"'{joint}' and the moving body a mass (Jm = {truth.Jm:g}, JL = {truth.JL:g}); "
+            "the default gain rule needs both")
     if center is None:
         center = truth.q0 + (effect.strength if effect and effect.name == "gravity" else 0.0)
     config[joint] = center
@@ -150,18 +171,27 @@ def build_experiment_model(model: str | Path = "prototype", joint: str | None = 
     hold = {a.name: float(data.qfrc_bias[a.link_dof]) for a in axes}
 
     spec = mujoco.MjSpec.from_file(str(path))
+    if moving.rigid and effect is not None and effect.name in RIGID_AXIS_REFUSES:
+        raise ModelStructureError(
+            f"{path}: effect '{effect.name}' needs a flexible axis (spring, link and motor "
+            f"friction); axis '{joint}' is rigid")
     for a in axes:
         if a.name == joint:
             continue
         spec.delete(spec.actuator(f"{a.name}_motor"))
-        spec.delete(spec.tendon(f"{a.name}_spring"))
-        hardening = spec.tendon(f"{a.name}_hardening")
-        if hardening is not None:
-            spec.delete(hardening)
-        spec.delete(spec.body(full.body(full.jnt_bodyid[a.motor_joint]).name))
+        if a.rigid:
+            passive = spec.actuator(f"{a.name}_offset")
+            if passive is not None:
+                spec.delete(passive)
+        else:
+            spec.delete(spec.tendon(f"{a.name}_spring"))
+            hardening = spec.tendon(f"{a.name}_hardening")
+            if hardening is not None:
+                spec.delete(hardening)
+            spec.delete(spec.body(full.body(full.jnt_bodyid[a.motor_joint]).name))
         link = spec.joint(a.name)
         angle = config.get(a.name, 0.0)
-        if lock == "rigid":
+        if lock == "rigid" or a.rigid:
             bid = full.jnt_bodyid[a.link_joint]
             body = spec.body(full.body(bid).name)
             if int(full.jnt_type[a.link_joint]) == int(mujoco.mjtJoint.mjJNT_HINGE):
@@ -177,7 +207,8 @@ def build_experiment_model(model: str | Path = "prototype", joint: str | None = 
             link.stiffness[0] = K
             link.springref = angle + hold[a.name] / K
     if effect is not None:
-        apply_to_spec(spec, joint, effect, float(full.tendon_stiffness[moving.tendon]))
+        apply_to_spec(spec, joint, effect,
+                      math.inf if moving.rigid else float(full.tendon_stiffness[moving.tendon]))
     T = 1.0 / sample_rate_hz
     spec.option.timestep = T / substeps
     try:
@@ -197,7 +228,9 @@ def build_experiment_model(model: str | Path = "prototype", joint: str | None = 
         tau_max = torque_limit(full, moving)
     if tau_max is None:
         # No ctrlrange: allow ten times the static and rigid-body chirp torque scale.
-        tau_max = 10.0 * max(abs(tau0), (truth.Jm + truth.JL) * (2 * math.pi * truth.f1_hz) ** 2 * 0.05, 1.0)
+        # A rigid axis (f1 infinite) takes the top of the default chirp, 30 Hz.
+        f_top = truth.f1_hz if math.isfinite(truth.f1_hz) else 30.0
+        tau_max = 10.0 * max(abs(tau0), (truth.Jm + truth.JL) * (2 * math.pi * f_top) ** 2 * 0.05, 1.0)
     return ExperimentModel(model=reduced, axis=axis, truth=truth, center=float(center),
                            qpos_init=qpos, tau0=tau0, tau_max=float(tau_max), source=path,
                            lock=lock, config=config)

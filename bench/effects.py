@@ -142,5 +142,32 @@ class LoopEffects:
         if self.ripple:
             tau += self.ripple * math.sin(2 * math.pi * q_m / self.period + self.phase)
         if self.asym and qd_m != 0.0:
-            tau -= self.asym * (self.FVm * qd_m + math.copysign(self.FSm, qd_m))
+            # Friction force opposing motion is (1 + a s)(FVm |qmd| + FSm), s = sign(qmd):
+            # the extra part acts against the positive direction whatever the sign of qmd.
+            tau -= self.asym * (self.FVm * abs(qd_m) + self.FSm)
         return tau
+
+
+def loop_effects_from_model(model: mujoco.MjModel, axis: str) -> LoopEffects | None:
+    """Bench-loop effects an extended MJCF carries as custom numerics (written by
+    `jointbench diagnose`): `{axis}_ripple` = (amplitude, period, phase) and
+    `{axis}_asymmetry` = (a, FVm, FSm). None when the model has neither."""
+    def numeric(name: str) -> list[float] | None:
+        i = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_NUMERIC, name)
+        if i < 0:
+            return None
+        adr, size = model.numeric_adr[i], model.numeric_size[i]
+        return [float(v) for v in model.numeric_data[adr:adr + size]]
+    ripple, asym = numeric(f"{axis}_ripple"), numeric(f"{axis}_asymmetry")
+    if ripple is None and asym is None:
+        return None
+    loop = LoopEffects(None, 0.0, 0.0, None)
+    if ripple is not None:
+        if len(ripple) != 3 or not ripple[1] > 0:
+            raise ValueError(f"numeric {axis}_ripple must hold amplitude, period > 0, phase")
+        loop.ripple, loop.period, loop.phase = ripple
+    if asym is not None:
+        if len(asym) != 3:
+            raise ValueError(f"numeric {axis}_asymmetry must hold a, FVm, FSm")
+        loop.asym, loop.FVm, loop.FSm = asym
+    return loop

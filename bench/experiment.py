@@ -12,16 +12,17 @@ from __future__ import annotations
 
 import math
 import sys
+from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Iterator
 
 import mujoco
 import numpy as np
 
 from bench.axes import ExperimentModel, build_experiment_model
 from bench.controller import Gains, PIController, gains_rule
-from bench.effects import HiddenEffect, LoopEffects
+from bench.effects import HiddenEffect, LoopEffects, loop_effects_from_model
 from bench.reference import Chirp
 from bench.sensors import Sensors
 from identification.log import Log
@@ -34,6 +35,32 @@ class SimulationError(RuntimeError):
     """The simulation diverged or MuJoCo raised a warning: names the joint, time and reason."""
 
 
+# Fault detection in the control loop (`_simulate`); each stops the run at once, no log.
+DIVERGED_POSITION = 1e4      # rad (m): |q_m| or |q| beyond it is a diverged state
+TRACKING_LIMIT = 10.0        # |q_ref - q_m| over this many chirp amplitudes (at least
+TRACKING_FLOOR = 0.1         # this many rad) is a loop that does not track: unstable
+CHATTER_REVERSALS = 20       # this many sample-to-sample jumps between -tau_max and +tau_max,
+CHATTER_SAMPLES = 3          # at most this many samples apart on average, is a limit cycle
+                             # at over Fs/6 (58 Hz at 350.87 Hz), far above the reference
+                             # (<= 30 Hz, whose bang-bang saturation jumps once per half period)
+_INSTABILITY_WARNINGS = (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL,
+                         mujoco.mjtWarning.mjWARN_BADQACC)
+
+
+@contextmanager
+def _mujoco_warnings() -> Iterator[list[str]]:
+    """Collect MuJoCo's warning texts for the duration of a run instead of letting MuJoCo
+    print them and append them to MUJOCO_LOG.TXT in the working directory; the previous
+    handler is restored afterwards."""
+    texts: list[str] = []
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(texts.append)
+    try:
+        yield texts
+    finally:
+        mujoco.set_mju_user_warning(previous)
+
+
 @dataclass(frozen=True)
 class ExperimentResult:
     """The log and the true signals behind it (for tests and plots)."""
@@ -44,6 +71,7 @@ class ExperimentResult:
     tau_applied: np.ndarray
     saturated: int
     experiment: ExperimentModel = field(repr=False)
+    clamped: int = 0  # samples where MuJoCo's actuator ctrlrange cut the applied torque
 
 
 def _fmt(x: float) -> str:
@@ -96,6 +124,7 @@ def run_experiment(model: str | Path = "prototype", joint: str | None = None, *,
                  f"{chirp.duration:g} s, taper {chirp.taper:g} s",
         "locked_config": " ".join(f"{k}={v:.6g}" for k, v in exp.config.items()),
         "saturated_samples": str(ctrl.saturated),
+        "actuator_clamped_samples": str(sim["clamped"]),
         "amplitude_reductions": str(reductions),
     })
     if truth.gear_ratio is not None:
@@ -110,7 +139,8 @@ def run_experiment(model: str | Path = "prototype", joint: str | None = None, *,
         meta.update(effect.to_meta())
     log = Log(t=t, q_m=q_m, tau_m=tau, q=q, q_ref=q_ref, meta=meta)
     return ExperimentResult(log=log, q_m_true=sim["q_m_true"], q_true=sim["q_true"],
-                            tau_applied=sim["tau_app"], saturated=ctrl.saturated, experiment=exp)
+                            tau_applied=sim["tau_app"], saturated=ctrl.saturated, experiment=exp,
+                            clamped=sim["clamped"])
 
 
 def _simulate(exp: ExperimentModel, chirp: Chirp, sensors: Sensors, gains: Gains, seed: int,
@@ -132,6 +162,9 @@ def _simulate(exp: ExperimentModel, chirp: Chirp, sensors: Sensors, gains: Gains
     d.qpos[:] = exp.qpos_init
     mujoco.mj_forward(m, d)
     loop = LoopEffects(effect, truth.FVm, truth.FSm, truth.gear_ratio)
+    if effect is None:
+        # An extended MJCF (jointbench diagnose) may carry bench-loop effects as numerics.
+        loop = loop_effects_from_model(m, ax.name) or loop
     ctrl = PIController(gains, T, exp.tau0)
     q_m = np.empty(n)
     q = np.empty(n)
@@ -145,32 +178,106 @@ def _simulate(exp: ExperimentModel, chirp: Chirp, sensors: Sensors, gains: Gains
     q_ref_list = q_ref.tolist()
     noise_list = noise.tolist()
     every = max(1, n // 100)
-    for k in range(n):
-        qm_k = qpos[im]
-        ql_k = qpos[il]
-        if not (abs(qm_k) < 1e6 and abs(ql_k) < 1e6):
-            raise SimulationError(
-                f"joint {ax.name}: the simulation diverged at t = {k * T:.4f} s "
-                f"(q_m = {qm_k:.3g} rad): unstable gains or too large a timestep")
-        meas_m = quant_m(qm_k)
-        meas_l = quant_l(ql_k)
-        u = ctrl.step(meas_m, q_ref_list[k])
-        applied = u + noise_list[k]
-        if loop.active:
-            applied += loop.torque(qm_k, qvel[dm])
-        q_m[k], q[k], tau[k] = meas_m, meas_l, u
-        q_m_true[k], q_true[k], tau_app[k] = qm_k, ql_k, applied
-        ctrl_arr[act] = applied
-        step(m, d, substeps)
-        if progress is not None and k % every == 0:
-            progress(k / n)
+    rk4 = int(m.opt.integrator) == int(mujoco.mjtIntegrator.mjINT_RK4)
+    fault = _Faults(ax.name, T, chirp.amplitude, float(gains.tau_max),
+                    float(np.max(np.abs(m.actuator_ctrlrange[act])))
+                    if m.actuator_ctrllimited[act] else math.inf,
+                    [d.warning[int(w)] for w in _INSTABILITY_WARNINGS],
+                    2 * math.pi * truth.f1_hz * m.opt.timestep, 2.78 if rk4 else 2.0)
+    track_limit, torque_limit, ctrl_limit = fault.track_limit, fault.torque_limit, fault.ctrl_limit
+    bad_qpos, bad_qvel, bad_qacc = fault.bad
+    with _mujoco_warnings() as texts:
+        for k in range(n):
+            qm_k = qpos[im]
+            ql_k = qpos[il]
+            if not (abs(qm_k) < DIVERGED_POSITION and abs(ql_k) < DIVERGED_POSITION):
+                fault.diverged(k, qm_k, ql_k)
+            meas_m = quant_m(qm_k)
+            meas_l = quant_l(ql_k)
+            r_k = q_ref_list[k]
+            if abs(r_k - meas_m) > track_limit:
+                fault.lost_track(k, r_k - meas_m)
+            u = ctrl.step(meas_m, r_k)
+            if abs(u) >= torque_limit:
+                fault.saturated(k, u)
+            applied = u + noise_list[k]
+            if loop.active:
+                applied += loop.torque(qm_k, qvel[dm])
+            if abs(applied) > ctrl_limit:
+                fault.clamped += 1
+            q_m[k], q[k], tau[k] = meas_m, meas_l, u
+            q_m_true[k], q_true[k], tau_app[k] = qm_k, ql_k, applied
+            ctrl_arr[act] = applied
+            step(m, d, substeps)
+            if bad_qpos.number or bad_qvel.number or bad_qacc.number:
+                fault.mujoco_unstable(k + 1, texts)
+            if progress is not None and k % every == 0:
+                progress(k / n)
     for w in range(len(d.warning)):
         if d.warning[w].number:
             raise SimulationError(
                 f"joint {ax.name}: MuJoCo warning {mujoco.mjtWarning(w).name} "
-                f"({d.warning[w].number} times, last at t = {d.time:.4f} s)")
+                f"({d.warning[w].number} times, last at t = {d.time:.4f} s)"
+                + (f": {texts[-1]}" if texts else ""))
     return {"ctrl": ctrl, "t": t, "q_m": q_m, "q": q, "tau": tau, "q_ref": q_ref,
-            "q_m_true": q_m_true, "q_true": q_true, "tau_app": tau_app}
+            "q_m_true": q_m_true, "q_true": q_true, "tau_app": tau_app,
+            "clamped": fault.clamped}
+
+
+class _Faults:
+    """The fault checks of one run (`_simulate`): each failing check raises SimulationError
+    naming the joint, the simulated time and the reason. Also counts the samples whose applied
+    torque MuJoCo's ctrlrange cut (`clamped`)."""
+
+    def __init__(self, joint: str, T: float, amplitude: float, tau_max: float,
+                 ctrl_limit: float, bad: list, w1_dt: float, w_dt_limit: float):
+        self.joint, self.T, self.tau_max, self.ctrl_limit, self.bad = \
+            joint, T, tau_max, ctrl_limit, bad
+        # w1 dt against the integrator's stability bound on the imaginary axis (RK4 2.78,
+        # Euler 2): beyond it the spring mode itself blows up, whatever the gains.
+        self.cause = (f"the timestep is too large for the joint's mode: w1 dt = {w1_dt:.3g} is "
+                      f"over the integrator's stability limit {w_dt_limit:g}; raise the sample "
+                      "rate or the substeps" if math.isfinite(w1_dt) and w1_dt > w_dt_limit else
+                      "unstable gains, check their signs and sizes, or too large a timestep "
+                      "for the model's stiffest mode")
+        self.track_limit = max(TRACKING_LIMIT * amplitude, TRACKING_FLOOR)
+        self.torque_limit = min(tau_max, ctrl_limit)  # the controller's or MuJoCo's clip
+        self.clamped = 0
+        self._last_sign = 0.0
+        self._last_k = -2
+        self._reversals: list[int] = []
+
+    def _fail(self, k: int, reason: str) -> None:
+        raise SimulationError(f"joint {self.joint}: the simulation stopped at "
+                              f"t = {k * self.T:.4f} s: {reason}")
+
+    def diverged(self, k: int, qm: float, q: float) -> None:
+        self._fail(k, f"the state diverged (q_m = {qm:.3g}, q = {q:.3g} rad): {self.cause}")
+
+    def lost_track(self, k: int, error: float) -> None:
+        self._fail(k, f"the motor is {abs(error):.3g} rad from the reference (limit "
+                      f"{self.track_limit:.3g} rad, {TRACKING_LIMIT:g} chirp amplitudes): "
+                      f"{self.cause}; or the torque limit {self.torque_limit:g} cannot hold "
+                      "the axis")
+
+    def saturated(self, k: int, u: float) -> None:
+        sign = math.copysign(1.0, u)
+        if self._last_k == k - 1 and sign == -self._last_sign:
+            self._reversals.append(k)
+            first = self._reversals[-CHATTER_REVERSALS] if \
+                len(self._reversals) >= CHATTER_REVERSALS else None
+            if first is not None and k - first <= CHATTER_SAMPLES * CHATTER_REVERSALS:
+                self._fail(k, f"the torque jumps between -{self.torque_limit:g} and "
+                              f"+{self.torque_limit:g} from one sample to the next ("
+                              f"{CHATTER_REVERSALS} times in {(k - first) * self.T:.3g} s): a "
+                              "limit cycle at the sampling rate, the velocity loop is unstable "
+                              "(kv too large for the sampling period)")
+        self._last_sign, self._last_k = sign, k
+
+    def mujoco_unstable(self, k: int, texts: list[str]) -> None:
+        names = [w for w, stat in zip(("qpos", "qvel", "qacc"), self.bad) if stat.number]
+        self._fail(k, f"MuJoCo found NaN, infinite or huge {'/'.join(names)} and reset the "
+                      f"state ({texts[-1] if texts else 'no message'}): {self.cause}")
 
 
 def default_chirp(exp: ExperimentModel, duration: float = 60.0,

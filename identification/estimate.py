@@ -3,6 +3,10 @@
     X^ = argmin ||y - W X||,  sigma^2 = ||rho||^2 / (r - Np),  C = sigma^2 (W^T W)^-1,
     2 sigma_i and %sigma_ri = 100 sigma_i / |X^_i|.
 
+Beside it, unchanged, `cov_corrected`: the heteroscedasticity-and-autocorrelation-consistent
+sandwich of identification/uncertainty.py, since after filtering and decimation the residuals
+are not white (the paper's sigma assumes they are).
+
 Before solving, the columns are scaled to unit norm and the singular values checked: the
 parameters the data cannot identify (structural or data rank deficiency) are named and left
 out, never returned as numbers.
@@ -14,6 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from identification.uncertainty import HACResult, hac_covariance
+
 COND_LIMIT = 1e8  # scaled condition number beyond which a direction counts as unidentified
 
 
@@ -24,7 +30,9 @@ class NotIdentifiable(ValueError):
 @dataclass(frozen=True)
 class LSResult:
     """Estimate, covariance and the paper's statistics; `unidentifiable` names the parameters
-    dropped by the rank check (their entries in X, sigma are NaN)."""
+    dropped by the rank check (their entries in X, sigma are NaN). `cov_corrected` is the
+    autocorrelation-consistent covariance (identification/uncertainty.py), `hac` how it was
+    obtained; `sigma`, `cov` stay the paper's."""
 
     names: tuple[str, ...]
     X: np.ndarray
@@ -36,6 +44,18 @@ class LSResult:
     cond: float
     unidentifiable: tuple[str, ...]
     reasons: dict[str, str]
+    cov_corrected: np.ndarray | None = None
+    hac: HACResult | None = None
+
+    @property
+    def sigma_corrected(self) -> np.ndarray:
+        """Standard deviations from `cov_corrected` (NaN where not available)."""
+        if self.cov_corrected is None:
+            return np.full(len(self.names), np.nan)
+        return np.sqrt(np.diag(self.cov_corrected))
+
+    def std_corrected(self, name: str) -> float:
+        return float(self.sigma_corrected[self.names.index(name)])
 
     @property
     def rel_sigma_pct(self) -> np.ndarray:
@@ -83,10 +103,14 @@ def _unidentified(Ws: np.ndarray, names: tuple[str, ...]) -> dict[str, str]:
 
 
 def least_squares(W: np.ndarray, y: np.ndarray, names: tuple[str, ...],
-                  weights: np.ndarray | None = None) -> LSResult:
-    """Solve eq. (21) for X with the paper's statistics. `weights` scales each row (weighted
-    least squares, for example 1/sigma per equation block). Raises NotIdentifiable when no
-    parameter is excited, ValueError on shape mismatch."""
+                  weights: np.ndarray | None = None, time: np.ndarray | None = None,
+                  corrected: bool = True) -> LSResult:
+    """Solve eq. (21) for X with the paper's statistics and the corrected covariance.
+    `weights` scales each row (weighted least squares, for example 1/sigma per equation
+    block); `time` labels each row's sampling instant (rows of stacked equation blocks taken
+    at the same instant share a label; default: every row its own instant, in order);
+    `corrected=False` skips the corrected covariance (`cov_corrected` None).
+    Raises NotIdentifiable when no parameter is excited, ValueError on shape mismatch."""
     W = np.asarray(W, dtype=float)
     y = np.asarray(y, dtype=float)
     if W.ndim != 2 or W.shape[0] != len(y) or W.shape[1] != len(names):
@@ -122,21 +146,38 @@ def least_squares(W: np.ndarray, y: np.ndarray, names: tuple[str, ...],
     cov[np.ix_(keep, keep)] = cov_k
     sv = np.linalg.svd(Ws, compute_uv=False)
     residual = y - np.nan_to_num(W[:, keep] @ Xk) if weights is not None else rho
+    hac, cov_corr = None, None
+    if corrected:
+        hac = hac_covariance(Wk, rho, time=time, cov_paper=cov_k)
+        cov_corr = np.full((len(names), len(names)), np.nan)
+        cov_corr[np.ix_(keep, keep)] = hac.cov
     return LSResult(names=tuple(names), X=X, sigma=np.sqrt(np.diag(cov)), cov=cov, sigma2=sigma2,
                     residual=residual, r=r, cond=float(sv[0] / sv[-1]),
-                    unidentifiable=tuple(n for n in names if n in reasons), reasons=reasons)
+                    unidentifiable=tuple(n for n in names if n in reasons), reasons=reasons,
+                    cov_corrected=cov_corr, hac=hac)
 
 
 def block_weighted(W: np.ndarray, y: np.ndarray, names: tuple[str, ...],
-                   block: np.ndarray) -> LSResult:
+                   block: np.ndarray, time: np.ndarray | None = None) -> LSResult:
     """Weighted least squares over equation blocks (motor and link equations of eq. 13): an
     ordinary solution gives each block's residual sigma, then every row is weighted by
     1 / sigma of its block, so that torque (N m) and link (N m, from encoder noise) residuals
-    count by their own noise level."""
-    first = least_squares(W, y, names)
+    count by their own noise level.
+
+    `time` labels each row's sampling instant (for example the raw sample index); the
+    corrected covariance adds the weighted scores of the blocks' rows at one instant, so the
+    covariance between blocks is counted at every lag. Without it the k-th row of every
+    block is taken as the k-th instant."""
+    block = np.asarray(block)
+    if time is None:
+        time = np.empty(len(block), dtype=int)
+        for b in np.unique(block):
+            rows = block == b
+            time[rows] = np.arange(int(rows.sum()))
+    first = least_squares(W, y, names, corrected=False)
     weights = np.ones(len(y))
     for b in np.unique(block):
         rows = block == b
         s = np.sqrt(np.mean(first.residual[rows] ** 2))
         weights[rows] = 1.0 / s if s > 0 else 1.0
-    return least_squares(W, y, names, weights=weights)
+    return least_squares(W, y, names, weights=weights, time=time)

@@ -3,13 +3,14 @@ direct validation (Figure 2). Pure numerics: no I/O, no MuJoCo."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from identification import models as regressors
-from identification.estimate import LSResult, block_weighted, least_squares
-from identification.filtering import FilterSettings, default_settings
+from identification.checks import check_excitation, check_signals
+from identification.estimate import LSResult, NotIdentifiable, block_weighted, least_squares
+from identification.filtering import FilterSettings, default_settings, generic_settings
 from identification.log import Log, LogError
 from identification.physical import InversionError, PhysicalResult, invert_motor_only, table3
 
@@ -32,6 +33,9 @@ class Identification:
     block: np.ndarray
     notes: tuple[str, ...] = ()
     table3: dict[str, float] = field(default_factory=dict)
+    prismatic: bool = False  # the log's `axis: prismatic` (m, N, kg in place of rad, N m, kg m^2)
+    # standard deviations from the autocorrelation-consistent covariance (LSResult.cov_corrected)
+    physical_sigma_corrected: dict[str, float] = field(default_factory=dict)
 
     @property
     def relative_error_pct(self) -> float:
@@ -49,40 +53,95 @@ def _check_length(log: Log, settings: FilterSettings, nd: int) -> None:
                        "are needed", log.path)
 
 
+def settings_for(log: Log, f1_hz: float | None = None) -> tuple[FilterSettings, str | None]:
+    """The default filter for `log`: `default_settings` (the paper's at 350.87 Hz, else from
+    f1), and when neither applies (another rate, no f1) `generic_settings`; the second item
+    is a note saying so, or None."""
+    try:
+        return default_settings(log.sample_rate_hz, f1_hz), None
+    except ValueError:
+        if f1_hz is not None:
+            raise
+    s = generic_settings(log.sample_rate_hz)
+    return s, (f"no first mode given at {log.sample_rate_hz:g} Hz: generic filter wn = "
+               f"{s.wn:.4g} rad/s ({s.wn / (2 * np.pi):.4g} Hz, a tenth of the rate), Nd = {s.Nd}")
+
+
+STIFFNESS_REL_SIGMA = 0.5  # auto: K and JL must be known to better than 50 % (1 sigma)
+
+
+def stiffness_rejection(result: Identification) -> str | None:
+    """Why a flexible identification does NOT identify a stiffness in the band, or None when
+    it does. `auto` keeps the flexible model only when all hold:
+    - K, Jm, JL > 0 (identified) and FVm, FV, FSm >= 0 (a physical two-mass axis);
+    - K and JL have relative standard deviations under 50 %;
+    - motor-only only: the identified first mode sqrt(K (1/Jm + 1/JL)) / 2 pi lies inside the
+      band the regressor sees, below the decimated cutoff 0.8 Fs / (2 Nd) (the joint-motor
+      model measures the deflection q_m - q directly).
+    """
+    p, sd = result.physical, result.physical_sigma
+    for k in ("K", "Jm", "JL"):
+        if not p.get(k, 0.0) > 0:
+            why = result.ls.reasons.get(k) if k in result.ls.names else None
+            return (f"{k} is not identified: {why}" if why else
+                    f"{k} = {p.get(k, float('nan')):.4g} is not positive")
+    for k in ("K", "JL"):
+        rel = sd.get(k, np.inf) / abs(p[k])
+        if not rel < STIFFNESS_REL_SIGMA:
+            return f"{k} has a relative standard deviation of {100 * rel:.0f} % (over 50 %)"
+    if result.model == "joint-motor":
+        return None if all(p.get(k, 0.0) >= 0 for k in ("FVm", "FV", "FSm")) else \
+            "a friction coefficient is negative (unphysical)"
+    f1 = float(np.sqrt(p["K"] * (1 / p["Jm"] + 1 / p["JL"])) / (2 * np.pi))
+    cut = result.settings.decimated_cutoff_hz
+    if f1 >= cut:
+        return (f"the identified first mode {f1:.4g} Hz lies outside the band (decimated "
+                f"cutoff {cut:.4g} Hz)")
+    for k in ("FVm", "FV", "FSm"):
+        if p.get(k, 0.0) < 0:
+            return f"{k} = {p[k]:.4g} is negative (unphysical)"
+    return None
+
+
 def identify(log: Log, model: str = "auto", settings: FilterSettings | None = None,
              f1_hz: float | None = None) -> Identification:
     """Identify the axis of `log` with `model` (CONTRACT section 3 names, plus
     `motor-only-printed`, the paper's eq. 18 as printed). `auto` takes joint-motor when `q`
     is logged, else motor-only, and falls back to rigid when the data does not identify a
-    stiffness. Raises LogError for unusable logs and NotIdentifiable when nothing is excited.
+    stiffness in the band (`stiffness_rejection`; with q, for example a rigid axis whose q
+    follows q_m). Without settings the filter is
+    `settings_for(log, f1_hz)`. Raises LogError for unusable logs and NotIdentifiable when
+    nothing is excited.
     """
     if model not in MODEL_CHOICES:
         raise ValueError(f"unknown model {model!r} (choices: {', '.join(MODEL_CHOICES)})")
-    settings = settings or default_settings(log.sample_rate_hz, f1_hz)
     notes: list[str] = []
+    if settings is None:
+        settings, note = settings_for(log, f1_hz)
+        if note:
+            notes.append(note)
     if model == "auto":
-        if log.q is not None:
-            model = "joint-motor"
+        flexible = "joint-motor" if log.q is not None else "motor-only"
+        try:
+            result = identify(log, flexible, settings)
+        except (InversionError, NotIdentifiable) as err:
+            notes.append(f"auto: {flexible} model rejected ({err}); rigid model used")
+            model = "rigid"
         else:
-            try:
-                result = identify(log, "motor-only", settings)
-            except InversionError as err:
-                notes.append(f"auto: motor-only model rejected ({err}); rigid model used")
-                model = "rigid"
-            else:
-                if result.physical.get("K", 0) > 0 and all(
-                        result.physical_sigma.get(k, np.inf) < 0.5 * abs(result.physical[k])
-                        for k in ("K", "JL")):
-                    return result
-                notes.append("auto: the data does not identify a stiffness in the band "
-                             "(K or JL has a relative standard deviation over 50 %); "
-                             "rigid model used")
-                model = "rigid"
+            why = stiffness_rejection(result)
+            if why is None:
+                return replace(result, notes=tuple(notes) + result.notes)
+            notes.append(f"auto: the data does not identify a stiffness in the band "
+                         f"({flexible} model: {why}); rigid model used")
+            model = "rigid"
+    if model != "rigid" and not (settings.zoh and settings.filter_torque):
+        notes.append("the no-ZOH / unfiltered-torque options apply to the rigid model only")
     nd = 4 if model.startswith("motor-only") else 2
     _check_length(log, settings, nd)
+    check_signals(log, model, settings)
     if model == "joint-motor":
         reg = regressors.joint_motor(log, settings)
-        ls = block_weighted(reg.W, reg.y, reg.names, reg.block)
+        ls = block_weighted(reg.W, reg.y, reg.names, reg.block, time=reg.index)
     elif model == "motor-only":
         reg = regressors.motor_only(log, settings, corrected=True)
         ls = least_squares(reg.W, reg.y, reg.names)
@@ -92,22 +151,28 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
     else:
         reg = regressors.rigid(log, settings)
         ls = least_squares(reg.W, reg.y, reg.names)
+    ls = check_excitation(log, reg, ls)
     physical: dict[str, float] = {}
     sigma: dict[str, float] = {}
     t3: dict[str, float] = {}
     if model.startswith("motor-only"):
         X = {n: ls.value(n) for n in ls.names if n not in ls.unidentifiable}
         try:
-            t3 = table3(X)
-        except (InversionError, KeyError):
+            t3 = table3(X, {n: ls.std(n) for n in X})
+        except InversionError as err:
+            notes.append(f"Table 3 not computed: {err}")
+        except KeyError:
             t3 = {}
         phys = invert_motor_only(ls, g=log.gravity, qc=float(np.mean(log.q_m)))
         physical, sigma = phys.as_dict(), {n: phys.std(n) for n in phys.names}
+        sigma_corr = _motor_only_sigma_corrected(ls, log)
     else:
         for n in ls.names:
             if n not in ls.unidentifiable:
                 physical[n] = ls.value(n)
                 sigma[n] = ls.std(n)
+        sigma_corr = {n: ls.std_corrected(n) for n in physical
+                      if np.isfinite(ls.std_corrected(n))}
     y_pred = reg.W[:, [i for i, n in enumerate(ls.names) if n not in ls.unidentifiable]] @ \
         ls.X[[i for i, n in enumerate(ls.names) if n not in ls.unidentifiable]]
     for n in ls.unidentifiable:
@@ -117,4 +182,21 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
             notes.append(f"{n} = {v:.4g} is unphysical (negative)")
     return Identification(model=reg.model, ls=ls, physical=physical, physical_sigma=sigma,
                           settings=settings, y=reg.y, y_pred=y_pred, t=log.t[reg.index],
-                          block=reg.block, notes=tuple(notes), table3=t3)
+                          block=reg.block, notes=tuple(notes), table3=t3,
+                          prismatic=log.prismatic, physical_sigma_corrected=sigma_corr)
+
+
+def _motor_only_sigma_corrected(ls: LSResult, log: Log) -> dict[str, float]:
+    """Physical standard deviations of the motor-only model from the corrected covariance of
+    the X's, through the same weighted inversion as the paper's; {} when unavailable."""
+    if ls.cov_corrected is None:
+        return {}
+    keep = [i for i, n in enumerate(ls.names) if n not in ls.unidentifiable]
+    if not np.all(np.isfinite(ls.cov_corrected[np.ix_(keep, keep)])):
+        return {}
+    swapped = replace(ls, cov=ls.cov_corrected, sigma=ls.sigma_corrected)
+    try:
+        phys = invert_motor_only(swapped, g=log.gravity, qc=float(np.mean(log.q_m)))
+    except (InversionError, np.linalg.LinAlgError):
+        return {}
+    return {n: phys.std(n) for n in phys.names}

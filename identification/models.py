@@ -98,9 +98,16 @@ def motor_only(log: Log, s: FilterSettings, corrected: bool = True) -> Regressor
 
 
 def rigid(log: Log, s: FilterSettings) -> Regressor:
-    """tau_m = J qm'' + FV qm' + FS sign(qm') + offset (CONTRACT section 3)."""
+    """tau_m = J qm'' + FV qm' + FS sign(qm') + offset (CONTRACT section 3).
+
+    The torque is zero-order-hold aligned when `s.zoh` and Butterworth filtered when
+    `s.filter_torque` (both by default); the EMPS reference chain uses neither (it pairs the
+    raw force with the filtered positions and lets the decimation filter both in parallel).
+    """
     qm = _filtered(log.q_m, s, 2)
-    tau = lowpass(zoh_align(log.tau_m), s.wn, s.ts, s.m)
+    tau = zoh_align(log.tau_m) if s.zoh else np.asarray(log.tau_m, dtype=float)
+    if s.filter_torque:
+        tau = lowpass(tau, s.wn, s.ts, s.m)
     W = np.column_stack([qm[2], qm[1], _sign(qm[1]), np.ones(len(log.t))])
     y, W, idx = decimate_parallel(tau, W, s)
     return Regressor("rigid", RIGID, y, W, np.zeros(len(y), int), idx, s)

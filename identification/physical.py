@@ -61,12 +61,28 @@ def _x_of_theta(theta: dict[str, float], names: tuple[str, ...], g: float, qc: f
     return np.array([full[n] for n in names])
 
 
-def table3(X: dict[str, float]) -> dict[str, float]:
+def _near_zero(X: dict[str, float], sigma: dict[str, float] | None, name: str,
+               why: str) -> None:
+    """InversionError when X[name] is missing, zero, not finite, or (given `sigma`) within two
+    standard deviations of zero; `why` says what needs it."""
+    if name not in X:
+        raise InversionError(f"{name} is not identified: {why}")
+    value = X[name]
+    s = None if sigma is None else sigma.get(name)
+    if not np.isfinite(value) or value == 0:
+        raise InversionError(f"{name} = {value:.3g}: {why}")
+    if s is not None and np.isfinite(s) and abs(value) <= 2 * s:
+        raise InversionError(f"{name} = {value:.3g} is not distinguishable from zero "
+                             f"(2 sigma = {2 * s:.3g}): {why}")
+
+
+def table3(X: dict[str, float], sigma: dict[str, float] | None = None) -> dict[str, float]:
     """The paper's Table 3: Jm = X3/X1, FVm = (X4 - Jm X2)/X1, FV = X6 - FVm, K = FV/X2,
-    JL = X1 K, FSm = X7. Raises InversionError when X1 or X2 is zero."""
-    if X["X1"] == 0 or X["X2"] == 0:
-        raise InversionError("Table 3 divides by X1 and X2: "
-                             f"X1 = {X['X1']:.3g}, X2 = {X['X2']:.3g}; one is zero")
+    JL = X1 K, FSm = X7. Raises InversionError when X1 or X2 is zero, not finite, or (given
+    their standard deviations `sigma`) within two standard deviations of zero, where the
+    divisions turn noise into any value."""
+    _near_zero(X, sigma, "X1", "Table 3 divides by it (Jm = X3/X1, FVm = (X4 - Jm X2)/X1)")
+    _near_zero(X, sigma, "X2", "Table 3 divides by it (K = FV/X2)")
     Jm = X["X3"] / X["X1"]
     FVm = (X["X4"] - Jm * X["X2"]) / X["X1"]
     FV = X["X6"] - FVm
@@ -100,10 +116,11 @@ def invert_motor_only(ls: LSResult, g: float = 9.81, qc: float = 0.0) -> Physica
             raise InversionError(f"{need} is not identified ({ls.reasons.get(need, '')}): "
                                  "the physical parameters cannot be computed")
     X = {n: ls.value(n) for n in names}
-    for need in ("X1", "X3"):
-        if abs(X[need]) <= 2 * ls.std(need):
-            raise InversionError(f"{need} = {X[need]:.3g} is not distinguishable from zero "
-                                 f"(2 sigma = {2 * ls.std(need):.3g}): the inversion divides by it")
+    sigma = {n: ls.std(n) for n in names}
+    _near_zero(X, sigma, "X1", "the motor-only inversion divides by it (Jm = X3/X1, "
+                               "K = (X5 - Jm - X2 FVm)/X1)")
+    _near_zero(X, sigma, "X3", "the motor-only inversion needs X3 = Jm JL/K to separate Jm "
+                               "from JL")
     idx = [ls.names.index(n) for n in names]
     C = ls.cov[np.ix_(idx, idx)]
     L = np.linalg.cholesky(C)

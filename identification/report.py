@@ -24,7 +24,32 @@ UNITS_REVOLUTE = {"Jm": "kg m^2", "JL": "kg m^2", "J": "kg m^2", "K": "N m/rad",
                   "FVm": "N m s/rad", "FV": "N m s/rad", "FSm": "N m", "FS": "N m",
                   "MX": "kg m", "MY": "kg m", "offset": "N m"}
 UNITS_PRISMATIC = {"J": "kg", "FV": "N s/m", "FS": "N", "offset": "N", "K": "N/m",
-                   "Jm": "kg", "JL": "kg", "FVm": "N s/m", "FSm": "N"}
+                   "Jm": "kg", "JL": "kg", "FVm": "N s/m", "FSm": "N", "MX": "kg", "MY": "kg"}
+
+
+def units(prismatic: bool) -> dict[str, str]:
+    """Units of the physical parameter names (CONTRACT: a prismatic axis uses m and N in place
+    of rad and N m, so inertias are masses in kg)."""
+    return dict(UNITS_PRISMATIC if prismatic else UNITS_REVOLUTE)
+
+
+def model_truth(model: str, truth: dict[str, float] | None) -> dict[str, float]:
+    """The truth in the parameters of `model`: for the rigid model (eq. 6 with q = qm, CONTRACT
+    section 3) J = Jm + JL, FV = FVm + FV, FS = FSm + FS; the other models use the truth as is."""
+    truth = dict(truth or {})
+    if model != "rigid":
+        return truth
+    if "Jm" in truth and "JL" in truth:
+        truth["J"] = truth["Jm"] + truth["JL"]
+    for total, motor in (("FV", "FVm"), ("FS", "FSm")):
+        if total in truth or motor in truth:
+            truth[total] = truth.get(total, 0.0) + truth.get(motor, 0.0)
+    return truth
+
+
+def signal_units(prismatic: bool) -> tuple[str, str]:
+    """(position unit, force or torque unit) of a log's signals."""
+    return ("m", "N") if prismatic else ("rad", "N m")
 
 
 def _num(x: float, width: int = 12) -> str:
@@ -50,7 +75,8 @@ def parameter_table(result: Identification, truth: dict[str, float] | None = Non
     """The LS estimate in the paper's layout (parameter, X, 2 sigma, % sigma_r), with the
     paper's value, the truth and the error % when given."""
     ls = result.ls
-    truth = truth or {}
+    truth = model_truth(result.model, truth)
+    unit = units(result.prismatic)
     order = [n for n in TABLE1_ORDER if n in ls.names] if result.model == "joint-motor" \
         else list(ls.names)
     head = f"{'Parameter':<10}{'X':>12}{'2 sigma':>12}{'% sigma_r':>11}"
@@ -58,6 +84,7 @@ def parameter_table(result: Identification, truth: dict[str, float] | None = Non
         head += f"{'paper':>12}"
     if truth:
         head += f"{'truth':>12}{'error %':>10}"
+    head += "  unit"
     lines = [title, head, "-" * len(head)] if title else [head, "-" * len(head)]
     for n in order:
         x, s = ls.value(n), ls.std(n)
@@ -73,6 +100,8 @@ def parameter_table(result: Identification, truth: dict[str, float] | None = Non
             else:
                 err = 100 * (x - tv) / abs(tv) if tv else float("nan")
                 row += f"{_num(tv)}{err:>10.3f}"
+        if n in unit:
+            row = f"{row:<{len(head) - 6}}  {unit[n]}"
         lines.append(row)
     return "\n".join(lines)
 
@@ -81,9 +110,11 @@ def physical_table(result: Identification, truth: dict[str, float] | None = None
                    title: str = "") -> str:
     """Physical parameters: this method (with sigma), Table 3 as printed, the paper, truth."""
     truth = truth or {}
+    unit = units(result.prismatic)
     head = f"{'Parameter':<10}{'estimate':>12}{'2 sigma':>12}{'Table 3 eq.':>13}{'paper':>12}"
     if truth:
         head += f"{'truth':>12}{'error %':>10}{'T3 err %':>10}"
+    head += "  unit"
     lines = [title, head, "-" * len(head)] if title else [head, "-" * len(head)]
     for n in ("Jm", "K", "JL", "FSm", "FVm", "FV", "MX", "MY"):
         if n not in result.physical:
@@ -95,23 +126,30 @@ def physical_table(result: Identification, truth: dict[str, float] | None = None
         if truth and n in truth:
             tv = truth[n]
             row += f"{_num(tv)}{100 * (v - tv) / abs(tv):>10.3f}{100 * (t3 - tv) / abs(tv):>10.3f}"
-        lines.append(row)
+        lines.append(f"{row:<{len(head) - 6}}  {unit.get(n, '')}".rstrip())
     return "\n".join(lines)
 
 
 def to_json(result: Identification, truth: dict[str, float] | None = None) -> dict:
     """The `identify --json` object of CONTRACT section 3 (plus optional keys)."""
     ls = result.ls
+    truth = model_truth(result.model, truth)
     params = {}
     for n in ls.names:
         if n in ls.unidentifiable:
             params[n] = {"value": None, "sigma": None, "rel_sigma_pct": None,
-                         "identifiable": False, "reason": ls.reasons[n]}
+                         "identifiable": False, "reason": ls.reasons[n],
+                         "sigma_corrected": None}
             continue
         x, s = ls.value(n), ls.std(n)
+        sc = ls.std_corrected(n) if ls.cov_corrected is not None else math.nan
         params[n] = {"value": x, "sigma": s,
-                     "rel_sigma_pct": 100 * s / abs(x) if x else None}
+                     "rel_sigma_pct": 100 * s / abs(x) if x else None,
+                     "sigma_corrected": sc if math.isfinite(sc) else None}
+    unit = units(result.prismatic)
     out = {"model": result.model, "parameters": params,
+           "axis": "prismatic" if result.prismatic else "revolute",
+           "units": {n: unit[n] for n in list(params) + list(result.physical) if n in unit},
            "physical": dict(result.physical),
            "physical_sigma": dict(result.physical_sigma),
            "filter": {"wn_rad_s": result.settings.wn, "order": result.settings.m,
@@ -120,6 +158,15 @@ def to_json(result: Identification, truth: dict[str, float] | None = None) -> di
            "relative_error_pct": result.relative_error_pct,
            "condition_number": ls.cond,
            "notes": list(result.notes)}
+    if result.physical_sigma_corrected:
+        out["physical_sigma_corrected"] = {k: v for k, v in
+                                           result.physical_sigma_corrected.items()
+                                           if math.isfinite(v)}
+    if ls.hac is not None:
+        out["uncertainty"] = {"sigma": "paper: ||rho||^2 / (r - Np) (W^T W)^-1, white residuals",
+                              "sigma_corrected": "HAC sandwich, VAR(1) prewhitened, "
+                                                 f"{ls.hac.kernel} kernel",
+                              "bandwidth": ls.hac.bandwidth, "lag1_autocorrelation": ls.hac.ar1}
     if result.table3:
         out["table3"] = dict(result.table3)
     if truth:

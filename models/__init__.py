@@ -8,6 +8,15 @@ for an axis named X,
   - motor actuator `X_motor`     the motor torque tau_m on `X_motor` (ctrlrange = torque limit);
   - optional `<numeric name="X_gear_ratio">`.
 All values are referred to the joint side, as in the paper.
+
+A rigid axis (no joint stiffness, the `rigid` identification model) is the same convention
+without rotor joint and spring:
+  - hinge (or slide) `X`         the axis joint: its whole inertia (armature and body), damping
+                                 FV, frictionloss FS;
+  - motor actuator `X_motor`     the motor torque (force, for a slide) on `X` itself;
+  - optional passive actuator `X_offset` (gain 0, constant bias force): a constant load.
+There must be no joint `X_motor` and no tendon `X_spring`; `Axis.rigid` is True and its motor
+and link indices coincide (q = q_m).
 """
 
 from __future__ import annotations
@@ -41,7 +50,8 @@ def model_path(name: str | Path) -> Path:
 
 @dataclass(frozen=True)
 class Axis:
-    """Indices of one flexible axis in a compiled model."""
+    """Indices of one axis in a compiled model. For a rigid axis `tendon` is -1 and the motor
+    indices equal the link indices (one joint)."""
 
     name: str
     link_joint: int
@@ -53,14 +63,46 @@ class Axis:
     link_dof: int
     motor_dof: int
 
+    @property
+    def rigid(self) -> bool:
+        """True for a rigid axis (one joint driven directly, no spring)."""
+        return self.tendon < 0
+
 
 def _name(model: mujoco.MjModel, obj: mujoco.mjtObj, index: int) -> str:
     return mujoco.mj_id2name(model, obj, index) or ""
 
 
+def _rigid_axes(model: mujoco.MjModel, source: str, flexible: set[str]) -> list[Axis]:
+    """Rigid axes: an actuator `X_motor` with a joint transmission to joint `X`, no joint
+    `X_motor`, no tendon `X_spring` (module docstring), in actuator order."""
+    axes = []
+    for act in range(model.nu):
+        aname = _name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, act)
+        if not aname.endswith("_motor"):
+            continue
+        axis = aname[: -len("_motor")]
+        if axis in flexible or mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, aname) >= 0:
+            continue  # flexible axis, or a malformed one that find_axes reports
+        j = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, axis)
+        if j < 0:
+            continue  # no joint X: not an axis (an extra actuator of an extended model)
+        if int(model.actuator_trntype[act]) != int(mujoco.mjtTrn.mjTRN_JOINT) or \
+                model.actuator_trnid[act, 0] != j:
+            raise ModelStructureError(
+                f"{source}: actuator '{aname}' of the rigid axis '{axis}' must drive joint '{axis}'")
+        if int(model.jnt_type[j]) not in (int(mujoco.mjtJoint.mjJNT_HINGE),
+                                         int(mujoco.mjtJoint.mjJNT_SLIDE)):
+            raise ModelStructureError(f"{source}: joint '{axis}' must be a hinge or slide")
+        qadr, dadr = int(model.jnt_qposadr[j]), int(model.jnt_dofadr[j])
+        axes.append(Axis(axis, j, j, -1, act, qadr, qadr, dadr, dadr))
+    return axes
+
+
 def find_axes(model: mujoco.MjModel, source: str = "<model>") -> list[Axis]:
-    """The flexible axes of `model`, in tendon order. ModelStructureError names what is
-    missing or malformed when the model does not follow the axis convention."""
+    """The axes of `model`: the flexible ones in tendon order, then the rigid ones in
+    actuator order. ModelStructureError names what is missing or malformed when the model
+    does not follow the axis convention."""
     axes = []
     for tid in range(model.ntendon):
         tname = _name(model, mujoco.mjtObj.mjOBJ_TENDON, tid)
@@ -94,10 +136,12 @@ def find_axes(model: mujoco.MjModel, source: str = "<model>") -> list[Axis]:
         axes.append(Axis(axis, jl, jm, tid, act, int(model.jnt_qposadr[jl]),
                          int(model.jnt_qposadr[jm]), int(model.jnt_dofadr[jl]),
                          int(model.jnt_dofadr[jm])))
+    axes += _rigid_axes(model, source, {a.name for a in axes})
     if not axes:
         raise ModelStructureError(
-            f"{source}: no flexible axis found: expected a fixed tendon 'X_spring' coupling "
-            "joints 'X_motor' and 'X', and an actuator 'X_motor' (see models/__init__.py)")
+            f"{source}: no flexible axis found, nor a rigid one: expected a fixed tendon 'X_spring' coupling "
+            "joints 'X_motor' and 'X', and an actuator 'X_motor' (flexible axis), or an "
+            "actuator 'X_motor' driving joint 'X' (rigid axis) (see models/__init__.py)")
     return axes
 
 

@@ -69,6 +69,8 @@ def axis_truth(model: mujoco.MjModel, axis: Axis, qpos: np.ndarray) -> AxisTruth
         q0 = -math.copysign(math.pi / 2, MX)
     else:
         q0 = -math.atan(MX / MY)  # eq. (17)
+    if axis.rigid:
+        return rigid_axis_truth(model, axis, JL, MX, MY, q0, g)
     Jm = float(model.dof_armature[axis.motor_dof])
     K = float(model.tendon_stiffness[axis.tendon])
     return AxisTruth(
@@ -80,3 +82,17 @@ def axis_truth(model: mujoco.MjModel, axis: Axis, qpos: np.ndarray) -> AxisTruth
         MX=MX, MY=MY, q0=q0,
         f1_hz=math.sqrt(K * (1.0 / Jm + 1.0 / JL)) / (2 * math.pi), g=g,
         gear_ratio=gear_ratio(model, axis.name))
+
+
+def rigid_axis_truth(model: mujoco.MjModel, axis: Axis, M_jj: float, MX: float, MY: float,
+                     q0: float, g: float) -> AxisTruth:
+    """Truth of a rigid axis (models/__init__.py): one joint `X`, so K and f1 are infinite;
+    as in the two-mass convention the joint's armature is the rotor inertia Jm, the rest of
+    M_jj the link inertia JL, and joint `X`'s damping and frictionloss are FV and FS (FVm =
+    FSm = 0). The rigid model's parameters are J = Jm + JL, FV and FS."""
+    Jm = float(model.dof_armature[axis.motor_dof])
+    return AxisTruth(
+        K=math.inf, Jm=Jm, JL=M_jj - Jm, FVm=0.0, FSm=0.0,
+        FV=float(model.dof_damping[axis.link_dof]),
+        FS=float(model.dof_frictionloss[axis.link_dof]),
+        MX=MX, MY=MY, q0=q0, f1_hz=math.inf, g=g, gear_ratio=gear_ratio(model, axis.name))

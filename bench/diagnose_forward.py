@@ -1,0 +1,177 @@
+"""Forward view of `diagnose`: the nominal and the extended MuJoCo axes, built from the
+parameters identified on the log, replay the logged experiment in closed loop (CONTRACT
+section 2, bench.replay) and are compared with the measured q_m, q and tau_m.
+
+The named effect goes into the MJCF where MuJoCo expresses it (bench.effects.apply_to_spec):
+backlash as a dead-band tendon, spring damping as tendon damping, hardening as a stacked
+dead-band tendon, link Coulomb friction as frictionloss, torque lag as an exact first-order
+filter actuator, gravity as the link's mass and centre of mass, an offset as a passive
+constant-bias actuator. Torque ripple and asymmetric friction depend on the motor angle and
+velocity in ways no MuJoCo actuator bias does: they are written as custom numerics
+(`X_ripple` = amplitude, period, phase; `X_asymmetry` = a, FVm, FSm) that the bench loop
+applies (bench.effects.loop_effects_from_model), in the replay and in `jointbench simulate`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+from typing import Callable
+
+import mujoco
+import numpy as np
+
+from bench import nominal as nominal_axes
+from bench.diagnose import Diagnosis, ForwardView
+from bench.effects import HiddenEffect, apply_to_spec, loop_effects_from_model
+from bench.replay import ReplayError, replay
+from identification.log import Log
+
+
+def _axis_name(d: Diagnosis) -> str:
+    return d.log.meta.get("joint") or "axis1"
+
+
+def _pos(p: dict, key: str) -> float:
+    v = float(p.get(key, 0.0))
+    return v if v > 0 and math.isfinite(v) else 0.0
+
+
+def build_spec(d: Diagnosis, extended: bool) -> mujoco.MjSpec:
+    """The nominal (extended=False) or extended MjSpec of the diagnosed axis."""
+    log = d.log
+    name = _axis_name(d)
+    p = dict(d.nominal_parameters)
+    c = d.named if extended else None
+    if c is not None:
+        p.update(d.extended_parameters)
+    common = dict(timestep=log.ts, tau_max=log.meta_float("tau_max"), gravity=log.gravity,
+                  prismatic=log.prismatic, name=name)
+    if "K" in d.nominal_parameters:
+        FS = _pos(p, "FS") if c is not None and c.effect == "link_coulomb" else 0.0
+        spec = nominal_axes.two_mass_axis(
+            Jm=p["Jm"], FVm=_pos(p, "FVm"), FSm=_pos(p, "FSm"), K=p["K"], JL=p["JL"],
+            FV=_pos(p, "FV"), FS=FS, MX=0.0 if log.prismatic else p.get("MX", 0.0),
+            MY=0.0 if log.prismatic else p.get("MY", 0.0), **common)
+        K = p["K"]
+    else:
+        spec = nominal_axes.rigid_axis(J=p["J"], FV=_pos(p, "FV"), FS=_pos(p, "FS"),
+                                       offset=0.0, **common)
+        K = 0.0
+    if c is None:
+        return spec
+    eff = c.effect
+    if eff in ("backlash", "spring_damping", "torque_lag"):
+        value = p[{"backlash": "backlash_rad", "spring_damping": "D",
+                   "torque_lag": "lag_s"}[eff]]
+        apply_to_spec(spec, name, HiddenEffect(eff, max(value, 0.0)), K)
+    elif eff == "hardening":
+        apply_to_spec(spec, name, HiddenEffect(eff, max(p["hardening_ratio"], 0.0),
+                                               {"deflection": p["deflection_rad"]}), K)
+    elif eff == "offset":
+        motor_joint = f"{name}_motor" if K else name
+        load = spec.add_actuator()
+        load.name = f"{name}_offset"
+        load.target = motor_joint
+        load.trntype = mujoco.mjtTrn.mjTRN_JOINT
+        load.gaintype = mujoco.mjtGain.mjGAIN_FIXED
+        load.gainprm[0] = 0.0
+        load.biastype = mujoco.mjtBias.mjBIAS_AFFINE
+        load.biasprm[:3] = [-p["offset"], 0.0, 0.0]
+    elif eff == "torque_ripple":
+        spec.add_numeric(name=f"{name}_ripple", data=[p["ripple_amplitude"],
+                                                      p["ripple_period_rad"],
+                                                      p["ripple_phase_rad"]])
+    elif eff == "asymmetric_friction":
+        FVm = _pos(p, "FVm") if K else _pos(p, "FV")
+        FSm = _pos(p, "FSm") if K else _pos(p, "FS")
+        spec.add_numeric(name=f"{name}_asymmetry", data=[p["asymmetry"], FVm, FSm])
+    # gravity and link_coulomb are in the parameters already.
+    return spec
+
+
+def _tau0(log: Log) -> float | None:
+    # With ki = 0 there is no integrator: CONTRACT's I[-1] = tau_m[0] would hold the first
+    # logged torque for ever, which is only right for a log starting at rest (EMPS starts in
+    # motion: 89 N held, a constant 65 um off). A P-only drive starts with I = 0.
+    return 0.0 if log.meta_float("ki") == 0 else None
+
+
+def _view(d: Diagnosis, spec: mujoco.MjSpec, disturbance: np.ndarray | None = None,
+          disturbance_at: str = "link") -> ForwardView:
+    log = d.log
+    model, axis = nominal_axes.compile_axis(spec, "<diagnosis>")
+    loop = loop_effects_from_model(model, axis.name)
+    r = replay(model, axis, log, disturbance=disturbance, disturbance_at=disturbance_at,
+               tau0=_tau0(log), loop=loop)
+    e_qm = float(np.sqrt(np.mean((r.q_m - log.q_m) ** 2)))
+    motion = float(np.sqrt(np.mean((log.q_m - np.mean(log.q_m)) ** 2)))
+    e_tau = 100 * float(np.linalg.norm(r.tau_m - log.tau_m) / np.linalg.norm(log.tau_m))
+    e_q = None
+    if r.q is not None and log.q is not None:
+        e_q = float(np.sqrt(np.mean((r.q - log.q) ** 2)))
+    return ForwardView(q_m_rms=e_qm, q_rms=e_q, tau_rel_pct=e_tau,
+                       q_m_rel_pct=100 * e_qm / motion if motion > 0 else float("nan"),
+                       t=r.t, q_m=r.q_m, q=r.q, tau_m=r.tau_m)
+
+
+def add_forward_view(d: Diagnosis, say: Callable[[str], None]) -> Diagnosis:
+    """Replay the nominal and (when an effect is named) the extended axis."""
+    log = d.log
+    if log.q_ref is None or log.meta_float("kv") is None:
+        return dataclasses.replace(d, forward_note=(
+            "not replayed: the log has no q_ref column or no controller gains (kp, kv, ki) "
+            "in its metadata (CONTRACT section 2)"))
+    try:
+        say("forward view: nominal replay")
+        fn = _view(d, build_spec(d, extended=False))
+        fe = None
+        if d.named is not None:
+            say(f"forward view: extended replay ({d.named_cause})")
+            fe = _view(d, build_spec(d, extended=True))
+    except (ReplayError, ValueError) as err:
+        return dataclasses.replace(d, forward_note=f"not replayed: {err}")
+    return dataclasses.replace(d, forward_nominal=fn, forward_extended=fe)
+
+
+def write_models(d: Diagnosis, out: Path) -> list[Path]:
+    """nominal.xml and, when an effect is named, extended.xml (atomic writes)."""
+    paths = []
+    try:
+        nominal_axes.write_xml(build_spec(d, extended=False), out / "nominal.xml")
+        paths.append(out / "nominal.xml")
+        if d.named is not None:
+            nominal_axes.write_xml(build_spec(d, extended=True), out / "extended.xml")
+            paths.append(out / "extended.xml")
+    except ValueError:
+        pass
+    return paths
+
+
+def cross_validate(d: Diagnosis, other: Log, disturbance: np.ndarray | None = None,
+                   disturbance_at: str = "link") -> dict:
+    """Both models of diagnosis `d` (identified and extended on d.log) evaluated, unchanged, on
+    another log: the inverse view (relative error of the motor equation, section 4's metric)
+    and the forward view (closed-loop replay with `disturbance` applied to the link or
+    carriage, or at the motor input: EMPS's pulses are volts at the drive input, already in
+    the logged force, so they go in as gtau x pulses at the motor)."""
+    from identification.discrepancy import nominal as nominal_rows, predict, with_parameters
+
+    rows = with_parameters(nominal_rows(other, d.settings), d.inverse.nominal.X)
+    out: dict = {"inverse": {}, "forward": {}}
+    models = {"nominal": None, "extended": d.named}
+    for label, c in models.items():
+        if label == "extended" and c is None:
+            continue
+        res = predict(rows, c)
+        out["inverse"][label] = {("motor", "link")[int(b)]: rows.relative_error_pct(res, int(b))
+                                 for b in np.unique(rows.block)}
+    dv = dataclasses.replace(d, log=other)
+    for label, ext in (("nominal", False), ("extended", True)):
+        if ext and d.named is None:
+            continue
+        f = _view(dv, build_spec(dv, extended=ext), disturbance, disturbance_at)
+        out["forward"][label] = {"tau_rel_pct": f.tau_rel_pct, "q_m_rms": f.q_m_rms,
+                                 "q_m_rel_pct": f.q_m_rel_pct}
+    return out

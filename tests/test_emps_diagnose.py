@@ -1,0 +1,65 @@
+"""`diagnose` on real data (EMPS, tests/data/emps): identify and extend on the estimation file,
+cross-validate on the other file (issue: real measured data).
+
+References: the EMPS README's published figures. The reference inverse model leaves 4.12 % on
+the estimation data; its direction-dependent friction variant 3.19 %. Our nominal model has no
+offset (`offset` is one of the candidate effects), so it starts higher.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from bench.cli import main
+from bench.diagnose import diagnose
+from bench.diagnose_forward import cross_validate
+from identification.log import read_log
+
+DATA = Path(__file__).parent / "data" / "emps"
+GTAU = 35.15065188   # N/V: the pulses column holds volts at the drive input (EMPS README)
+
+
+@pytest.fixture(scope="module")
+def emps():
+    est = read_log(DATA / "emps_estimation.csv")
+    val = read_log(DATA / "emps_validation_pulses.csv")
+    return est, val, diagnose(est)
+
+
+def test_emps_named_cause_is_asymmetric_friction(emps):
+    _, _, d = emps
+    assert d.named_cause == "asymmetric_friction"
+    untested = {c.effect for c in d.inverse.candidates if not c.testable}
+    assert untested == {"gravity", "link_coulomb", "backlash", "spring_damping", "hardening"}
+    before, after = d.inverse_before_after
+    # The published asymmetric variant (5 parameters) leaves 3.19 %; ours (4) within 0.3 %.
+    assert after == pytest.approx(3.19, abs=0.3)
+    assert before / after >= 2.0
+    # The forward view (closed-loop replay) improves on the estimation file too.
+    assert d.forward_extended.tau_rel_pct < d.forward_nominal.tau_rel_pct
+
+
+def test_emps_cross_validated_gain(emps):
+    est, val, d = emps
+    xv = cross_validate(d, val, GTAU * val.extra["pulses_N"], "motor")
+    inv_n, inv_e = xv["inverse"]["nominal"]["motor"], xv["inverse"]["extended"]["motor"]
+    assert inv_n / inv_e >= 1.5
+    fwd_n, fwd_e = xv["forward"]["nominal"], xv["forward"]["extended"]
+    assert fwd_e["tau_rel_pct"] < fwd_n["tau_rel_pct"]
+    assert fwd_e["q_m_rms"] < fwd_n["q_m_rms"]
+
+
+def test_emps_cli_cross_validation_json(tmp_path, capsys):
+    code = main(["diagnose", str(DATA / "emps_estimation.csv"), "--json", "--no-forward",
+                 "--validate", str(DATA / "emps_validation_pulses.csv"),
+                 "--disturbance-column", "pulses_N", "--disturbance-gain", str(GTAU),
+                 "--disturbance-at", "motor"])
+    assert code == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["named_cause"] == "asymmetric_friction"
+    assert set(doc["cross_validation"]) == {"file", "inverse", "forward"}
+    assert set(doc["untested"]) == {"gravity", "link_coulomb", "backlash", "spring_damping",
+                                    "hardening"}
