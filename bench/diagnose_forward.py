@@ -70,15 +70,7 @@ def build_spec(d: Diagnosis, extended: bool) -> mujoco.MjSpec:
         apply_to_spec(spec, name, HiddenEffect(eff, max(p["hardening_ratio"], 0.0),
                                                {"deflection": p["deflection_rad"]}), K)
     elif eff == "offset":
-        motor_joint = f"{name}_motor" if K else name
-        load = spec.add_actuator()
-        load.name = f"{name}_offset"
-        load.target = motor_joint
-        load.trntype = mujoco.mjtTrn.mjTRN_JOINT
-        load.gaintype = mujoco.mjtGain.mjGAIN_FIXED
-        load.gainprm[0] = 0.0
-        load.biastype = mujoco.mjtBias.mjBIAS_AFFINE
-        load.biasprm[:3] = [-p["offset"], 0.0, 0.0]
+        nominal_axes.add_offset_load(spec, name, f"{name}_motor" if K else name, p["offset"])
     elif eff == "torque_ripple":
         spec.add_numeric(name=f"{name}_ripple", data=[p["ripple_amplitude"],
                                                       p["ripple_period_rad"],

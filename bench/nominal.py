@@ -123,6 +123,19 @@ def _check(values: dict[str, float], positive: tuple[str, ...],
             raise ValueError(f"{k} = {values[k]:g} must be >= 0 for a physical axis")
 
 
+def add_offset_load(spec: mujoco.MjSpec, name: str, joint: str, offset: float) -> None:
+    """A passive actuator `{name}_offset` on `joint` with constant force -offset (gain 0,
+    affine bias): a constant load the motor holds with tau_m = offset."""
+    load = spec.add_actuator()
+    load.name = f"{name}_offset"
+    load.target = joint
+    load.trntype = mujoco.mjtTrn.mjTRN_JOINT
+    load.gaintype = mujoco.mjtGain.mjGAIN_FIXED
+    load.gainprm[0] = 0.0
+    load.biastype = mujoco.mjtBias.mjBIAS_AFFINE
+    load.biasprm[:3] = [-offset, 0.0, 0.0]
+
+
 def rigid_axis(J: float, FV: float, FS: float, offset: float = 0.0, *, timestep: float,
                prismatic: bool = False, tau_max: float | None = None, gravity: float = 9.81,
                gear_ratio: float | None = None, name: str = "axis1") -> mujoco.MjSpec:
@@ -141,14 +154,7 @@ def rigid_axis(J: float, FV: float, FS: float, offset: float = 0.0, *, timestep:
     _joint(body, name, prismatic, armature, FV, FS)
     _motor(spec, f"{name}_motor", name, tau_max)
     if offset != 0.0:
-        load = spec.add_actuator()
-        load.name = f"{name}_offset"
-        load.target = name
-        load.trntype = mujoco.mjtTrn.mjTRN_JOINT
-        load.gaintype = mujoco.mjtGain.mjGAIN_FIXED
-        load.gainprm[0] = 0.0
-        load.biastype = mujoco.mjtBias.mjBIAS_AFFINE
-        load.biasprm[:3] = [-offset, 0.0, 0.0]
+        add_offset_load(spec, name, name, offset)
     if gear_ratio is not None:
         spec.add_numeric(name=f"{name}_gear_ratio", data=[gear_ratio])
     return spec
