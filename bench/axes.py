@@ -21,7 +21,7 @@ import mujoco
 import numpy as np
 
 from bench.effects import HiddenEffect, apply_to_spec
-from models import Axis, ModelStructureError, find_axes, load_model, model_path, torque_limit
+from models import Axis, ModelStructureError, find_axes, load_model, torque_limit
 from models.truth import AxisTruth, axis_truth
 
 LOCKS = ("rigid", "brake")
@@ -45,6 +45,20 @@ class ExperimentModel:
     lock: str
     config: dict[str, float]
 
+
+def secant_root(residual, x0: float, slope: float, rtol: float, kick: float) -> float:
+    """Root of a residual that is piecewise linear in x (a spring, dead bands included) by
+    secant iterations from the Newton step x0 - r(x0) / slope; `kick` keeps the first two
+    points apart. Converges in a few steps; at most 60."""
+    a = x0
+    ra = residual(a)
+    b = a - ra / slope + kick
+    for _ in range(60):
+        rb = residual(b)
+        if abs(rb) < rtol * max(1.0, abs(ra)) or rb == ra:
+            break
+        a, b, ra = b, b - rb * (b - a) / (rb - ra), rb
+    return float(b)
 
 def _rotate_body(body: mujoco.MjsBody, pos: np.ndarray, quat: np.ndarray,
                  jpos: np.ndarray, jaxis: np.ndarray, angle: float) -> None:
@@ -110,17 +124,9 @@ def _static_equilibrium(model: mujoco.MjModel, axis: Axis, qpos: np.ndarray,
         mujoco.mj_forward(model, data)
         return float(data.qfrc_passive[axis.link_dof] - data.qfrc_bias[axis.link_dof])
 
-    # Secant iterations from the linear-spring guess qm = q + Q / K; the residual is piecewise
-    # linear in qm (dead bands included), so this converges in a few steps.
+    # From the linear-spring guess qm = q + Q / K (the residual rises with qm at slope K).
     K = float(model.tendon_stiffness[axis.tendon]) or 1.0
-    a = float(qpos[axis.link_qpos])
-    ra = residual(a)
-    b = a - ra / K + 1e-9
-    for _ in range(60):
-        rb = residual(b)
-        if abs(rb) < 1e-9 * max(1.0, abs(ra)) or rb == ra:
-            break
-        a, b, ra = b, b - rb * (b - a) / (rb - ra), rb
+    b = secant_root(residual, float(qpos[axis.link_qpos]), K, rtol=1e-9, kick=1e-9)
     qpos[axis.motor_qpos] = b
     data.qpos[:] = qpos
     data.qvel[:] = 0.0

@@ -13,18 +13,17 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
-from identification.discrepancy import (Candidate, InverseDiagnosis, Nominal, SIZE_MIN_PCT,
-                                        diagnose_inverse)
-from identification.effects import EFFECTS, NONE
+from identification.discrepancy import Candidate, InverseDiagnosis, Nominal, diagnose_inverse
+from identification.effects import EFFECTS
 from identification.filtering import FilterSettings, default_settings, PAPER_RATE
 from identification.frequency import first_mode_hz, measured_frf
-from identification.log import Log, atomic_write_text
+from identification.log import Log
 
 BLOCK_NAMES = ("motor equation (eq. 6): torque residual, % of the measured torque RMS",
                "link equation (eq. 5): residual, % of the spring torque K (qm - q) RMS")

@@ -104,7 +104,6 @@ def plot_structure(d: Diagnosis, path: Path) -> Path:
 def plot_inverse(d: Diagnosis, path: Path) -> Path:
     plt = _pyplot()
     nom, before, after = _residuals(d)
-    n = len(nom.sig.index)
     t = nom.sig.index * nom.sig.ts
     blocks = np.unique(nom.block)
     fig, axes = plt.subplots(len(blocks), 1, figsize=(10, 3.2 * len(blocks)), squeeze=False)

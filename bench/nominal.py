@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from bench.axes import secant_root
 from identification.identify import Identification
 from identification.log import Log, atomic_write_text
 from models import Axis, ModelStructureError, find_axes
@@ -286,13 +287,6 @@ def static_link_position(model: mujoco.MjModel, axis: Axis, qpos: np.ndarray) ->
         mujoco.mj_forward(model, data)
         return float(data.qfrc_passive[axis.link_dof] - data.qfrc_bias[axis.link_dof])
 
+    # The residual falls with q at slope K (the spring), from q = q_m.
     K = float(model.tendon_stiffness[axis.tendon]) or 1.0
-    a = float(qpos[axis.motor_qpos])
-    ra = residual(a)
-    b = a + ra / K + 1e-12
-    for _ in range(60):
-        rb = residual(b)
-        if abs(rb) < 1e-10 * max(1.0, abs(ra)) or rb == ra:
-            break
-        a, b, ra = b, b - rb * (b - a) / (rb - ra), rb
-    return float(b)
+    return secant_root(residual, float(qpos[axis.motor_qpos]), -K, rtol=1e-10, kick=1e-12)

@@ -37,10 +37,6 @@ from identification.log import Log, LogError
 NOMINAL_TWO_MASS = ("Jm", "FVm", "FSm", "K", "JL", "FV", "P")
 NOMINAL_RIGID = ("J", "FV", "FS")
 
-# Which equation block an effect acts in (0 motor, 1 link, 2 both), for its error metric.
-LINK_EFFECTS = ("gravity", "link_coulomb", "backlash", "spring_damping", "hardening")
-MOTOR_EFFECTS = ("offset", "asymmetric_friction", "torque_ripple", "torque_lag")
-
 BIC_MIN = 10.0          # "very strong" evidence on Kass and Raftery's scale
 # Practical size: the effect must move its block's prediction by this much (% RMS) to be
 # named. The link block is held to more because every real link has some Coulomb friction:

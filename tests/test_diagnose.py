@@ -9,9 +9,7 @@ equation the effect acts in), and `none` on clean data.
 from __future__ import annotations
 
 import json
-import math
 
-import numpy as np
 import pytest
 
 from bench.battery import Case, cases, run_case
