@@ -50,6 +50,7 @@ SWEEPABLE: dict[str, type] = {
     "amplitude": float,   # chirp amplitude [rad]
     "wn": float,          # Butterworth frequency [rad/s]
     "Nd": int,            # decimation factor
+    "stencil": int,       # central-difference points: 3 (eq. 22) or 5
     "motor_bits": int,    # motor encoder bits per motor turn (joint side: / gear ratio)
     "link_bits": int,     # link encoder bits per turn
     "noise": float,       # current-loop torque noise, multiple of the default (1.25 % tau_max)
@@ -89,6 +90,7 @@ class RunSettings:
     scatter: float = 0.0
     wn: float | None = None
     Nd: int | None = None
+    stencil: int = 3
     effect: str | None = None
     id_models: tuple[str, ...] = ("joint-motor", "motor-only")
 
@@ -99,6 +101,8 @@ class RunSettings:
             if m not in ID_MODELS:
                 raise CampaignError(f"unknown identification model {m!r} "
                                     f"(choices: {', '.join(ID_MODELS)})")
+        if self.stencil not in (3, 5):
+            raise CampaignError(f"stencil must be 3 (eq. 22) or 5 points, got {self.stencil}")
         if len(set(self.id_models)) != len(self.id_models):
             raise CampaignError(f"identification models repeated: {', '.join(self.id_models)}")
 
@@ -296,11 +300,12 @@ def _sensors(settings: RunSettings, model_ref: str, joint: str | None):
 def _filter(settings: RunSettings, log):
     from identification.filtering import FilterSettings, default_settings
 
-    if settings.wn is None and settings.Nd is None:
+    if settings.wn is None and settings.Nd is None and settings.stencil == 3:
         return None
     base = default_settings(log.sample_rate_hz, log.truth().get("f1_hz"))
     return FilterSettings(wn=settings.wn if settings.wn is not None else base.wn, m=base.m,
-                          Nd=settings.Nd if settings.Nd is not None else base.Nd, ts=log.ts)
+                          Nd=settings.Nd if settings.Nd is not None else base.Nd, ts=log.ts,
+                          stencil=settings.stencil)
 
 
 def corrected_sigmas(ident, log) -> dict[str, float]:
@@ -711,6 +716,8 @@ def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
                         "the model, e.g. 0.1 (default 0)")
     p.add_argument("--wn", type=float, help="Butterworth frequency in rad/s (default 176)")
     p.add_argument("--decimate", type=int, help="decimation factor Nd (default 26)")
+    p.add_argument("--stencil", type=int, default=3, choices=(3, 5),
+                   help="central-difference points: 3, the paper's eq. (22) (default), or 5")
     p.add_argument("--effect", help="hidden effect NAME=STRENGTH[:OPTION=VALUE] in every run")
     p.add_argument("--id-models", default="joint-motor,motor-only",
                    help="identification models, comma separated (default joint-motor,motor-only)")
@@ -745,7 +752,7 @@ def spec_from_args(args: argparse.Namespace) -> CampaignSpec:
     base = RunSettings(model=str(args.model), joint=args.joint, duration=args.duration,
                        amplitude=args.amplitude, noise=args.noise, motor_bits=args.motor_bits,
                        link_bits=args.link_bits, scatter=args.scatter, wn=args.wn,
-                       Nd=args.decimate, effect=args.effect,
+                       Nd=args.decimate, stencil=args.stencil, effect=args.effect,
                        id_models=tuple(m.strip() for m in args.id_models.split(",") if m.strip()))
     sweep, values = _parse_sweep(args.sweep) if args.sweep else (None, ())
     if not str(args.model) in ("prototype", "prototype_axis", "arm6") and not Path(args.model).is_file():

@@ -240,9 +240,9 @@ def _settings_from_args(args, log):
     wn = args.wn if args.wn is not None else (
         2 * math.pi * args.fc if args.fc is not None else None)
     chain = {"zoh": not args.no_zoh, "filter_torque": not args.no_torque_filter,
-             "skip": args.skip}
+             "skip": args.skip, "stencil": args.stencil}
     if wn is None and args.decimate is None and args.order == 4 and \
-            chain == {"zoh": True, "filter_torque": True, "skip": 0}:
+            chain == {"zoh": True, "filter_torque": True, "skip": 0, "stencil": 3}:
         return None
     base, _ = settings_for(log, args.f1)
     return FilterSettings(wn=wn if wn is not None else base.wn, m=args.order,
@@ -263,16 +263,33 @@ def cmd_identify(args: argparse.Namespace) -> int:
     warnings = unit_warnings(log)
     for text in warnings:
         print(f"jointbench identify: warning: {text}", file=sys.stderr)
+    if args.refine_max_nfev is not None and not args.refine:
+        raise UsageError("--refine-max-nfev applies to --refine")
+    if args.refine:
+        from bench.refine import require_replayable
+
+        require_replayable(log)  # before the least squares: no half answer
     try:
         result = identify(log, args.model, _settings_from_args(args, log), f1_hz=args.f1)
     except InversionError as err:
         raise InversionError(f"{args.file}: {err}") from None
     truth = log.truth() or None
     flags = estimate_flags(result.physical, result.physical_sigma, log.prismatic)
+    refined = None
+    if args.refine:
+        from bench.refine import refine
+
+        say = None if args.json else \
+            (lambda msg: print(f"identify: {msg}", file=sys.stderr, flush=True))
+        refined = refine(log, result, max_nfev=args.refine_max_nfev, progress=say)
     if args.json:
         answer = to_json(result, truth)
         answer["flags"] = flags
         answer["warnings"] = warnings
+        if refined is not None:
+            from bench.refine import refined_json
+
+            answer["refined"] = refined_json(refined, result, truth)
         print(json.dumps(answer, allow_nan=False, default=float))
         return 0
     s = result.settings
@@ -282,7 +299,9 @@ def cmd_identify(args: argparse.Namespace) -> int:
           f"condition number {result.ls.cond:.3g}")
     chain = [text for on, text in ((not s.zoh, "torque not ZOH-aligned"),
                                    (not s.filter_torque, "torque not Butterworth-filtered"),
-                                   (s.skip, f"first {s.skip} samples dropped")) if on]
+                                   (s.skip, f"first {s.skip} samples dropped"),
+                                   (s.stencil != 3, f"{s.stencil}-point central differences"))
+             if on]
     if log.prismatic or chain:
         print("; ".join((["prismatic axis: positions in m, forces in N, masses in kg"]
                          if log.prismatic else []) + chain))
@@ -302,6 +321,11 @@ def cmd_identify(args: argparse.Namespace) -> int:
         print(f"note: {note}")
     for flag in flags:
         print(f"flag: {flag['message']}")
+    if refined is not None:
+        from bench.refine import refinement_table
+
+        print()
+        print(refinement_table(refined, result, truth))
     return 0
 
 
@@ -450,10 +474,20 @@ def build_parser() -> argparse.ArgumentParser:
     i.add_argument("--no-torque-filter", action="store_true",
                    help="rigid model: the torque goes only through the decimation filter, not "
                         "the Butterworth (the EMPS reference chain)")
+    i.add_argument("--stencil", type=int, default=3, choices=(3, 5),
+                   help="central-difference points: 3, the paper's eq. (22) (default), or 5 "
+                        "(fourth order: no sinc distortion of the derivatives)")
     i.add_argument("--order", type=int, default=4, help="Butterworth order m (default 4)")
     i.add_argument("--decimate", type=int, help="decimation factor Nd")
     i.add_argument("--f1", type=_positive, help="first mode in Hz (to derive wn and Nd)")
     i.add_argument("--json", action="store_true", help="print the CONTRACT JSON object")
+    i.add_argument("--refine", action="store_true",
+                   help="continue from the least-squares estimate by closed-loop output error "
+                        "(DIDIM-style): replay the log in MuJoCo under its controller on the "
+                        "two-mass axis and fit the torque (and q); needs q_ref and the gains "
+                        "(bench/refine.py)")
+    i.add_argument("--refine-max-nfev", type=int, default=None, metavar="N",
+                   help="--refine: residual evaluations allowed (each one replay; default 40)")
     i.set_defaults(func=cmd_identify)
 
     f = sub.add_parser("design-filter", help="the bandpass design of eqs. (26)-(29)")

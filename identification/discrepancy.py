@@ -84,10 +84,10 @@ class Signals:
 def signals(log: Log, settings: FilterSettings) -> Signals:
     """Filter and differentiate the log once (eq. 22 after the Butterworth of eq. 25)."""
     s = settings
-    qm, qmd, qmdd = derivatives(lowpass(log.q_m, s.wn, s.ts, s.m), s.ts, 2)
+    qm, qmd, qmdd = derivatives(lowpass(log.q_m, s.wn, s.ts, s.m), s.ts, 2, s.stencil)
     q = qd = qdd = None
     if log.q is not None:
-        q, qd, qdd = derivatives(lowpass(log.q, s.wn, s.ts, s.m), s.ts, 2)
+        q, qd, qdd = derivatives(lowpass(log.q, s.wn, s.ts, s.m), s.ts, 2, s.stencil)
     n = len(log.t)
     if n < s.min_samples(2):
         raise LogError(f"{n} samples are too few for the diagnosis filter (Nd = {s.Nd}): at "

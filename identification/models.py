@@ -49,7 +49,7 @@ class Regressor:
 
 
 def _filtered(x: np.ndarray, s: FilterSettings, nd: int) -> list[np.ndarray]:
-    return derivatives(lowpass(x, s.wn, s.ts, s.m), s.ts, nd)
+    return derivatives(lowpass(x, s.wn, s.ts, s.m), s.ts, nd, s.stencil)
 
 
 def _sign(x: np.ndarray) -> np.ndarray:

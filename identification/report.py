@@ -153,7 +153,7 @@ def to_json(result: Identification, truth: dict[str, float] | None = None) -> di
            "physical": dict(result.physical),
            "physical_sigma": dict(result.physical_sigma),
            "filter": {"wn_rad_s": result.settings.wn, "order": result.settings.m,
-                      "decimate": result.settings.Nd},
+                      "decimate": result.settings.Nd, "stencil": result.settings.stencil},
            "residual_rms": ls.rms,
            "relative_error_pct": result.relative_error_pct,
            "condition_number": ls.cond,

@@ -1,0 +1,159 @@
+"""`jointbench identify --refine` (bench/refine.py): closed-loop output error (DIDIM-style)
+from the least-squares estimate."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import pytest
+
+from bench.cli import main
+from bench.experiment import run_experiment
+from bench.refine import ALL_PARAMETERS, RefineError, refine
+from bench.sensors import Sensors
+from identification.identify import identify
+from identification.log import write_log
+
+
+def _err_pct(value: float, truth: float) -> float:
+    return 100.0 * (value - truth) / abs(truth)
+
+
+@pytest.fixture(scope="module")
+def motor_only(prototype_log):
+    """The demo's log (prototype, 60 s, default sensors, seed 1) without q, its motor-only LS
+    identification and the refinement."""
+    log = dataclasses.replace(prototype_log, q=None)
+    ident = identify(log, "motor-only")
+    return log, ident, refine(log, ident)
+
+
+def test_motor_only_refinement_within_half_a_percent(motor_only):
+    """The issue's target: K, Jm, JL within 0.5 % of truth on the prototype from motor-only
+    data. Measured on seeds 1-6 (60 s): worst 0.31 % after refinement (this log 0.14 %), LS
+    up to 1.4 % (README). The optimiser must also lower the output error it minimises and
+    the forward view's torque error, and not end on its evaluation limit."""
+    log, ident, res = motor_only
+    truth = log.truth()
+    for n in ("K", "Jm", "JL"):
+        ls, refined = _err_pct(ident.physical[n], truth[n]), _err_pct(res.parameters[n], truth[n])
+        assert abs(refined) < 0.5, (n, refined)
+        assert abs(refined) <= abs(ls), (n, ls, refined)
+    assert res.cost_after < res.cost_before == pytest.approx(1.0)
+    assert res.forward_after["torque_rms"] < res.forward_before["torque_rms"]
+    assert "maximum number" not in res.message
+    assert set(res.free) == set(ALL_PARAMETERS) and res.outputs == ("tau_m",)
+    # FS is not in the motor-only regressor: it starts at 0.1 FSm and is fitted (truth 8.46;
+    # measured -5 %), the friction errors shrink from LS's +12 % (FSm, FV) to about 2 %
+    assert "FS" not in ident.physical and res.start["FS"] == pytest.approx(0.1 * res.start["FSm"])
+    for n in ("FSm", "FV", "FS"):
+        assert abs(_err_pct(res.parameters[n], truth[n])) < 10, n
+    for n in ("FSm", "FV"):
+        assert abs(_err_pct(res.parameters[n], truth[n])) < \
+            abs(_err_pct(ident.physical[n], truth[n])), n
+    assert all(res.sigma[n] > 0 for n in res.free)
+
+
+@pytest.fixture(scope="module")
+def ideal_log():
+    """10 s of the prototype with ideal sensors: the data the nominal axis can reproduce
+    exactly (same MuJoCo model structure, friction constraint and integrator)."""
+    return run_experiment("prototype", duration=10.0, seed=1, sensors=Sensors.ideal()).log
+
+
+@pytest.mark.parametrize("model", ["motor-only", "joint-motor"])
+def test_noise_free_refinement_recovers_all_nine(ideal_log, model):
+    """Without noise the output-error minimum is the truth: all nine parameters, the ones the
+    motor-only regressor does not give (FS) or barely sees (MX) included, to the optimiser's
+    step tolerance (1e-5 relative; measured 5e-11). LS starts 0.1-15 % off (FS 100 %)."""
+    log = ideal_log if model == "joint-motor" else dataclasses.replace(ideal_log, q=None)
+    truth = log.truth()
+    res = refine(log, identify(log, model))
+    for n in ALL_PARAMETERS:
+        assert abs(_err_pct(res.parameters[n], truth[n])) < 1e-3, (n, res.parameters[n])
+    assert res.forward_after["torque_rel_pct"] < 1e-4
+
+
+def test_refinement_is_deterministic(ideal_log):
+    log = dataclasses.replace(ideal_log, q=None)
+    ident = identify(log, "motor-only")
+    a = refine(log, ident, max_nfev=2)
+    b = refine(log, ident, max_nfev=2)
+    assert a.parameters == b.parameters and a.sigma == b.sigma and a.replays == b.replays
+
+
+def test_refine_refuses_what_it_cannot_refine(ideal_log):
+    rigid = identify(ideal_log, "rigid")
+    with pytest.raises(RefineError, match="two-mass models"):
+        refine(ideal_log, rigid)
+    ident = identify(ideal_log, "joint-motor")
+    with pytest.raises(RefineError, match="each must be one of"):
+        refine(ideal_log, ident, params=("K", "Q"))
+    with pytest.raises(ValueError, match="outputs"):
+        refine(dataclasses.replace(ideal_log, q=None), ident, outputs=("q",))
+
+
+@pytest.fixture(scope="module")
+def short_file(tmp_path_factory):
+    """A 10 s prototype log with default sensors, written to a file."""
+    path = tmp_path_factory.mktemp("refine") / "proto10.csv"
+    write_log(run_experiment("prototype", duration=10.0, seed=2).log, path)
+    return path
+
+
+def test_cli_refine_json(short_file, capsys):
+    assert main(["identify", str(short_file), "--refine", "--refine-max-nfev", "3",
+                 "--json"]) == 0
+    out, _ = capsys.readouterr()
+    doc = json.loads(out)
+    for key in ("model", "parameters", "physical", "filter", "residual_rms"):  # CONTRACT keys
+        assert key in doc
+    ref = doc["refined"]
+    assert set(ref["parameters"]) == set(ALL_PARAMETERS)
+    for entry in ref["parameters"].values():
+        assert {"value", "sigma", "start"} <= set(entry)
+        assert entry["sigma"] > 0
+    assert ref["parameters"]["K"]["start"] == doc["physical"]["K"]
+    assert ref["cost"]["after"] <= ref["cost"]["before"]
+    assert {"before", "after"} == set(ref["forward"])
+    assert ref["forward"]["after"]["torque_rms"] <= ref["forward"]["before"]["torque_rms"]
+    assert ref["replays"] >= 1 + 9  # the start and at least one Jacobian
+    assert set(ref["error_pct"]["refined"]) == set(ALL_PARAMETERS)
+
+
+def test_cli_refine_text(short_file, capsys):
+    assert main(["identify", str(short_file), "--model", "motor-only", "--refine",
+                 "--refine-max-nfev", "2"]) == 0
+    out, err = capsys.readouterr()
+    assert "## Refinement (closed-loop output error" in out
+    assert out.index("direct validation") < out.index("## Refinement")
+    rows = [line.split()[0] for line in out.split("## Refinement")[1].splitlines()[3:12]]
+    assert rows == list(ALL_PARAMETERS)
+    assert "forward view: torque" in out and "refine: iteration 1" in err
+
+
+def test_cli_refine_bad_input(prototype_log, tmp_path, capsys):
+    """A log that cannot be replayed (no q_ref, no gains, CONTRACT sections 1-2), a rigid
+    identification and a stray option: exit 2, one line, nothing on stdout."""
+    short = dataclasses.replace(prototype_log, t=prototype_log.t[:3000],
+                                q_m=prototype_log.q_m[:3000], q=prototype_log.q[:3000],
+                                tau_m=prototype_log.tau_m[:3000],
+                                q_ref=prototype_log.q_ref[:3000])
+    no_ref = tmp_path / "no_ref.csv"
+    write_log(dataclasses.replace(short, q_ref=None), no_ref)
+    no_gains = tmp_path / "no_gains.csv"
+    write_log(dataclasses.replace(short, meta={
+        k: v for k, v in short.meta.items() if k not in ("kp", "kv", "ki")}), no_gains)
+    good = tmp_path / "good.csv"
+    write_log(short, good)
+    cases = [([str(no_ref), "--refine"], "no column 'q_ref'"),
+             ([str(no_gains), "--refine", "--json"], "controller gains kp, kv, ki"),
+             ([str(good), "--model", "rigid", "--refine"], "two-mass models"),
+             ([str(good), "--refine-max-nfev", "3"], "applies to --refine"),
+             ([str(good), "--refine", "--refine-max-nfev", "0"], "must be >= 1")]
+    for args, message in cases:
+        assert main(["identify", *args]) == 2, args
+        out, err = capsys.readouterr()
+        assert out == "" and message in err and "Traceback" not in err, (args, err)
+        assert len(err.strip().splitlines()) == 1, err
