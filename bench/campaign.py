@@ -64,6 +64,15 @@ PARAMS = {"joint-motor": ("K", "Jm", "JL", "FVm", "FSm", "FV", "FS", "MX", "MY")
 TRUTH = ("K", "Jm", "JL", "FVm", "FSm", "FV", "FS", "MX", "MY", "f1_hz")
 SCATTERED = ("K", "Jm", "JL", "FVm", "FSm", "FV", "FS")
 SIGMA_KINDS = {"sigma": "paper", "sigma_c": "corrected"}
+DEBIASED = "+bc"   # column prefix suffix of the bias-corrected estimates (bench.debias)
+BIAS_CORRECTABLE = ("joint-motor", "motor-only")
+
+
+def debiased_models(settings: "RunSettings") -> tuple[str, ...]:
+    """The identification models whose estimates a run bias-corrects (--debias B > 0)."""
+    if not settings.debias:
+        return ()
+    return tuple(m for m in settings.id_models if m in BIAS_CORRECTABLE)
 
 
 class CampaignError(ValueError):
@@ -93,6 +102,7 @@ class RunSettings:
     stencil: int = 3
     effect: str | None = None
     id_models: tuple[str, ...] = ("joint-motor", "motor-only")
+    debias: int = 0   # bias-correction replicas per two-mass identification (0: none)
 
     def __post_init__(self):
         if not self.id_models:
@@ -103,6 +113,9 @@ class RunSettings:
                                     f"(choices: {', '.join(ID_MODELS)})")
         if self.stencil not in (3, 5):
             raise CampaignError(f"stencil must be 3 (eq. 22) or 5 points, got {self.stencil}")
+        if self.debias != 0 and self.debias < 2:
+            raise CampaignError(f"--debias needs 0 (off) or at least 2 replicas, got "
+                                f"{self.debias}")
         if len(set(self.id_models)) != len(self.id_models):
             raise CampaignError(f"identification models repeated: {', '.join(self.id_models)}")
 
@@ -176,6 +189,9 @@ class CampaignSpec:
             for p in PARAMS[m]:
                 cols += [f"{ID_MODELS[m]}.{p}", f"{ID_MODELS[m]}.{p}.sigma",
                          f"{ID_MODELS[m]}.{p}.sigma_c"]
+        for m in debiased_models(self.base):
+            for p in PARAMS[m]:
+                cols += [f"{ID_MODELS[m]}{DEBIASED}.{p}", f"{ID_MODELS[m]}{DEBIASED}.{p}.sigma_c"]
         return cols
 
 
@@ -381,6 +397,19 @@ def run_task(task: RunTask) -> RunOutcome:
                 row[f"{pre}.{p}"] = _fmt(ident.physical.get(p))
                 row[f"{pre}.{p}.sigma"] = _fmt(ident.physical_sigma.get(p))
                 row[f"{pre}.{p}.sigma_c"] = _fmt(corr.get(p))
+            if m in debiased_models(s):
+                try:
+                    from bench.debias import debias, friction_timeconst_of
+
+                    d = debias(log, ident, replicas=s.debias, seed=task.seed,
+                               friction_timeconst=friction_timeconst_of(
+                                   result.experiment.model, result.experiment.axis))
+                except Exception as err:  # noqa: BLE001 - recorded in the row
+                    reasons.append(f"{m} bias correction: {type(err).__name__}: {err}")
+                    continue
+                for p in PARAMS[m]:
+                    row[f"{pre}{DEBIASED}.{p}"] = _fmt(d.estimate.get(p))
+                    row[f"{pre}{DEBIASED}.{p}.sigma_c"] = _fmt(d.sigma.get(p))
         identify_s = time.perf_counter() - t1
     if reasons:
         row["status"] = "failed"
@@ -551,6 +580,16 @@ def summarize(spec: CampaignSpec, rows: list[dict[str, str]], k: float = 2.0) ->
                        for col, kind in SIGMA_KINDS.items()}
                 stats.append(parameter_stats(p, est, truth, sig, k))
             models[m] = [s.as_dict() for s in stats]
+        for m in debiased_models(spec.base):
+            pre = ID_MODELS[m] + DEBIASED
+            stats = []
+            for p in PARAMS[m]:
+                est = np.array([_num(r, f"{pre}.{p}") for r in sel])
+                truth = np.array([_num(r, f"truth.{p}") for r in sel])
+                sig = {"paper": np.full(len(sel), np.nan),
+                       "corrected": np.array([_num(r, f"{pre}.{p}.sigma_c") for r in sel])}
+                stats.append(parameter_stats(p, est, truth, sig, k))
+            models[f"{m} (bias-corrected)"] = [s.as_dict() for s in stats]
         group["models"] = models
         groups.append(group)
     return {"spec": json.loads(spec.to_json()), "runs": len(rows),
@@ -721,6 +760,10 @@ def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
     p.add_argument("--effect", help="hidden effect NAME=STRENGTH[:OPTION=VALUE] in every run")
     p.add_argument("--id-models", default="joint-motor,motor-only",
                    help="identification models, comma separated (default joint-motor,motor-only)")
+    p.add_argument("--debias", type=int, default=0, metavar="B",
+                   help="also bias-correct every two-mass estimate by B closed-loop replicas "
+                        "(bench/debias.py; each run then costs about 1 + B experiments; "
+                        "default 0: off)")
     p.add_argument("--sweep", help="sweep one setting: NAME=V1,V2,... with NAME one of "
                                    + ", ".join(SWEEPABLE))
     p.add_argument("--workers", type=int,
@@ -753,6 +796,7 @@ def spec_from_args(args: argparse.Namespace) -> CampaignSpec:
                        amplitude=args.amplitude, noise=args.noise, motor_bits=args.motor_bits,
                        link_bits=args.link_bits, scatter=args.scatter, wn=args.wn,
                        Nd=args.decimate, stencil=args.stencil, effect=args.effect,
+                       debias=args.debias,
                        id_models=tuple(m.strip() for m in args.id_models.split(",") if m.strip()))
     sweep, values = _parse_sweep(args.sweep) if args.sweep else (None, ())
     if not str(args.model) in ("prototype", "prototype_axis", "arm6") and not Path(args.model).is_file():

@@ -265,10 +265,22 @@ def cmd_identify(args: argparse.Namespace) -> int:
         print(f"jointbench identify: warning: {text}", file=sys.stderr)
     if args.refine_max_nfev is not None and not args.refine:
         raise UsageError("--refine-max-nfev applies to --refine")
-    if args.refine:
+    if args.friction_timeconst is not None and args.debias is None:
+        raise UsageError("--friction-timeconst applies to --debias")
+    if args.debias is not None and args.debias < 2:
+        raise UsageError(f"--debias needs at least 2 replicas, got {args.debias}")
+    if args.refine or args.debias is not None:
         from bench.refine import require_replayable
 
         require_replayable(log)  # before the least squares: no half answer
+    if args.debias is not None:
+        from bench.debias import DebiasError
+        from bench.sensors import Sensors
+
+        if Sensors.from_log(log) is None:
+            raise DebiasError(f"{args.file}: --debias replays the experiment with the log's "
+                              "sensors: the metadata needs motor_encoder_resolution_rad, "
+                              "link_encoder_resolution_rad and torque_noise_std")
     try:
         result = identify(log, args.model, _settings_from_args(args, log), f1_hz=args.f1)
     except InversionError as err:
@@ -282,6 +294,20 @@ def cmd_identify(args: argparse.Namespace) -> int:
         say = None if args.json else \
             (lambda msg: print(f"identify: {msg}", file=sys.stderr, flush=True))
         refined = refine(log, result, max_nfev=args.refine_max_nfev, progress=say)
+    debiased = None
+    if args.debias is not None:
+        from bench.debias import SOLREF_FRICTION, debias
+
+        tty = sys.stderr.isatty()
+
+        def tell(done: int, total: int) -> None:
+            if tty or done == total:
+                print(f"\ridentify: bias correction, replica {done}/{total}",
+                      end="" if done < total else "\n", file=sys.stderr, flush=True)
+        if args.json:
+            tell = None
+        debiased = debias(log, result, replicas=args.debias, progress=tell,
+                          friction_timeconst=args.friction_timeconst or SOLREF_FRICTION[0])
     if args.json:
         answer = to_json(result, truth)
         answer["flags"] = flags
@@ -290,6 +316,10 @@ def cmd_identify(args: argparse.Namespace) -> int:
             from bench.refine import refined_json
 
             answer["refined"] = refined_json(refined, result, truth)
+        if debiased is not None:
+            from bench.debias import debiased_json
+
+            answer["debiased"] = debiased_json(debiased, truth)
         print(json.dumps(answer, allow_nan=False, default=float))
         return 0
     s = result.settings
@@ -326,6 +356,11 @@ def cmd_identify(args: argparse.Namespace) -> int:
 
         print()
         print(refinement_table(refined, result, truth))
+    if debiased is not None:
+        from bench.debias import debias_table
+
+        print()
+        print(debias_table(debiased, log.prismatic, truth))
     return 0
 
 
@@ -488,6 +523,14 @@ def build_parser() -> argparse.ArgumentParser:
                         "(bench/refine.py)")
     i.add_argument("--refine-max-nfev", type=int, default=None, metavar="N",
                    help="--refine: residual evaluations allowed (each one replay; default 40)")
+    i.add_argument("--debias", type=int, default=None, metavar="B",
+                   help="bias-correct the least-squares estimate by B closed-loop replicas of "
+                        "the experiment on the nominal axis with the log's sensors (parametric "
+                        "bootstrap; 8 is a good start; needs q_ref, the gains and the sensor "
+                        "metadata; bench/debias.py)")
+    i.add_argument("--friction-timeconst", type=_positive, default=None, metavar="S",
+                   help="--debias: Coulomb friction time constant of the nominal axis in s "
+                        "(MuJoCo solreffriction; default 0.002, models/arm6.xml uses 0.00025)")
     i.set_defaults(func=cmd_identify)
 
     f = sub.add_parser("design-filter", help="the bandpass design of eqs. (26)-(29)")

@@ -84,7 +84,8 @@ def _inertial(body: mujoco.MjsBody, mass: float, inertia: float,
 
 
 def _joint(body: mujoco.MjsBody, name: str, slide: bool, armature: float, damping: float,
-           frictionloss: float) -> mujoco.MjsJoint:
+           frictionloss: float, friction_timeconst: float = SOLREF_FRICTION[0]
+           ) -> mujoco.MjsJoint:
     j = body.add_joint()
     j.name = name
     j.type = mujoco.mjtJoint.mjJNT_SLIDE if slide else mujoco.mjtJoint.mjJNT_HINGE
@@ -92,7 +93,7 @@ def _joint(body: mujoco.MjsBody, name: str, slide: bool, armature: float, dampin
     j.armature = armature
     j.damping[0] = damping
     j.frictionloss = frictionloss
-    j.solref_friction = SOLREF_FRICTION
+    j.solref_friction = (friction_timeconst, SOLREF_FRICTION[1])
     j.solimp_friction[:3] = SOLIMP_FRICTION
     return j
 
@@ -164,10 +165,12 @@ def rigid_axis(J: float, FV: float, FS: float, offset: float = 0.0, *, timestep:
 def two_mass_axis(Jm: float, FVm: float, FSm: float, K: float, JL: float, FV: float = 0.0,
                   FS: float = 0.0, MX: float = 0.0, MY: float = 0.0, *, timestep: float,
                   prismatic: bool = False, tau_max: float | None = None, gravity: float = 9.81,
-                  gear_ratio: float | None = None, name: str = "axis1") -> mujoco.MjSpec:
+                  gear_ratio: float | None = None, name: str = "axis1",
+                  friction_timeconst: float = SOLREF_FRICTION[0]) -> mujoco.MjSpec:
     """The joint-motor model of eqs. (5)-(7) as an MjSpec (module docstring), hinges only
-    (`prismatic=True` raises ValueError). ValueError for non-positive Jm, K, JL or negative
-    friction."""
+    (`prismatic=True` raises ValueError). `friction_timeconst` [s]: the solreffriction time
+    constant of both Coulomb frictions, the width of their stick band (models/arm6.xml uses
+    0.25 ms). ValueError for non-positive Jm, K, JL or negative friction."""
     _check({"Jm": Jm, "FVm": FVm, "FSm": FSm, "K": K, "JL": JL, "FV": FV, "FS": FS,
             "MX": MX, "MY": MY}, ("Jm", "K", "JL"), ("FVm", "FSm", "FV", "FS"))
     if prismatic:
@@ -178,7 +181,9 @@ def two_mass_axis(Jm: float, FVm: float, FSm: float, K: float, JL: float, FV: fl
     rotor = spec.worldbody.add_body()
     rotor.name = f"{name}_rotor"
     _inertial(rotor, ROTOR_MASS, ROTOR_INERTIA)
-    _joint(rotor, f"{name}_motor", prismatic, Jm, FVm, FSm)
+    if not friction_timeconst > 0:
+        raise ValueError(f"friction_timeconst must be > 0 s, got {friction_timeconst}")
+    _joint(rotor, f"{name}_motor", prismatic, Jm, FVm, FSm, friction_timeconst)
     link = spec.worldbody.add_body()
     link.name = f"{name}_link"
     M2 = MX * MX + MY * MY
@@ -188,7 +193,7 @@ def two_mass_axis(Jm: float, FVm: float, FSm: float, K: float, JL: float, FV: fl
         _inertial(link, m, JL / 2, (-MX / m, 0.0, -MY / m))
     else:
         _inertial(link, 1.0, JL)
-    _joint(link, name, prismatic, 0.0, FV, FS)
+    _joint(link, name, prismatic, 0.0, FV, FS, friction_timeconst)
     tendon = spec.add_tendon()
     tendon.name = f"{name}_spring"
     tendon.stiffness[0] = K

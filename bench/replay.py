@@ -27,6 +27,7 @@ import numpy as np
 
 from bench.controller import Gains, PIController
 from bench.nominal import static_link_position
+from bench.sensors import Sensors
 from identification.log import Log, LogError
 from models import Axis
 
@@ -63,7 +64,8 @@ def _with_timestep(model: mujoco.MjModel, dt: float) -> mujoco.MjModel:
 
 def replay(model: mujoco.MjModel, axis: Axis, log: Log, disturbance: np.ndarray | None = None,
            substeps: int = 1, *, disturbance_at: str = "link",
-           tau0: float | None = None, loop=None) -> ReplayResult:
+           tau0: float | None = None, loop=None, sensors: Sensors | None = None,
+           seed: int = 0) -> ReplayResult:
     """Re-run the logged closed-loop experiment of `log` on `axis` of `model` (module
     docstring). `disturbance`: force/torque per sample [N or N m, joint side], applied to the
     link (carriage) through qfrc_applied (`disturbance_at="link"`), or added to the motor
@@ -71,8 +73,12 @@ def replay(model: mujoco.MjModel, axis: Axis, log: Log, disturbance: np.ndarray 
     the recorded tau_m includes it, as the drive's own log would). `tau0`: the integrator's
     initial state, default tau_m[0] (CONTRACT section 2). `loop`: bench-loop effects
     (bench.effects.LoopEffects, e.g. from an extended MJCF's numerics) whose torque, a function
-    of the rotor angle and velocity, adds to the applied motor torque. The model is not modified (a copy
-    takes the log's timestep when it differs).
+    of the rotor angle and velocity, adds to the applied motor torque. `sensors`: measure as
+    the virtual experiment does (`bench.experiment`): the controller and the returned q_m, q
+    see the quantised encoders, and white torque noise (seeded by `seed`, as an experiment's)
+    adds to the applied torque but not to the recorded tau_m; default: exact measurements, no
+    noise (step 1 above). The model is not modified (a copy takes the log's timestep when it
+    differs).
 
     Raises LogError when the log lacks q_ref or the controller gains, ValueError for bad
     arguments, ReplayError when the simulation diverges.
@@ -104,6 +110,10 @@ def replay(model: mujoco.MjModel, axis: Axis, log: Log, disturbance: np.ndarray 
     mujoco.mj_forward(m, d)
 
     ctrl = PIController(gains, T, float(log.tau_m[0]) if tau0 is None else float(tau0))
+    exact = Sensors.ideal()
+    quant_m = (sensors or exact).motor_quantizer()
+    quant_l = (sensors or exact).link_quantizer()
+    noise = (sensors or exact).torque_noise(np.random.default_rng(seed), n).tolist()
     q_m = np.empty(n)
     q = None if axis.rigid else np.empty(n)
     tau = np.empty(n)
@@ -119,17 +129,20 @@ def replay(model: mujoco.MjModel, axis: Axis, log: Log, disturbance: np.ndarray 
         if not abs(qm_k) < 1e6 * scale:
             raise ReplayError(f"replay of {log.path or 'the log'} diverged at t = {k * T:.4f} s "
                               f"(q_m = {qm_k:.3g}): the model is unstable under the logged gains")
-        u = ctrl.step(qm_k, q_ref[k])
+        meas_m = quant_m(qm_k)
+        u = ctrl.step(meas_m, q_ref[k])
         if dist is not None:
             if at_motor:
                 u += dist[k]
             else:
                 qfrc[dl] = dist[k]
-        q_m[k] = qm_k
+        q_m[k] = meas_m
         if q is not None:
-            q[k] = qpos[il]
+            q[k] = quant_l(qpos[il])
         tau[k] = u
-        ctrl_arr[act] = u if loop is None else u + loop.torque(qm_k, d.qvel[axis.motor_dof])
+        applied = u + noise[k]
+        ctrl_arr[act] = applied if loop is None else applied + loop.torque(qm_k,
+                                                                           d.qvel[axis.motor_dof])
         step(m, d, substeps)
     for w in range(len(d.warning)):
         if d.warning[w].number:

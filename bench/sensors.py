@@ -36,6 +36,17 @@ class Sensors:
     def ideal(cls) -> "Sensors":
         return cls(0.0, 0.0, 0.0)
 
+    @classmethod
+    def from_log(cls, log) -> "Sensors | None":
+        """The sensors a log's metadata describes (`to_meta`'s keys, as every jointbench log
+        carries them), None when any key is absent; LogError when one is not a number."""
+        keys = ("motor_encoder_resolution_rad", "link_encoder_resolution_rad",
+                "torque_noise_std")
+        values = [log.meta_float(k) for k in keys]
+        if any(v is None for v in values):
+            return None
+        return cls(*values)
+
     @staticmethod
     def _quantizer(res: float) -> Callable[[float], float]:
         if res <= 0:
