@@ -64,6 +64,7 @@ PARAMS = {"joint-motor": ("K", "Jm", "JL", "FVm", "FSm", "FV", "FS", "MX", "MY")
 TRUTH = ("K", "Jm", "JL", "FVm", "FSm", "FV", "FS", "MX", "MY", "f1_hz")
 SCATTERED = ("K", "Jm", "JL", "FVm", "FSm", "FV", "FS")
 SIGMA_KINDS = {"sigma": "paper", "sigma_c": "corrected"}
+DEBIASED_SIGMA_KINDS = {"sigma_c": "corrected", "sigma_r": "replicas"}
 DEBIASED = "+bc"   # column prefix suffix of the bias-corrected estimates (bench.debias)
 BIAS_CORRECTABLE = ("joint-motor", "motor-only")
 
@@ -191,7 +192,8 @@ class CampaignSpec:
                          f"{ID_MODELS[m]}.{p}.sigma_c"]
         for m in debiased_models(self.base):
             for p in PARAMS[m]:
-                cols += [f"{ID_MODELS[m]}{DEBIASED}.{p}", f"{ID_MODELS[m]}{DEBIASED}.{p}.sigma_c"]
+                cols += [f"{ID_MODELS[m]}{DEBIASED}.{p}", f"{ID_MODELS[m]}{DEBIASED}.{p}.sigma_c",
+                         f"{ID_MODELS[m]}{DEBIASED}.{p}.sigma_r"]
         return cols
 
 
@@ -410,6 +412,7 @@ def run_task(task: RunTask) -> RunOutcome:
                 for p in PARAMS[m]:
                     row[f"{pre}{DEBIASED}.{p}"] = _fmt(d.estimate.get(p))
                     row[f"{pre}{DEBIASED}.{p}.sigma_c"] = _fmt(d.sigma.get(p))
+                    row[f"{pre}{DEBIASED}.{p}.sigma_r"] = _fmt(d.sigma_replicas.get(p))
         identify_s = time.perf_counter() - t1
     if reasons:
         row["status"] = "failed"
@@ -586,8 +589,8 @@ def summarize(spec: CampaignSpec, rows: list[dict[str, str]], k: float = 2.0) ->
             for p in PARAMS[m]:
                 est = np.array([_num(r, f"{pre}.{p}") for r in sel])
                 truth = np.array([_num(r, f"truth.{p}") for r in sel])
-                sig = {"paper": np.full(len(sel), np.nan),
-                       "corrected": np.array([_num(r, f"{pre}.{p}.sigma_c") for r in sel])}
+                sig = {kind: np.array([_num(r, f"{pre}.{p}.{col}") for r in sel])
+                       for col, kind in DEBIASED_SIGMA_KINDS.items()}
                 stats.append(parameter_stats(p, est, truth, sig, k))
             models[f"{m} (bias-corrected)"] = [s.as_dict() for s in stats]
         group["models"] = models
@@ -627,8 +630,8 @@ def summary_text(summary: dict) -> str:
     for group in summary["groups"]:
         title = ", ".join(f"{k} = {v:g}" for k, v in group.get("sweep", {}).items())
         for m, stats in group["models"].items():
-            kinds = tuple(kind for kind in SIGMA_KINDS.values()
-                          if any(s["coverage"][kind]["n"] > 0 for s in stats))
+            kinds = tuple(kind for kind in ("paper", "corrected", "replicas")
+                          if any(s["coverage"].get(kind, {}).get("n", 0) > 0 for s in stats))
             lines.append("")
             lines.append(f"## {m}" + (f" ({title})" if title else "")
                          + f": {group['ok']} of {group['n_runs']} runs ok")

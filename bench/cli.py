@@ -304,9 +304,8 @@ def cmd_identify(args: argparse.Namespace) -> int:
             if tty or done == total:
                 print(f"\ridentify: bias correction, replica {done}/{total}",
                       end="" if done < total else "\n", file=sys.stderr, flush=True)
-        if args.json:
-            tell = None
-        debiased = debias(log, result, replicas=args.debias, progress=tell,
+        debiased = debias(log, result, replicas=args.debias,
+                          progress=None if args.json else tell,
                           friction_timeconst=args.friction_timeconst or SOLREF_FRICTION[0])
     if args.json:
         answer = to_json(result, truth)

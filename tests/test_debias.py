@@ -16,9 +16,10 @@ import numpy as np
 import pytest
 
 from bench.axes import build_experiment_model
-from bench.campaign import CampaignError, CampaignSpec, RunSettings, run_task, summarize
+from bench.campaign import (CampaignError, CampaignSpec, RunSettings, run_task, summarize,
+                            summary_text)
 from bench.cli import main
-from bench.debias import (DebiasError, debias, debias_table, debiased_json,
+from bench.debias import (DebiasError, debias, debias_table,
                           friction_timeconst_of, replica_seed)
 from bench.experiment import run_experiment
 from bench.replay import replay
@@ -84,6 +85,7 @@ def test_debias_removes_the_least_squares_bias(seed5):
     for n in d.estimate:
         assert d.sigma[n] == pytest.approx(math.hypot(d.ls_sigma[n],
                                                       d.spread[n] / math.sqrt(8)))
+        assert d.sigma_replicas[n] == pytest.approx(d.spread[n] * math.sqrt(9 / 8))
     text = debias_table(d, truth=truth)
     assert "8 closed-loop replicas" in text and "corrected" in text
 
@@ -143,7 +145,8 @@ def test_cli_identify_debias(tmp_path, capsys):
     out = json.loads(capsys.readouterr().out)
     d = out["debiased"]
     assert d["replicas"] == 3 and set(d["parameters"]) >= {"K", "Jm", "JL", "FSm", "MY"}
-    assert set(d) >= {"sigma", "bias", "replica_std", "ls", "truth", "error_pct"}
+    assert set(d) >= {"sigma", "sigma_replicas", "bias", "replica_std", "ls", "truth",
+                      "error_pct"}
     assert out["parameters"]  # the LS answer is unchanged beside it
     assert main(["identify", str(path), "--debias", "2"]) == 0
     text = capsys.readouterr().out
@@ -165,13 +168,14 @@ def test_campaign_debias_columns_and_summary():
     spec = CampaignSpec(base=RunSettings(duration=10.0, id_models=("joint-motor",), debias=2),
                         runs=2)
     cols = spec.columns()
-    assert "jm+bc.K" in cols and "jm+bc.K.sigma_c" in cols
+    assert {"jm+bc.K", "jm+bc.K.sigma_c", "jm+bc.K.sigma_r"} <= set(cols)
     rows = [run_task(t).row for t in spec.tasks()]
     assert all(r["status"] == "ok" for r in rows), [r["reason"] for r in rows]
     assert all(float(r["jm+bc.Jm"]) > 0 for r in rows)
     summary = summarize(spec, rows)
     stats = summary["groups"][0]["models"]["joint-motor (bias-corrected)"]
     assert [s["name"] for s in stats][:3] == ["K", "Jm", "JL"]
-    assert stats[0]["coverage"]["corrected"]["n"] == 2
+    assert stats[0]["coverage"]["corrected"]["n"] == stats[0]["coverage"]["replicas"]["n"] == 2
+    assert "replicas %" in summary_text(summary)
     with pytest.raises(CampaignError, match="--debias"):
         RunSettings(debias=1)

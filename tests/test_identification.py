@@ -115,7 +115,9 @@ def test_demo_writes_figures_and_report(tmp_path, capsys):
     for name in ("figure1.png", "figure2.png", "frequency_response.png", "report.md",
                  "prototype.csv"):
         assert (tmp_path / name).stat().st_size > 0, name
-    assert "Table 1" in (tmp_path / "report.md").read_text()
+    report = (tmp_path / "report.md").read_text()
+    assert "Table 1" in report
+    assert "## Bias correction of Table 1 (parametric bootstrap): 8 closed-loop" in report
 
 
 def test_five_point_stencil_gain():
