@@ -557,6 +557,20 @@ def _num(row: dict[str, str], key: str) -> float:
         return math.nan
 
 
+def _model_stats(sel: list[dict[str, str]], pre: str, params: tuple[str, ...],
+                 sigma_kinds: dict[str, str], k: float) -> list[dict]:
+    """Per parameter the statistics of the columns `pre.p` against `truth.p`, each sigma column
+    `pre.p.col` as the coverage of kind `sigma_kinds[col]`."""
+    stats = []
+    for p in params:
+        est = np.array([_num(r, f"{pre}.{p}") for r in sel])
+        truth = np.array([_num(r, f"truth.{p}") for r in sel])
+        sig = {kind: np.array([_num(r, f"{pre}.{p}.{col}") for r in sel])
+               for col, kind in sigma_kinds.items()}
+        stats.append(parameter_stats(p, est, truth, sig, k).as_dict())
+    return stats
+
+
 def summarize(spec: CampaignSpec, rows: list[dict[str, str]], k: float = 2.0) -> dict:
     """The campaign's Monte Carlo statistics (JSON-able): per sweep point, per identification
     model, per parameter: bias, empirical std, mean sigma (paper and corrected) and coverage."""
@@ -574,25 +588,10 @@ def summarize(spec: CampaignSpec, rows: list[dict[str, str]], k: float = 2.0) ->
             group["sweep"] = {spec.sweep: spec.values[point]}
         models = {}
         for m in spec.base.id_models:
-            pre = ID_MODELS[m]
-            stats = []
-            for p in PARAMS[m]:
-                est = np.array([_num(r, f"{pre}.{p}") for r in sel])
-                truth = np.array([_num(r, f"truth.{p}") for r in sel])
-                sig = {kind: np.array([_num(r, f"{pre}.{p}.{col}") for r in sel])
-                       for col, kind in SIGMA_KINDS.items()}
-                stats.append(parameter_stats(p, est, truth, sig, k))
-            models[m] = [s.as_dict() for s in stats]
+            models[m] = _model_stats(sel, ID_MODELS[m], PARAMS[m], SIGMA_KINDS, k)
         for m in debiased_models(spec.base):
-            pre = ID_MODELS[m] + DEBIASED
-            stats = []
-            for p in PARAMS[m]:
-                est = np.array([_num(r, f"{pre}.{p}") for r in sel])
-                truth = np.array([_num(r, f"truth.{p}") for r in sel])
-                sig = {kind: np.array([_num(r, f"{pre}.{p}.{col}") for r in sel])
-                       for col, kind in DEBIASED_SIGMA_KINDS.items()}
-                stats.append(parameter_stats(p, est, truth, sig, k))
-            models[f"{m} (bias-corrected)"] = [s.as_dict() for s in stats]
+            models[f"{m} (bias-corrected)"] = _model_stats(sel, ID_MODELS[m] + DEBIASED,
+                                                           PARAMS[m], DEBIASED_SIGMA_KINDS, k)
         group["models"] = models
         groups.append(group)
     return {"spec": json.loads(spec.to_json()), "runs": len(rows),
