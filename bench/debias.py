@@ -46,8 +46,8 @@ from typing import Callable
 
 import numpy as np
 
-from bench.nominal import SOLREF_FRICTION, compile_axis, two_mass_axis
-from bench.refine import RefineError, require_replayable, start_parameters
+from bench.nominal import SOLREF_FRICTION
+from bench.refine import RefineError, axis_for_log, require_replayable, start_parameters
 from bench.replay import ReplayError, replay
 from bench.sensors import Sensors
 from identification.identify import Identification, NotIdentifiable, identify
@@ -130,12 +130,7 @@ def debias(log: Log, ident: Identification, *, replicas: int = DEFAULT_REPLICAS,
     except RefineError as err:
         raise DebiasError(str(err).replace("--refine", "--debias")) from None
     sens = _sensors(log, sensors)
-    spec = two_mass_axis(*(theta[n] for n in ("Jm", "FVm", "FSm", "K", "JL", "FV", "FS",
-                                               "MX", "MY")),
-                         timestep=log.ts, tau_max=log.meta_float("tau_max"),
-                         gravity=log.gravity, name=log.meta.get("joint") or "axis1",
-                         friction_timeconst=friction_timeconst)
-    model, axis = compile_axis(spec, "bias-correction axis")
+    model, axis = axis_for_log(log, theta, "bias-correction axis", friction_timeconst)
     notes = [*notes, f"nominal axis: Coulomb friction time constant {1e3 * friction_timeconst:g} "
              "ms (solreffriction; --friction-timeconst)"]
     start = time.perf_counter()
@@ -206,7 +201,7 @@ def debias_table(res: DebiasResult, prismatic: bool = False,
     tables): per parameter the LS value, the bias the replicas show, the corrected value and
     its 2 sigma, the replicas' spread over the LS corrected sigma and, with truth, the LS and
     corrected errors in % and in corrected sigmas."""
-    from identification.report import units
+    from identification.report import cell as num, units
 
     unit = units(prismatic)
     truth = {n: v for n, v in (truth or {}).items() if n in res.estimate and v}
@@ -219,12 +214,6 @@ def debias_table(res: DebiasResult, prismatic: bool = False,
         head += f"{'truth':>12}{'LS err %':>10}{'(sigma)':>8}{'error %':>10}{'(sigma)':>8}"
     head += "  unit"
     lines += [head, "-" * len(head)]
-
-    def num(x: float | None, width: int = 12, fmt: str = ".6g") -> str:
-        if x is None or not math.isfinite(x):
-            return f"{'-':>{width}}"
-        sign, fmt = ("+", fmt[1:]) if fmt.startswith("+") else ("", fmt)
-        return f"{x:>{sign}{width}{fmt}}"
 
     for n, est in res.estimate.items():
         sc = res.ls_sigma.get(n, math.nan)

@@ -77,15 +77,17 @@ import time
 from dataclasses import dataclass, field
 from typing import Callable
 
+import mujoco
 import numpy as np
 from scipy import optimize
 
 from bench.controller import Gains
-from bench.nominal import compile_axis, two_mass_axis
+from bench.nominal import SOLREF_FRICTION, compile_axis, two_mass_axis
 from bench.replay import ReplayError, ReplayResult, forward_errors, replay
 from identification.identify import Identification
 from identification.log import Log, LogError
 from identification.uncertainty import hac_covariance
+from models import Axis
 
 ALL_PARAMETERS = ("Jm", "K", "JL", "FVm", "FSm", "FV", "FS", "MX", "MY")
 FREE = {"joint-motor": ALL_PARAMETERS, "motor-only": ALL_PARAMETERS}
@@ -225,14 +227,22 @@ def _bounds(start: dict[str, float], free: tuple[str, ...],
     return lo, hi
 
 
-def simulate(log: Log, theta: dict[str, float], *, substeps: int = 1) -> ReplayResult:
-    """One closed-loop replay of `log` on the two-mass axis with parameters `theta` (all of
-    ALL_PARAMETERS), the log's sample period, torque limit and gravity."""
+def axis_for_log(log: Log, theta: dict[str, float], source: str,
+                 friction_timeconst: float = SOLREF_FRICTION[0]) -> tuple[mujoco.MjModel, Axis]:
+    """The compiled two-mass axis with parameters `theta` (all of ALL_PARAMETERS) and the
+    log's sample period, torque limit, gravity and joint name."""
     spec = two_mass_axis(*(theta[n] for n in ("Jm", "FVm", "FSm", "K", "JL", "FV", "FS",
                                                "MX", "MY")),
                          timestep=log.ts, tau_max=log.meta_float("tau_max"),
-                         gravity=log.gravity, name=log.meta.get("joint") or "axis1")
-    model, axis = compile_axis(spec, "refinement candidate")
+                         gravity=log.gravity, name=log.meta.get("joint") or "axis1",
+                         friction_timeconst=friction_timeconst)
+    return compile_axis(spec, source)
+
+
+def simulate(log: Log, theta: dict[str, float], *, substeps: int = 1) -> ReplayResult:
+    """One closed-loop replay of `log` on the two-mass axis with parameters `theta` (all of
+    ALL_PARAMETERS), the log's sample period, torque limit and gravity."""
+    model, axis = axis_for_log(log, theta, "refinement candidate")
     return replay(model, axis, log, substeps=substeps)
 
 
@@ -432,7 +442,7 @@ def refinement_table(res: RefineResult, ident: Identification,
     """The refinement as text (what `jointbench identify --refine` prints after the LS
     tables): parameter, LS value, refined value, 2 sigma (white residuals) and, with truth,
     the LS and refined errors."""
-    from identification.report import units
+    from identification.report import cell as num, units
 
     unit = units(ident.prismatic)
     truth = {n: v for n, v in (truth or {}).items() if n in res.parameters and v}
@@ -445,9 +455,6 @@ def refinement_table(res: RefineResult, ident: Identification,
         head += f"{'truth':>12}{'LS err %':>10}{'error %':>10}"
     head += "  unit"
     lines += [head, "-" * len(head)]
-
-    def num(x: float | None, width: int = 12, fmt: str = ".6g") -> str:
-        return f"{'-':>{width}}" if x is None or not math.isfinite(x) else f"{x:>{width}{fmt}}"
 
     for n in ALL_PARAMETERS:
         ls = ident.physical.get(n)

@@ -58,6 +58,15 @@ def _num(x: float, width: int = 12) -> str:
     return f"{x:>{width}.6g}"
 
 
+def cell(x: float | None, width: int = 12, fmt: str = ".6g") -> str:
+    """A right-aligned table cell, '-' for a missing or non-finite value; `fmt` may start with
+    '+' to sign every number."""
+    if x is None or not math.isfinite(x):
+        return f"{'-':>{width}}"
+    sign, fmt = ("+", fmt[1:]) if fmt.startswith("+") else ("", fmt)
+    return f"{x:>{sign}{width}{fmt}}"
+
+
 def expected_x(truth: dict[str, float]) -> dict[str, float]:
     """X1..X9 of eq. (19) (and the corrected terms) from physical truth, for truth columns."""
     try:
