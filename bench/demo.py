@@ -8,12 +8,12 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.experiment import run_experiment
-from identification.filtering import default_settings
-from identification.frequency import FRF, first_mode_hz, measured_frf, model_frf, two_mass_tf
-from identification.identify import identify
-from identification.log import atomic_write_text, write_log
-from identification.report import (PAPER_TABLE1, PAPER_TABLE2, expected_x, parameter_table,
+from jointbench.bench.sim.experiment import run_experiment
+from jointbench.identification.filtering import default_settings
+from jointbench.identification.frequency import FRF, first_mode_hz, measured_frf, model_frf, two_mass_tf
+from jointbench.identification.identify import identify
+from jointbench.identification.log import atomic_write_text, write_log
+from jointbench.identification.report import (PAPER_TABLE1, PAPER_TABLE2, expected_x, parameter_table,
                                    physical_table)
 
 
@@ -24,7 +24,7 @@ def _err(v: float, t: float) -> str:
 def run_demo(out: Path, duration: float = 60.0, seed: int = 1) -> int:
     import matplotlib
     matplotlib.use("Agg")
-    from identification.plots import figure1_setup, plot_figure1, plot_frf, plot_validation
+    from jointbench.identification.plots import figure1_setup, plot_figure1, plot_frf, plot_validation
 
     start = time.perf_counter()
     out.mkdir(parents=True, exist_ok=True)
@@ -129,7 +129,7 @@ def run_demo(out: Path, duration: float = 60.0, seed: int = 1) -> int:
 def _bias_correction(log, jm, mo, truth: dict[str, float], say, replicas: int = 8) -> None:
     """Both two-mass estimates bias-corrected by closed-loop replicas (bench/debias.py,
     `identify --debias`)."""
-    from bench.debias import debias, debias_table
+    from jointbench.bench.analysis.debias import debias, debias_table
 
     d = debias(log, jm, replicas=replicas)
     say(debias_table(d, truth=truth).replace("## Bias correction", "## Bias correction of "
@@ -149,9 +149,9 @@ def _discrepancy_example(out: Path, duration: float, seed: int, say) -> None:
     the log goes to diagnose, which must find it, extend the model and measure the gain."""
     import dataclasses
 
-    from bench.diagnose import diagnose, summary_text
-    from bench.effects import HiddenEffect
-    from identification.log import write_log
+    from jointbench.bench.analysis.diagnose.run import diagnose, summary_text
+    from jointbench.bench.effects import HiddenEffect
+    from jointbench.identification.log import write_log
 
     hidden = HiddenEffect("backlash", 0.002)
     say("Discrepancy example: the same experiment with backlash of half-width 0.002 rad hidden "

@@ -29,7 +29,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.cli import main as jointbench  # noqa: E402
+from jointbench.bench.cli import main as jointbench  # noqa: E402
 
 
 def main() -> None:

@@ -14,9 +14,9 @@ import argparse
 import sys
 import time
 
-from bench.battery import cases, confusion, run_case
-from bench.diagnose import diagnose
-from identification.effects import EFFECTS, NONE
+from jointbench.bench.campaign.battery import cases, confusion, run_case
+from jointbench.bench.analysis.diagnose.run import diagnose
+from jointbench.identification.effects import EFFECTS, NONE
 
 
 def main(argv=None) -> int:

@@ -53,9 +53,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.experiment import run_experiment  # noqa: E402
-from identification.identify import identify  # noqa: E402
-from identification.log import Log  # noqa: E402
+from jointbench.bench.sim.experiment import run_experiment  # noqa: E402
+from jointbench.identification.identify import identify  # noqa: E402
+from jointbench.identification.log import Log  # noqa: E402
 
 PARAMS = ("K", "Jm", "JL")
 # the wrong nominal model both iterative peers start from (factor x truth)
@@ -104,7 +104,7 @@ def sysid_spec():
     """models/prototype_axis.xml with sensors for both encoders and the motor torque."""
     import mujoco
 
-    from models import model_path
+    from jointbench.models import model_path
 
     spec = mujoco.MjSpec.from_file(str(model_path("prototype")))
     spec.add_sensor(name="q_m", type=mujoco.mjtSensor.mjSENS_JOINTPOS, objname="axis1_motor",
@@ -165,7 +165,7 @@ def closed_loop_rollout(log: Log):
     from mujoco import sysid
     from mujoco.sysid._src.trajectory import SystemTrajectory
 
-    from bench.controller import Gains, PIController
+    from jointbench.bench.sim.controller import Gains, PIController
 
     gains = Gains.from_log(log)
     T = log.ts
@@ -271,7 +271,7 @@ def _frf_fit(log: Log, fmin: float, fmax: float) -> PeerResult:
 
     import control
 
-    from identification.frequency import measured_frf, two_mass_tf
+    from jointbench.identification.frequency import measured_frf, two_mass_tf
 
     t0 = time.perf_counter()
     truth = log.truth()
@@ -331,8 +331,8 @@ def identification_time(log: Log) -> dict[str, float]:
 def experiments_per_second(runs: int, workers: int | None) -> tuple[float, float, str]:
     """A campaign of `runs` 60 s prototype experiments (both identification models) on
     LocalExecutor(workers): (runs per second, mean simulation s per run, engine)."""
-    from bench.campaign import CampaignSpec, RunSettings, run_campaign
-    from bench.executors import LocalExecutor
+    from jointbench.bench.campaign.run import CampaignSpec, RunSettings, run_campaign
+    from jointbench.bench.campaign.executors import LocalExecutor
 
     spec = CampaignSpec(base=RunSettings(duration=60.0), runs=runs, seed=99)
     with tempfile.TemporaryDirectory() as tmp, LocalExecutor(workers) as ex:

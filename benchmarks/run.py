@@ -30,9 +30,9 @@ import time
 import mujoco
 import numpy as np
 
-from bench.axes import build_experiment_model
-from bench.experiment import SAMPLE_RATE_HZ, run_experiment
-from identification.identify import identify
+from jointbench.bench.sim.axes import build_experiment_model
+from jointbench.bench.sim.experiment import SAMPLE_RATE_HZ, run_experiment
+from jointbench.identification.identify import identify
 
 DURATION = 60.0
 N_TICKS = int(round(DURATION * SAMPLE_RATE_HZ)) + 1  # 21053, as in run_experiment

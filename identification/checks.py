@@ -38,9 +38,9 @@ from dataclasses import replace
 import numpy as np
 from scipy import signal
 
-from identification.estimate import LSResult, NotIdentifiable, block_weighted, least_squares
-from identification.filtering import FilterSettings, lowpass
-from identification.log import Log
+from jointbench.identification.estimate import LSResult, NotIdentifiable, block_weighted, least_squares
+from jointbench.identification.filtering import FilterSettings, lowpass
+from jointbench.identification.log import Log
 
 EXCITATION_LIMIT = 1e-4     # smallest / largest singular value of the column-scaled W
 MAX_RELATIVE_ERROR = 0.90   # ||residual|| / ||y - mean y|| over the torque rows

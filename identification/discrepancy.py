@@ -30,9 +30,9 @@ from typing import Callable
 import numpy as np
 from scipy import optimize, signal, stats
 
-from identification.effects import EFFECTS, NONE
-from identification.filtering import FilterSettings, derivatives, lowpass, zoh_align
-from identification.log import Log, LogError
+from jointbench.identification.effects import EFFECTS, NONE
+from jointbench.identification.filtering import FilterSettings, derivatives, lowpass, zoh_align
+from jointbench.identification.log import Log, LogError
 
 NOMINAL_TWO_MASS = ("Jm", "FVm", "FSm", "K", "JL", "FV", "P")
 NOMINAL_RIGID = ("J", "FV", "FS")

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from identification.uncertainty import HACResult, hac_covariance
+from jointbench.identification.uncertainty import HACResult, hac_covariance
 
 COND_LIMIT = 1e8  # scaled condition number beyond which a direction counts as unidentified
 

@@ -159,7 +159,7 @@ def default_settings(rate_hz: float, f1_hz: float | None = None, m: int = 4) -> 
     if f1_hz is None:
         raise ValueError("at a sample rate other than 350.87 Hz the filter is derived from the "
                          "first mode: give f1 (Hz) or explicit wn and Nd")
-    from identification.design import design_bandpass
+    from jointbench.identification.design import design_bandpass
     wn = min(design_bandpass(f1_hz, nd=2, m=m).wn_rad_s, 0.8 * np.pi * rate_hz)
     Nd = max(1, int(round(0.8 * rate_hz / (2 * f1_hz * 5.4 / 3.9))))
     return FilterSettings(wn=wn, m=m, Nd=Nd, ts=ts)
@@ -173,7 +173,7 @@ def design_rate_hz(f1_hz: float, m: int = 4, margin: float = RATE_MARGIN) -> flo
     (w1 Ts)^2 / 3 = 0.47 %, which biases K by about -0.2 % and Jm by +0.2 % (measured on the
     arm without friction, joint-motor model). Twice the rate quarters it (0.12 %, K and Jm
     within 0.05 %). For the arm's 14.7-19.5 Hz modes: 1.5-2.1 kHz."""
-    from identification.design import design_bandpass
+    from jointbench.identification.design import design_bandpass
     if not margin >= 1.0:
         raise ValueError(f"margin must be >= 1 (a rate below eq. (29)'s), got {margin!r}")
     return margin * design_bandpass(f1_hz, nd=2, m=m).fs_hz

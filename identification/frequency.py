@@ -9,7 +9,7 @@ import control
 import numpy as np
 from scipy import signal
 
-from identification.log import Log
+from jointbench.identification.log import Log
 
 
 @dataclass(frozen=True)

@@ -7,12 +7,12 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from identification import models as regressors
-from identification.checks import check_excitation, check_signals
-from identification.estimate import LSResult, NotIdentifiable, block_weighted, least_squares
-from identification.filtering import FilterSettings, default_settings, generic_settings
-from identification.log import Log, LogError
-from identification.physical import InversionError, PhysicalResult, invert_motor_only, table3
+from jointbench.identification import regressors
+from jointbench.identification.checks import check_excitation, check_signals
+from jointbench.identification.estimate import LSResult, NotIdentifiable, block_weighted, least_squares
+from jointbench.identification.filtering import FilterSettings, default_settings, generic_settings
+from jointbench.identification.log import Log, LogError
+from jointbench.identification.physical import InversionError, PhysicalResult, invert_motor_only, table3
 
 MODEL_CHOICES = ("joint-motor", "motor-only", "motor-only-printed", "rigid", "auto")
 

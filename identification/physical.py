@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize
 
-from identification.estimate import LSResult
+from jointbench.identification.estimate import LSResult
 
 PHYSICAL = ("Jm", "K", "JL", "FVm", "FV", "FSm")
 

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from identification.design import butterworth_magnitude, central_difference_magnitude
+from jointbench.identification.design import butterworth_magnitude, central_difference_magnitude
 
 if TYPE_CHECKING:
     import matplotlib.figure

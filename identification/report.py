@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 
-from identification.identify import Identification
+from jointbench.identification.identify import Identification
 
 # The paper's published values (section 4), for side-by-side tables.
 PAPER_TABLE1 = {"Jm": (174.7996, 2.7741, 0.7952), "K": (20341.0458, 437.1569, 1.0746),

@@ -8,7 +8,7 @@ from dataclasses import asdict, dataclass
 import mujoco
 import numpy as np
 
-from models import Axis, gear_ratio
+from jointbench.models import Axis, gear_ratio
 
 
 @dataclass(frozen=True)

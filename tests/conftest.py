@@ -11,7 +11,7 @@ matplotlib.use("Agg")
 @pytest.fixture(scope="session")
 def prototype_run():
     """The demo's experiment: the paper's prototype, 60 s chirp, default sensors, seed 1."""
-    from bench.experiment import run_experiment
+    from jointbench.bench.sim.experiment import run_experiment
 
     return run_experiment("prototype", duration=60.0, seed=1)
 

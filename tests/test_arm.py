@@ -21,14 +21,14 @@ import mujoco
 import numpy as np
 import pytest
 
-from bench.axes import build_experiment_model
-from bench.cli import main
-from bench.experiment import default_chirp, run_experiment
-from identification.design import design_bandpass
-from identification.filtering import default_settings, design_rate_hz
-from identification.identify import identify
-from identification.log import read_log
-from models import model_path
+from jointbench.bench.sim.axes import build_experiment_model
+from jointbench.bench.cli import main
+from jointbench.bench.sim.experiment import default_chirp, run_experiment
+from jointbench.identification.design import design_bandpass
+from jointbench.identification.filtering import default_settings, design_rate_hz
+from jointbench.identification.identify import identify
+from jointbench.identification.log import read_log
+from jointbench.models import model_path
 
 JOINTS = ("axis1", "axis4", "axis6")
 ACCELERATION_SHARE = 0.55  # chirp acceleration cap: share of tau_max over Jm + JL (default 0.4)
@@ -94,7 +94,7 @@ def test_arm_truth_within_3_sigma_after_bias_correction(arm_runs):
     the nominal axis with the arm's friction time constant) takes that bias out: measured
     (seed 1, 8 or 4 replicas) Jm +0.26 -> -0.01 % (axis1), +0.22 -> +0.03 % (axis4),
     +0.20 -> +0.01 % (axis6), K and JL within 0.06 %, every |z| < 1."""
-    from bench.debias import debias, friction_timeconst_of
+    from jointbench.bench.analysis.debias import debias, friction_timeconst_of
 
     for joint, (res, result, truth) in arm_runs.items():
         z_ls = (result.physical["Jm"] - truth["Jm"]) / result.physical_sigma_corrected["Jm"]

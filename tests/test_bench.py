@@ -8,16 +8,16 @@ import json
 import numpy as np
 import pytest
 
-from bench.cli import main
-from bench.controller import Gains, control_law
-from bench.effects import parse_effect
-from bench.experiment import run_experiment
-from bench.sensors import Sensors
-from identification.effects import EFFECTS
-from identification.filtering import lowpass
-from identification.frequency import first_mode_hz, measured_frf
-from identification.log import format_log, read_log
-from models import model_path
+from jointbench.bench.cli import main
+from jointbench.bench.sim.controller import Gains, control_law
+from jointbench.bench.effects import parse_effect
+from jointbench.bench.sim.experiment import run_experiment
+from jointbench.bench.sim.sensors import Sensors
+from jointbench.identification.effects import EFFECTS
+from jointbench.identification.filtering import lowpass
+from jointbench.identification.frequency import first_mode_hz, measured_frf
+from jointbench.identification.log import format_log, read_log
+from jointbench.models import model_path
 
 
 def rel_rms(a: np.ndarray, b: np.ndarray) -> float:

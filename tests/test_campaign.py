@@ -18,10 +18,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bench.campaign import (CampaignError, CampaignSpec, CampaignTable, RunSettings, read_table,
+from jointbench.bench.campaign.run import (CampaignError, CampaignSpec, CampaignTable, RunSettings, read_table,
                             run_campaign, scattered_factors, scattered_mjcf, summarize)
-from bench.executors import LocalExecutor, SerialExecutor
-from identification.summary import coverage, parameter_stats, wilson_interval
+from jointbench.bench.campaign.executors import LocalExecutor, SerialExecutor
+from jointbench.identification.summary import coverage, parameter_stats, wilson_interval
 
 REPO = Path(__file__).resolve().parents[1]
 SHORT = RunSettings(duration=10.0)
@@ -150,7 +150,7 @@ def test_process_pool_gives_the_same_table(reference, tmp_path):
 
 def test_dask_cluster_on_loopback_gives_the_same_table(reference, tmp_path):
     distributed = pytest.importorskip("distributed")
-    from bench.cli import main
+    from jointbench.bench.cli import main
 
     ref_path, _ = reference
     out = tmp_path / "dask.csv"
@@ -212,7 +212,7 @@ def test_resume_after_sigkill(tmp_path):
     args = ["campaign", "--runs", "16", "--seed", "7", "--duration", "10", "--workers", "1",
             "--quiet", "--id-models", "joint-motor"]
     killed = tmp_path / "killed.csv"
-    proc = subprocess.Popen([sys.executable, "-m", "bench.cli", *args, "--out", str(killed)],
+    proc = subprocess.Popen([sys.executable, "-m", "jointbench.bench.cli", *args, "--out", str(killed)],
                             cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     try:
         while proc.poll() is None:
@@ -224,7 +224,7 @@ def test_resume_after_sigkill(tmp_path):
         proc.wait()
     was_killed = proc.returncode == -signal.SIGKILL
     before = len(data_rows(killed))
-    from bench.cli import main
+    from jointbench.bench.cli import main
 
     assert main([*args, "--out", str(killed)]) == 0
     ref = tmp_path / "ref16.csv"
@@ -237,7 +237,7 @@ def test_resume_after_sigkill(tmp_path):
 
 
 def test_resume_with_another_spec_is_refused(reference, tmp_path, capsys):
-    from bench.cli import main
+    from jointbench.bench.cli import main
 
     out = tmp_path / "other.csv"
     shutil.copy(reference[0], out)
@@ -260,7 +260,7 @@ def test_resume_with_another_spec_is_refused(reference, tmp_path, capsys):
     (["--model", "no_such.xml"], "no_such.xml"),
 ])
 def test_cli_bad_input_exit_2(argv, message, tmp_path, capsys):
-    from bench.cli import main
+    from jointbench.bench.cli import main
 
     rc = main(["campaign", "--quiet", "--workers", "1", "--out", str(tmp_path / "x.csv"), *argv])
     err = capsys.readouterr().err
@@ -272,8 +272,8 @@ def test_cli_bad_input_exit_2(argv, message, tmp_path, capsys):
 
 
 def test_scattered_model_round_trip_and_truth_follows(tmp_path):
-    from models import find_axes, load_model
-    from models.truth import axis_truth
+    from jointbench.models import find_axes, load_model
+    from jointbench.models.truth import axis_truth
 
     def truth_of(path):
         model, axes, _ = load_model(path)
@@ -312,7 +312,7 @@ def test_scatter_campaign_identifies_each_runs_truth(tmp_path):
 
 
 def test_tune_filter_small_grid():
-    from bench.tuning import tune_filter
+    from jointbench.bench.campaign.tuning import tune_filter
 
     r = tune_filter("prototype", None, (120.0, 176.0), (13, 26), seeds=1,
                     executor=SerialExecutor(), duration=20.0, seed=3)
@@ -332,7 +332,7 @@ def test_tune_filter_small_grid():
 def test_cli_json_is_one_strict_json_object(tmp_path, capsys):
     import json
 
-    from bench.cli import main
+    from jointbench.bench.cli import main
 
     rc = main(["campaign", "--runs", "1", "--duration", "10", "--workers", "1", "--json",
                "--id-models", "joint-motor", "--out", str(tmp_path / "j.csv")])

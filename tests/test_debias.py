@@ -15,17 +15,17 @@ from dataclasses import astuple
 import numpy as np
 import pytest
 
-from bench.axes import build_experiment_model
-from bench.campaign import (CampaignError, CampaignSpec, RunSettings, run_task, summarize,
+from jointbench.bench.sim.axes import build_experiment_model
+from jointbench.bench.campaign.run import (CampaignError, CampaignSpec, RunSettings, run_task, summarize,
                             summary_text)
-from bench.cli import main
-from bench.debias import (DebiasError, debias, debias_table,
+from jointbench.bench.cli import main
+from jointbench.bench.analysis.debias import (DebiasError, debias, debias_table,
                           friction_timeconst_of, replica_seed)
-from bench.experiment import run_experiment
-from bench.replay import replay
-from bench.sensors import Sensors
-from identification.identify import identify
-from identification.log import Log, read_log, write_log
+from jointbench.bench.sim.experiment import run_experiment
+from jointbench.bench.sim.replay import replay
+from jointbench.bench.sim.sensors import Sensors
+from jointbench.identification.identify import identify
+from jointbench.identification.log import Log, read_log, write_log
 
 
 def z(value: float, truth: float, sigma: float) -> float:

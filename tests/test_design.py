@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from identification.design import (
+from jointbench.identification.design import (
     FilterDesign,
     butterworth_magnitude,
     central_difference_magnitude,
@@ -138,7 +138,7 @@ def test_plot_figure1_writes_png(tmp_path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from identification.plots import figure1_setup, plot_figure1
+    from jointbench.identification.plots import figure1_setup, plot_figure1
 
     setup = figure1_setup()
     assert math.pi / setup.ts == pytest.approx(1.0e3)  # ws/2 = 1e3 rad/s

@@ -12,11 +12,11 @@ import json
 
 import pytest
 
-from bench.battery import Case, cases, run_case
-from bench.cli import main
-from bench.diagnose import diagnose
-from identification.effects import EFFECTS, NONE
-from identification.log import write_log
+from jointbench.bench.campaign.battery import Case, cases, run_case
+from jointbench.bench.cli import main
+from jointbench.bench.analysis.diagnose.run import diagnose
+from jointbench.identification.effects import EFFECTS, NONE
+from jointbench.identification.log import write_log
 
 # One case per effect and one clean case, on the prototype (the first axis of the battery).
 SUBSET = cases(per_effect=1, seed=7)

@@ -14,13 +14,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bench.cli import main
-from bench.controller import Gains, control_law
-from bench.nominal import compile_axis, for_log
-from bench.replay import forward_errors, replay
-from identification.filtering import FilterSettings
-from identification.identify import identify
-from identification.log import read_log
+from jointbench.bench.cli import main
+from jointbench.bench.sim.controller import Gains, control_law
+from jointbench.bench.sim.nominal import compile_axis, for_log
+from jointbench.bench.sim.replay import forward_errors, replay
+from jointbench.identification.filtering import FilterSettings
+from jointbench.identification.identify import identify
+from jointbench.identification.log import read_log
 
 DATA = Path(__file__).parent / "data" / "emps"
 ESTIMATION = DATA / "emps_estimation.csv"

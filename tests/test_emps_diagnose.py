@@ -13,10 +13,10 @@ from pathlib import Path
 
 import pytest
 
-from bench.cli import main
-from bench.diagnose import diagnose
-from bench.diagnose_forward import cross_validate
-from identification.log import read_log
+from jointbench.bench.cli import main
+from jointbench.bench.analysis.diagnose.run import diagnose
+from jointbench.bench.analysis.diagnose.forward import cross_validate
+from jointbench.identification.log import read_log
 
 DATA = Path(__file__).parent / "data" / "emps"
 GTAU = 35.15065188   # N/V: the pulses column holds volts at the drive input (EMPS README)

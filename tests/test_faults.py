@@ -19,17 +19,17 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from bench.cli import main
-from bench.controller import Gains
-from bench.experiment import SimulationError, run_experiment
-from bench.reference import Chirp
-from identification import checks
-from identification.estimate import NotIdentifiable, least_squares
-from identification.identify import identify
-from identification.log import Log, LogError, parse_log, read_log, write_log
-from identification.models import Regressor
-from identification.physical import InversionError, invert_motor_only, table3
-from models import model_path
+from jointbench.bench.cli import main
+from jointbench.bench.sim.controller import Gains
+from jointbench.bench.sim.experiment import SimulationError, run_experiment
+from jointbench.bench.sim.reference import Chirp
+from jointbench.identification import checks
+from jointbench.identification.estimate import NotIdentifiable, least_squares
+from jointbench.identification.identify import identify
+from jointbench.identification.log import Log, LogError, parse_log, read_log, write_log
+from jointbench.identification.regressors import Regressor
+from jointbench.identification.physical import InversionError, invert_motor_only, table3
+from jointbench.models import model_path
 
 RATE = 350.87
 
@@ -124,7 +124,7 @@ def test_single_sine_does_not_identify_the_flexible_models(sine_run, tmp_path, c
 
 
 def identify_settings(log: Log):
-    from identification.identify import settings_for
+    from jointbench.identification.identify import settings_for
     return settings_for(log)[0]
 
 
@@ -359,7 +359,7 @@ def test_broken_mjcf_is_refused_and_nothing_written(tmp_path, capsys, edit, mess
 
 def test_simulation_error_is_exit_2_without_a_log(tmp_path, capsys, monkeypatch):
     """The command line maps a diverging run to status 2 and writes nothing."""
-    import bench.experiment as experiment
+    import jointbench.bench.sim.experiment as experiment
 
     real = experiment.run_experiment
     monkeypatch.setattr(experiment, "run_experiment", lambda *a, **k: real(
@@ -423,7 +423,7 @@ def _handler_installed(pid: int, signum: int) -> bool:
 @pytest.mark.parametrize("signum, status", [(signal.SIGTERM, 143), (signal.SIGINT, 130)])
 def test_signal_during_simulate_leaves_no_file(tmp_path, signum, status):
     out = tmp_path / "X.csv"
-    proc = subprocess.Popen([sys.executable, "-m", "bench.cli", "simulate", "--duration", "600",
+    proc = subprocess.Popen([sys.executable, "-m", "jointbench.bench.cli", "simulate", "--duration", "600",
                              "--out", str(out), "--quiet"], cwd=tmp_path,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
@@ -446,7 +446,7 @@ def test_signal_during_simulate_leaves_no_file(tmp_path, signum, status):
 
 def test_broken_pipe_is_quiet():
     """`jointbench ... | true`: the reader is gone before the first write."""
-    proc = subprocess.run(["bash", "-c", f"'{sys.executable}' -m bench.cli design-filter "
+    proc = subprocess.run(["bash", "-c", f"'{sys.executable}' -m jointbench.bench.cli design-filter "
                            "--f1 3.9 --nd 2 --m 4 | true; exit ${PIPESTATUS[0]}"],
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode in (0, 141) and proc.stderr == ""

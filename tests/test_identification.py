@@ -7,11 +7,12 @@ import json
 import numpy as np
 import pytest
 
-from bench.cli import main
-from identification import filtering, models
-from identification.estimate import NotIdentifiable, least_squares
-from identification.identify import identify
-from identification.log import write_log
+from jointbench.bench.cli import main
+from jointbench.identification import filtering
+from jointbench.identification import regressors as models
+from jointbench.identification.estimate import NotIdentifiable, least_squares
+from jointbench.identification.identify import identify
+from jointbench.identification.log import write_log
 
 
 def err_pct(value: float, truth: float) -> float:
@@ -146,9 +147,9 @@ def test_five_point_stencil_removes_the_differentiation_bias(tmp_path):
     -0.006 %, Jm +0.082 -> -0.016 %, seeds 1-2)."""
     import mujoco
 
-    from bench.experiment import run_experiment
-    from bench.sensors import Sensors
-    from models import model_path
+    from jointbench.bench.sim.experiment import run_experiment
+    from jointbench.bench.sim.sensors import Sensors
+    from jointbench.models import model_path
 
     spec = mujoco.MjSpec.from_file(str(model_path("prototype")))
     for j in spec.joints:

@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from identification import log as log_module
-from identification.log import (Log, LogError, atomic_write_text, parse_log, read_log,
+from jointbench.identification import log as log_module
+from jointbench.identification.log import (Log, LogError, atomic_write_text, parse_log, read_log,
                                 unit_warnings, write_log)
 
 GOOD = """# jointbench-log: 1

@@ -9,9 +9,9 @@ import mujoco
 import numpy as np
 import pytest
 
-from bench.axes import build_experiment_model, full_qpos
-from models import ModelStructureError, find_axes, load_model
-from models.truth import axis_truth
+from jointbench.bench.sim.axes import build_experiment_model, full_qpos
+from jointbench.models import ModelStructureError, find_axes, load_model
+from jointbench.models.truth import axis_truth
 
 TABLE1 = {"Jm": 174.7996, "K": 20341.0458, "JL": 47.4458, "FSm": 41.4254, "FVm": 235.9100,
           "FV": 83.1508, "MX": -0.7241, "MY": -53.4201, "FS": 8.4612}

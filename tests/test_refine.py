@@ -8,12 +8,12 @@ import json
 
 import pytest
 
-from bench.cli import main
-from bench.experiment import run_experiment
-from bench.refine import ALL_PARAMETERS, RefineError, refine
-from bench.sensors import Sensors
-from identification.identify import identify
-from identification.log import write_log
+from jointbench.bench.cli import main
+from jointbench.bench.sim.experiment import run_experiment
+from jointbench.bench.analysis.refine import ALL_PARAMETERS, RefineError, refine
+from jointbench.bench.sim.sensors import Sensors
+from jointbench.identification.identify import identify
+from jointbench.identification.log import write_log
 
 
 def _err_pct(value: float, truth: float) -> float:

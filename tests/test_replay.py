@@ -11,16 +11,16 @@ import mujoco
 import numpy as np
 import pytest
 
-from bench.axes import build_experiment_model
-from bench.cli import main
-from bench.experiment import run_experiment
-from bench.nominal import compile_axis, for_log, rigid_axis, two_mass_axis, write_xml
-from bench.replay import ReplayResult, forward_errors, replay, simulated_log
-from bench.sensors import Sensors
-from identification.identify import identify
-from identification.log import Log, LogError, read_log
-from models import ModelStructureError, find_axes, load_model
-from models.truth import axis_truth
+from jointbench.bench.sim.axes import build_experiment_model
+from jointbench.bench.cli import main
+from jointbench.bench.sim.experiment import run_experiment
+from jointbench.bench.sim.nominal import compile_axis, for_log, rigid_axis, two_mass_axis, write_xml
+from jointbench.bench.sim.replay import ReplayResult, forward_errors, replay, simulated_log
+from jointbench.bench.sim.sensors import Sensors
+from jointbench.identification.identify import identify
+from jointbench.identification.log import Log, LogError, read_log
+from jointbench.models import ModelStructureError, find_axes, load_model
+from jointbench.models.truth import axis_truth
 
 TABLE1 = {"Jm": 174.7996, "FVm": 235.9100, "FSm": 41.4254, "K": 20341.0458, "JL": 47.4458,
           "FV": 83.1508, "FS": 8.4612, "MX": -0.7241, "MY": -53.4201}
@@ -91,7 +91,7 @@ def test_rigid_axis_convention_and_errors(tmp_path):
     exp = build_experiment_model(path)
     assert exp.tau0 == pytest.approx(0.5, rel=1e-9)  # the motor holds the offset at rest
     with pytest.raises(ModelStructureError, match="needs a flexible axis"):
-        from bench.effects import parse_effect
+        from jointbench.bench.effects import parse_effect
         build_experiment_model(path, effect=parse_effect("backlash=0.01"))
     bad = tmp_path / "bad.xml"
     bad.write_text('<mujoco><worldbody><body><joint name="j"/><geom size=".1"/></body>'
@@ -204,7 +204,7 @@ def test_cli_replay_of_rigid_virtual_log(tmp_path, capsys):
 
 def test_cli_replay_text_and_bad_input(ideal_run, tmp_path, capsys):
     path = tmp_path / "proto.csv"
-    from identification.log import write_log
+    from jointbench.identification.log import write_log
     write_log(ideal_run.log, path)
     assert main(["simulate", "--replay", str(path), "--model", "prototype"]) == 0
     out = capsys.readouterr().out
@@ -228,7 +228,7 @@ def test_simulated_log_round_trip(ideal_run, tmp_path):
     sim = simulated_log(log, result, "test")
     assert isinstance(result, ReplayResult) and isinstance(sim, Log)
     assert not any(k.startswith("truth_") for k in sim.meta)
-    from identification.log import write_log
+    from jointbench.identification.log import write_log
     write_log(sim, tmp_path / "sim.csv")
     back = read_log(tmp_path / "sim.csv")
     np.testing.assert_allclose(back.q_m, result.q_m, rtol=1e-11, atol=1e-15)

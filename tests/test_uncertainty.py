@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from bench.cli import main
-from identification.estimate import least_squares
-from identification.identify import identify
-from identification.log import write_log
-from identification.uncertainty import (autocovariances, hac_covariance, kernel_weights,
+from jointbench.bench.cli import main
+from jointbench.identification.estimate import least_squares
+from jointbench.identification.identify import identify
+from jointbench.identification.log import write_log
+from jointbench.identification.uncertainty import (autocovariances, hac_covariance, kernel_weights,
                                         score_series)
 
 N = 2000          # rows of the synthetic regression

@@ -22,11 +22,11 @@ from typing import Callable
 import mujoco
 import numpy as np
 
-from bench import nominal as nominal_axes
-from bench.diagnose import Diagnosis, ForwardView
-from bench.effects import HiddenEffect, apply_to_spec, loop_effects_from_model
-from bench.replay import ReplayError, replay
-from identification.log import Log
+from jointbench.bench.sim import nominal as nominal_axes
+from jointbench.bench.analysis.diagnose.run import Diagnosis, ForwardView
+from jointbench.bench.effects import HiddenEffect, apply_to_spec, loop_effects_from_model
+from jointbench.bench.sim.replay import ReplayError, replay
+from jointbench.identification.log import Log
 
 
 def _axis_name(d: Diagnosis) -> str:
@@ -148,7 +148,7 @@ def cross_validate(d: Diagnosis, other: Log, disturbance: np.ndarray | None = No
     and the forward view (closed-loop replay with `disturbance` applied to the link or
     carriage, or at the motor input: EMPS's pulses are volts at the drive input, already in
     the logged force, so they go in as gtau x pulses at the motor)."""
-    from identification.discrepancy import nominal as nominal_rows, predict, with_parameters
+    from jointbench.identification.discrepancy import nominal as nominal_rows, predict, with_parameters
 
     rows = with_parameters(nominal_rows(other, d.settings), d.inverse.nominal.X)
     out: dict = {"inverse": {}, "forward": {}}

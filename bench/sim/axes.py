@@ -20,9 +20,9 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from bench.effects import HiddenEffect, apply_to_spec
-from models import Axis, ModelStructureError, find_axes, load_model, torque_limit
-from models.truth import AxisTruth, axis_truth
+from jointbench.bench.effects import HiddenEffect, apply_to_spec
+from jointbench.models import Axis, ModelStructureError, find_axes, load_model, torque_limit
+from jointbench.models.truth import AxisTruth, axis_truth
 
 LOCKS = ("rigid", "brake")
 # Effects that act on the spring or split motor and link friction: meaningless on a rigid axis.

@@ -32,10 +32,10 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from bench.axes import secant_root
-from identification.identify import Identification
-from identification.log import Log, atomic_write_text
-from models import Axis, ModelStructureError, find_axes
+from jointbench.bench.sim.axes import secant_root
+from jointbench.identification.identify import Identification
+from jointbench.identification.log import Log, atomic_write_text
+from jointbench.models import Axis, ModelStructureError, find_axes
 
 # The friction constraint of models/prototype_axis.xml (README "Coulomb friction").
 SOLREF_FRICTION = (0.002, 1.0)

@@ -14,8 +14,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bench.effects import HiddenEffect
-from identification.effects import EFFECTS, NONE
+from jointbench.bench.effects import HiddenEffect
+from jointbench.identification.effects import EFFECTS, NONE
 
 # (model, joint, sample rate): the prototype at the paper's rate; arm joints at 1 kHz, where
 # the central differences keep their 15-19 Hz modes (eq. 29 wants about 53 f1).
@@ -81,8 +81,8 @@ def cases(per_effect: int = 5, seed: int = 2026, effects: tuple[str, ...] | None
           axes: tuple = AXES, clean: int | None = None) -> list[Case]:
     """`per_effect` cases for every effect and `clean` (default `per_effect`) clean ones,
     cycling over `axes`."""
-    from models import load_model, torque_limit
-    from models.truth import axis_truth
+    from jointbench.models import load_model, torque_limit
+    from jointbench.models.truth import axis_truth
 
     rng = np.random.default_rng(seed)
     names = list(effects or (NONE, *EFFECTS))
@@ -108,7 +108,7 @@ def cases(per_effect: int = 5, seed: int = 2026, effects: tuple[str, ...] | None
 
 def run_case(case: Case, duration: float = 40.0):
     """The case's virtual experiment (bench.experiment.run_experiment): its log."""
-    from bench.experiment import run_experiment
+    from jointbench.bench.sim.experiment import run_experiment
     return run_experiment(case.model, case.joint, duration=duration, seed=case.seed,
                           effect=case.hidden, sample_rate_hz=case.rate_hz).log
 

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from identification.log import Log, LogError
+from jointbench.identification.log import Log, LogError
 
 
 @dataclass(frozen=True)

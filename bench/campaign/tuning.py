@@ -43,9 +43,9 @@ class TuneTask:
 def evaluate(task: TuneTask) -> np.ndarray:
     """Relative errors [%] against truth, shape (pairs, params); NaN where the pair fails.
     Runs in a worker (top-level, plain data)."""
-    from bench.experiment import run_experiment
-    from identification.filtering import FilterSettings
-    from identification.identify import identify
+    from jointbench.bench.sim.experiment import run_experiment
+    from jointbench.identification.filtering import FilterSettings
+    from jointbench.identification.identify import identify
 
     out = np.full((len(task.pairs), len(task.params)), np.nan)
     try:
@@ -133,8 +133,8 @@ def tune_filter(model: str, joint: str | None, wn_grid: tuple[float, ...],
                 params: tuple[str, ...] = ("K", "Jm", "JL"), progress=None) -> TuneResult:
     """Grid search of (wn, Nd) on `seeds` experiments, then the optimum and the reference
     settings on `seeds` fresh ones."""
-    from bench.axes import build_experiment_model
-    from identification.design import design_bandpass
+    from jointbench.bench.sim.axes import build_experiment_model
+    from jointbench.identification.design import design_bandpass
 
     exp = build_experiment_model(model, joint)
     rate = 350.87
@@ -234,8 +234,8 @@ def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
 
 def main(args: argparse.Namespace) -> int:
     """`jointbench tune-filter`."""
-    from bench.campaign import Progress, jsonable
-    from bench.executors import make_executor
+    from jointbench.bench.campaign.run import Progress, jsonable
+    from jointbench.bench.campaign.executors import make_executor
 
     if args.seeds < 1:
         raise ValueError(f"--seeds must be >= 1, got {args.seeds}")

@@ -25,11 +25,11 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from bench.controller import Gains, PIController
-from bench.nominal import static_link_position
-from bench.sensors import Sensors
-from identification.log import Log, LogError
-from models import Axis
+from jointbench.bench.sim.controller import Gains, PIController
+from jointbench.bench.sim.nominal import static_link_position
+from jointbench.bench.sim.sensors import Sensors
+from jointbench.identification.log import Log, LogError
+from jointbench.models import Axis
 
 DISTURBANCE_AT = ("link", "motor")
 
@@ -270,8 +270,8 @@ def replay_log_file(path, model: str | None = None, joint: str | None = None,
     says), or without a model on the nominal axis of its own identification
     (`identification.identify.identify(log, identify_model)`, then `bench.nominal.for_log`).
     """
-    from identification.identify import identify
-    from identification.log import read_log
+    from jointbench.identification.identify import identify
+    from jointbench.identification.log import read_log
 
     log = read_log(path)
     if log.q_ref is None:
@@ -280,7 +280,7 @@ def replay_log_file(path, model: str | None = None, joint: str | None = None,
     gains = Gains.from_log(log)
     notes: list[str] = []
     if model is None:
-        from bench.nominal import compile_axis, for_log
+        from jointbench.bench.sim.nominal import compile_axis, for_log
 
         ident = identify(log, identify_model)
         notes += [f"identify: {n}" for n in ident.notes]
@@ -289,7 +289,7 @@ def replay_log_file(path, model: str | None = None, joint: str | None = None,
         m, axis = compile_axis(nominal.spec, f"nominal {nominal.model} axis of {path}")
         label, params, spec = f"nominal {nominal.model}", dict(nominal.parameters), nominal.spec
     else:
-        from bench.axes import build_experiment_model
+        from jointbench.bench.sim.axes import build_experiment_model
 
         start = log.q[0] if log.q is not None else log.q_m[0]
         exp = build_experiment_model(model, joint, config=config, center=float(start),

@@ -40,8 +40,8 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from identification.log import atomic_write_text
-from identification.summary import NOMINAL_2SIGMA, ParameterStats, parameter_stats, stats_table
+from jointbench.identification.log import atomic_write_text
+from jointbench.identification.summary import NOMINAL_2SIGMA, ParameterStats, parameter_stats, stats_table
 
 TABLE_MAGIC = "# jointbench-campaign: 1"
 
@@ -249,7 +249,7 @@ def scattered_mjcf(model: str, joint: str | None, factors: dict[str, float]) -> 
     from any folder."""
     import xml.etree.ElementTree as ET
 
-    from models import ModelStructureError, load_model
+    from jointbench.models import ModelStructureError, load_model
 
     full, axes, path = load_model(model)
     names = [a.name for a in axes]
@@ -299,8 +299,8 @@ def scattered_mjcf(model: str, joint: str | None, factors: dict[str, float]) -> 
 
 def _sensors(settings: RunSettings, model_ref: str, joint: str | None):
     """Sensors.default with the campaign's noise multiple and encoder resolutions."""
-    from bench.axes import build_experiment_model
-    from bench.sensors import Sensors
+    from jointbench.bench.sim.axes import build_experiment_model
+    from jointbench.bench.sim.sensors import Sensors
 
     if settings.noise == 1.0 and settings.motor_bits is None and settings.link_bits is None:
         return None
@@ -316,7 +316,7 @@ def _sensors(settings: RunSettings, model_ref: str, joint: str | None):
 
 
 def _filter(settings: RunSettings, log):
-    from identification.filtering import FilterSettings, default_settings
+    from jointbench.identification.filtering import FilterSettings, default_settings
 
     if settings.wn is None and settings.Nd is None and settings.stencil == 3:
         return None
@@ -338,7 +338,7 @@ def corrected_sigmas(ident, log) -> dict[str, float]:
         return {}
     cov = np.asarray(cov, dtype=float)
     if ident.model.startswith("motor-only"):
-        from identification.physical import invert_motor_only
+        from jointbench.identification.physical import invert_motor_only
 
         swapped = replace(ls, cov=cov, sigma=np.sqrt(np.abs(np.diag(cov))))
         phys = invert_motor_only(swapped, g=log.gravity, qc=float(np.mean(log.q_m)))
@@ -358,8 +358,8 @@ def run_task(task: RunTask) -> RunOutcome:
     reasons: list[str] = []
     sim_s = identify_s = math.nan
     try:
-        from bench.effects import parse_effect
-        from bench.experiment import run_experiment
+        from jointbench.bench.effects import parse_effect
+        from jointbench.bench.sim.experiment import run_experiment
 
         t0 = time.perf_counter()
         effect = parse_effect(s.effect) if s.effect else None
@@ -387,7 +387,7 @@ def run_task(task: RunTask) -> RunOutcome:
         t1 = time.perf_counter()
         for m in s.id_models:
             try:
-                from identification.identify import identify
+                from jointbench.identification.identify import identify
 
                 ident = identify(log, m, _filter(s, log))
                 corr = corrected_sigmas(ident, log)
@@ -401,7 +401,7 @@ def run_task(task: RunTask) -> RunOutcome:
                 row[f"{pre}.{p}.sigma_c"] = _fmt(corr.get(p))
             if m in debiased_models(s):
                 try:
-                    from bench.debias import debias, friction_timeconst_of
+                    from jointbench.bench.analysis.debias import debias, friction_timeconst_of
 
                     d = debias(log, ident, replicas=s.debias, seed=task.seed,
                                friction_timeconst=friction_timeconst_of(
@@ -603,7 +603,7 @@ def summarize(spec: CampaignSpec, rows: list[dict[str, str]], k: float = 2.0) ->
 
 
 def _stats_of(group_model: list[dict]) -> list[ParameterStats]:
-    from identification.summary import Coverage
+    from jointbench.identification.summary import Coverage
 
     out = []
     for d in group_model:
@@ -791,7 +791,7 @@ def spec_from_args(args: argparse.Namespace) -> CampaignSpec:
     if args.scatter < 0:
         raise CampaignError(f"--scatter must be >= 0, got {args.scatter:g}")
     if args.effect:
-        from bench.effects import parse_effect
+        from jointbench.bench.effects import parse_effect
 
         parse_effect(args.effect)  # ValueError names what is wrong
     base = RunSettings(model=str(args.model), joint=args.joint, duration=args.duration,
@@ -824,7 +824,7 @@ def summary_paths(table: Path) -> tuple[Path, Path]:
 
 def main(args: argparse.Namespace) -> int:
     """`jointbench campaign`."""
-    from bench.executors import make_executor
+    from jointbench.bench.campaign.executors import make_executor
 
     spec = spec_from_args(args)
     out = Path(args.out)

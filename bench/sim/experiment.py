@@ -20,12 +20,12 @@ from typing import Callable, Iterator
 import mujoco
 import numpy as np
 
-from bench.axes import ExperimentModel, build_experiment_model
-from bench.controller import Gains, PIController, gains_rule
-from bench.effects import HiddenEffect, LoopEffects, loop_effects_from_model
-from bench.reference import Chirp
-from bench.sensors import Sensors
-from identification.log import Log
+from jointbench.bench.sim.axes import ExperimentModel, build_experiment_model
+from jointbench.bench.sim.controller import Gains, PIController, gains_rule
+from jointbench.bench.effects import HiddenEffect, LoopEffects, loop_effects_from_model
+from jointbench.bench.sim.reference import Chirp
+from jointbench.bench.sim.sensors import Sensors
+from jointbench.identification.log import Log
 
 SAMPLE_RATE_HZ = 350.87  # the paper's acquisition rate
 DEFAULT_SUBSTEPS = 1      # RK4; see README "Substeps" for the convergence check

@@ -19,11 +19,11 @@ from typing import Callable
 
 import numpy as np
 
-from identification.discrepancy import Candidate, InverseDiagnosis, Nominal, diagnose_inverse
-from identification.effects import EFFECTS
-from identification.filtering import FilterSettings, default_settings, PAPER_RATE
-from identification.frequency import first_mode_hz, measured_frf
-from identification.log import Log
+from jointbench.identification.discrepancy import Candidate, InverseDiagnosis, Nominal, diagnose_inverse
+from jointbench.identification.effects import EFFECTS
+from jointbench.identification.filtering import FilterSettings, default_settings, PAPER_RATE
+from jointbench.identification.frequency import first_mode_hz, measured_frf
+from jointbench.identification.log import Log
 
 BLOCK_NAMES = ("motor equation (eq. 6): torque residual, % of the measured torque RMS",
                "link equation (eq. 5): residual, % of the spring torque K (qm - q) RMS")
@@ -42,7 +42,7 @@ def diagnosis_settings(log: Log) -> tuple[FilterSettings, str]:
         return (default_settings(rate, f1),
                 f"first mode {f1:.2f} Hz from the measured q / tau_m response; wn and Nd "
                 "from eqs. (28)-(29)")
-    from identification.filtering import generic_settings
+    from jointbench.identification.filtering import generic_settings
     return (generic_settings(rate),
             "no link position: generic band (Butterworth at 0.1 Fs, Nd = 10)")
 
@@ -195,10 +195,10 @@ def diagnose(log: Log, out_dir: Path | None = None, forward: bool = True,
     d = Diagnosis(log=log, settings=settings, settings_note=how, inverse=inv,
                   nominal_parameters=nom_p, extended_parameters=ext_p)
     if forward:
-        from bench import diagnose_forward
+        from jointbench.bench.analysis.diagnose import forward as diagnose_forward
         d = diagnose_forward.add_forward_view(d, say)
     if out_dir is not None:
-        from bench import diagnose_report
+        from jointbench.bench.analysis.diagnose import report as diagnose_report
         d = diagnose_report.write(d, Path(out_dir), say)
     return d
 

@@ -11,11 +11,11 @@ from typing import Callable
 import numpy as np
 from scipy import signal
 
-from bench.diagnose import BLOCK_NAMES, Diagnosis
-from identification.discrepancy import SIZE_MIN_PCT
-from identification.effects import EFFECTS
-from identification.log import atomic_write_text
-from identification.plots import save_figure_atomic
+from jointbench.bench.analysis.diagnose.run import BLOCK_NAMES, Diagnosis
+from jointbench.identification.discrepancy import SIZE_MIN_PCT
+from jointbench.identification.effects import EFFECTS
+from jointbench.identification.log import atomic_write_text
+from jointbench.identification.plots import save_figure_atomic
 
 
 def _pyplot():
@@ -259,7 +259,7 @@ def write(d: Diagnosis, out: Path, say: Callable[[str], None]) -> Diagnosis:
         if p is not None:
             figures[key] = Path(p).name
     files = [str(out / f) for f in figures.values()]
-    from bench import diagnose_forward
+    from jointbench.bench.analysis.diagnose import forward as diagnose_forward
     files += [str(p) for p in diagnose_forward.write_models(d, out)]
     atomic_write_text(out / "report.md", report_markdown(d, figures))
     files.append(str(out / "report.md"))

@@ -81,13 +81,13 @@ import mujoco
 import numpy as np
 from scipy import optimize
 
-from bench.controller import Gains
-from bench.nominal import SOLREF_FRICTION, compile_axis, two_mass_axis
-from bench.replay import ReplayError, ReplayResult, forward_errors, replay
-from identification.identify import Identification
-from identification.log import Log, LogError
-from identification.uncertainty import hac_covariance
-from models import Axis
+from jointbench.bench.sim.controller import Gains
+from jointbench.bench.sim.nominal import SOLREF_FRICTION, compile_axis, two_mass_axis
+from jointbench.bench.sim.replay import ReplayError, ReplayResult, forward_errors, replay
+from jointbench.identification.identify import Identification
+from jointbench.identification.log import Log, LogError
+from jointbench.identification.uncertainty import hac_covariance
+from jointbench.models import Axis
 
 ALL_PARAMETERS = ("Jm", "K", "JL", "FVm", "FSm", "FV", "FS", "MX", "MY")
 FREE = {"joint-motor": ALL_PARAMETERS, "motor-only": ALL_PARAMETERS}
@@ -442,7 +442,7 @@ def refinement_table(res: RefineResult, ident: Identification,
     """The refinement as text (what `jointbench identify --refine` prints after the LS
     tables): parameter, LS value, refined value, 2 sigma (white residuals) and, with truth,
     the LS and refined errors."""
-    from identification.report import cell as num, units
+    from jointbench.identification.report import cell as num, units
 
     unit = units(ident.prismatic)
     truth = {n: v for n, v in (truth or {}).items() if n in res.parameters and v}

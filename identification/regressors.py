@@ -20,9 +20,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from identification.filtering import (FilterSettings, decimate_parallel, derivatives, lowpass,
+from jointbench.identification.filtering import (FilterSettings, decimate_parallel, derivatives, lowpass,
                                       zoh_align)
-from identification.log import Log, LogError
+from jointbench.identification.log import Log, LogError
 
 JOINT_MOTOR = ("Jm", "FVm", "FSm", "K", "JL", "MX", "MY", "FV", "FS")
 MOTOR_ONLY = ("X1", "X2", "X3", "X4", "X5", "X6", "X7")

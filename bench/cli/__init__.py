@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from identification.log import LogError
+from jointbench.identification.log import LogError
 
 
 class UsageError(ValueError):
@@ -106,8 +106,8 @@ def _positive(value: str) -> float:
 
 def cmd_replay(args: argparse.Namespace) -> int:
     """`simulate --replay LOG`: the logged experiment again in closed loop (bench/replay.py)."""
-    from bench.replay import format_report, replay_log_file, report_json, simulated_log
-    from identification.log import write_log
+    from jointbench.bench.sim.replay import format_report, replay_log_file, report_json, simulated_log
+    from jointbench.identification.log import write_log
 
     for flag, given in (("--effect", args.effect), ("--amplitude", args.amplitude),
                         ("--ideal-sensors", args.ideal_sensors)):
@@ -130,7 +130,7 @@ def cmd_replay(args: argparse.Namespace) -> int:
                           config=_parse_config(args.config), lock=args.lock,
                           substeps=args.substeps, tau0=args.tau0, skip=args.skip)
     if args.save_model:
-        from bench.nominal import write_xml
+        from jointbench.bench.sim.nominal import write_xml
 
         write_xml(rep.spec, args.save_model)
     if out is not None:
@@ -139,8 +139,8 @@ def cmd_replay(args: argparse.Namespace) -> int:
     if args.plot:
         import matplotlib
         matplotlib.use("Agg")
-        from bench.replay import plot_replay
-        from identification.plots import save_figure_atomic
+        from jointbench.bench.sim.replay import plot_replay
+        from jointbench.identification.plots import save_figure_atomic
 
         save_figure_atomic(plot_replay(rep.log, rep.result, f"replay of {src.name}"), args.plot)
     if args.json:
@@ -167,14 +167,14 @@ def _rate(value: str) -> float | str:
 def _sample_rate(args: argparse.Namespace, effect) -> float:
     """The acquisition rate of `simulate`: --rate HZ, or for `auto` twice the Fs of eq. (29)
     for the axis' first mode (identification.filtering.design_rate_hz)."""
-    from bench.experiment import SAMPLE_RATE_HZ
+    from jointbench.bench.sim.experiment import SAMPLE_RATE_HZ
 
     if args.rate is None:
         return SAMPLE_RATE_HZ
     if args.rate != "auto":
         return float(args.rate)
-    from bench.axes import build_experiment_model
-    from identification.filtering import design_rate_hz
+    from jointbench.bench.sim.axes import build_experiment_model
+    from jointbench.identification.filtering import design_rate_hz
 
     exp = build_experiment_model(args.model, args.joint, config=_parse_config(args.config),
                                  lock=args.lock, effect=effect)
@@ -186,10 +186,10 @@ def _sample_rate(args: argparse.Namespace, effect) -> float:
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
-    from bench.effects import parse_effect
-    from bench.experiment import run_experiment, stderr_progress
-    from bench.sensors import Sensors
-    from identification.log import write_log
+    from jointbench.bench.effects import parse_effect
+    from jointbench.bench.sim.experiment import run_experiment, stderr_progress
+    from jointbench.bench.sim.sensors import Sensors
+    from jointbench.identification.log import write_log
 
     if args.replay:
         return cmd_replay(args)
@@ -232,8 +232,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 def _settings_from_args(args, log):
     """FilterSettings from the identify options, or None for identify's own default
     (identification.identify.settings_for)."""
-    from identification.filtering import FilterSettings
-    from identification.identify import settings_for
+    from jointbench.identification.filtering import FilterSettings
+    from jointbench.identification.identify import settings_for
 
     if args.wn is not None and args.fc is not None:
         raise UsageError("give the Butterworth frequency once: --wn (rad/s) or --fc (Hz)")
@@ -251,13 +251,13 @@ def _settings_from_args(args, log):
 
 
 def cmd_identify(args: argparse.Namespace) -> int:
-    from identification.identify import identify
-    from identification.log import read_log
-    from identification.report import parameter_table, physical_table, to_json
+    from jointbench.identification.identify import identify
+    from jointbench.identification.log import read_log
+    from jointbench.identification.report import parameter_table, physical_table, to_json
 
-    from identification.checks import estimate_flags
-    from identification.log import unit_warnings
-    from identification.physical import InversionError
+    from jointbench.identification.checks import estimate_flags
+    from jointbench.identification.log import unit_warnings
+    from jointbench.identification.physical import InversionError
 
     log = read_log(args.file)
     warnings = unit_warnings(log)
@@ -270,12 +270,12 @@ def cmd_identify(args: argparse.Namespace) -> int:
     if args.debias is not None and args.debias < 2:
         raise UsageError(f"--debias needs at least 2 replicas, got {args.debias}")
     if args.refine or args.debias is not None:
-        from bench.refine import require_replayable
+        from jointbench.bench.analysis.refine import require_replayable
 
         require_replayable(log)  # before the least squares: no half answer
     if args.debias is not None:
-        from bench.debias import DebiasError
-        from bench.sensors import Sensors
+        from jointbench.bench.analysis.debias import DebiasError
+        from jointbench.bench.sim.sensors import Sensors
 
         if Sensors.from_log(log) is None:
             raise DebiasError(f"{args.file}: --debias replays the experiment with the log's "
@@ -289,14 +289,14 @@ def cmd_identify(args: argparse.Namespace) -> int:
     flags = estimate_flags(result.physical, result.physical_sigma, log.prismatic)
     refined = None
     if args.refine:
-        from bench.refine import refine
+        from jointbench.bench.analysis.refine import refine
 
         say = None if args.json else \
             (lambda msg: print(f"identify: {msg}", file=sys.stderr, flush=True))
         refined = refine(log, result, max_nfev=args.refine_max_nfev, progress=say)
     debiased = None
     if args.debias is not None:
-        from bench.debias import SOLREF_FRICTION, debias
+        from jointbench.bench.analysis.debias import SOLREF_FRICTION, debias
 
         tty = sys.stderr.isatty()
 
@@ -312,11 +312,11 @@ def cmd_identify(args: argparse.Namespace) -> int:
         answer["flags"] = flags
         answer["warnings"] = warnings
         if refined is not None:
-            from bench.refine import refined_json
+            from jointbench.bench.analysis.refine import refined_json
 
             answer["refined"] = refined_json(refined, result, truth)
         if debiased is not None:
-            from bench.debias import debiased_json
+            from jointbench.bench.analysis.debias import debiased_json
 
             answer["debiased"] = debiased_json(debiased, truth)
         print(json.dumps(answer, allow_nan=False, default=float))
@@ -351,12 +351,12 @@ def cmd_identify(args: argparse.Namespace) -> int:
     for flag in flags:
         print(f"flag: {flag['message']}")
     if refined is not None:
-        from bench.refine import refinement_table
+        from jointbench.bench.analysis.refine import refinement_table
 
         print()
         print(refinement_table(refined, result, truth))
     if debiased is not None:
-        from bench.debias import debias_table
+        from jointbench.bench.analysis.debias import debias_table
 
         print()
         print(debias_table(debiased, log.prismatic, truth))
@@ -364,7 +364,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
 
 
 def cmd_design_filter(args: argparse.Namespace) -> int:
-    from identification.design import design_bandpass
+    from jointbench.identification.design import design_bandpass
 
     d = design_bandpass(args.f1, nd=args.nd, m=args.m, ac=args.ac, rc=args.rc, ratio=args.ratio)
     if args.json:
@@ -380,27 +380,27 @@ def cmd_design_filter(args: argparse.Namespace) -> int:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    from bench.demo import run_demo
+    from jointbench.bench.demo import run_demo
 
     return run_demo(Path(args.out), duration=args.duration, seed=args.seed)
 
 
 def cmd_campaign(args: argparse.Namespace) -> int:
-    from bench.campaign import main as campaign_main
+    from jointbench.bench.campaign.run import main as campaign_main
 
     return campaign_main(args)
 
 
 def cmd_tune_filter(args: argparse.Namespace) -> int:
-    from bench.tuning import main as tuning_main
+    from jointbench.bench.campaign.tuning import main as tuning_main
 
     return tuning_main(args)
 
 
 def cmd_diagnose(args: argparse.Namespace) -> int:
-    from bench.diagnose import diagnose, summary_text
-    from identification.log import atomic_write_text
-    from identification.log import read_log
+    from jointbench.bench.analysis.diagnose.run import diagnose, summary_text
+    from jointbench.identification.log import atomic_write_text
+    from jointbench.identification.log import read_log
 
     log = read_log(args.file)
     say = (lambda msg: None) if (args.json or args.quiet) else \
@@ -423,7 +423,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     d = diagnose(log, out_dir=out, forward=not args.no_forward, progress=say)
     xval = None
     if other is not None:
-        from bench.diagnose_forward import cross_validate
+        from jointbench.bench.analysis.diagnose.forward import cross_validate
         say(f"cross-validation on {args.validate}")
         xval = cross_validate(d, other, dist, args.disturbance_at)
     if args.json:
@@ -563,7 +563,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "command (default link)")
     g.set_defaults(func=cmd_diagnose)
 
-    from bench import campaign, tuning  # light at import: numpy and the argument lists
+    from jointbench.bench.campaign import run as campaign
+    from jointbench.bench.campaign import tuning  # light at import: numpy and the argument lists
 
     campaign.add_arguments(sub.add_parser(
         "campaign", help="N virtual experiments identified, a table row per run, bias, "
@@ -577,9 +578,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from identification.estimate import NotIdentifiable
-    from identification.physical import InversionError
-    from models import ModelStructureError
+    from jointbench.identification.estimate import NotIdentifiable
+    from jointbench.identification.physical import InversionError
+    from jointbench.models import ModelStructureError
 
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -624,7 +625,7 @@ def _one_line(err: Exception) -> str:
 def _is_simulation_error(err: Exception) -> bool:
     """A diverging or unstable virtual experiment (bench.experiment.SimulationError, loaded
     only by the commands that simulate): bad input (gains, timestep, model), status 2."""
-    experiment = sys.modules.get("bench.experiment")
+    experiment = sys.modules.get("jointbench.bench.sim.experiment")
     return experiment is not None and isinstance(err, experiment.SimulationError)
 
 

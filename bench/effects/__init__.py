@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import mujoco
 
-from identification.effects import EFFECTS
+from jointbench.identification.effects import EFFECTS
 
 # Options each effect accepts, with defaults (joint-side units).
 OPTIONS: dict[str, dict[str, float]] = {

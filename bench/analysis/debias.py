@@ -46,12 +46,12 @@ from typing import Callable
 
 import numpy as np
 
-from bench.nominal import SOLREF_FRICTION
-from bench.refine import RefineError, axis_for_log, require_replayable, start_parameters
-from bench.replay import ReplayError, replay
-from bench.sensors import Sensors
-from identification.identify import Identification, NotIdentifiable, identify
-from identification.log import Log, LogError
+from jointbench.bench.sim.nominal import SOLREF_FRICTION
+from jointbench.bench.analysis.refine import RefineError, axis_for_log, require_replayable, start_parameters
+from jointbench.bench.sim.replay import ReplayError, replay
+from jointbench.bench.sim.sensors import Sensors
+from jointbench.identification.identify import Identification, NotIdentifiable, identify
+from jointbench.identification.log import Log, LogError
 
 DEFAULT_REPLICAS = 8
 PARAMETERS = ("Jm", "K", "JL", "FVm", "FSm", "FV", "FS", "MX", "MY")
@@ -201,7 +201,7 @@ def debias_table(res: DebiasResult, prismatic: bool = False,
     tables): per parameter the LS value, the bias the replicas show, the corrected value and
     its 2 sigma, the replicas' spread over the LS corrected sigma and, with truth, the LS and
     corrected errors in % and in corrected sigmas."""
-    from identification.report import cell as num, units
+    from jointbench.identification.report import cell as num, units
 
     unit = units(prismatic)
     truth = {n: v for n, v in (truth or {}).items() if n in res.estimate and v}
