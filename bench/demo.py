@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from jointbench.bench.sim.experiment import run_experiment
-from jointbench.identification.filtering import default_settings
+from jointbench.identification.defaults import default_settings
 from jointbench.identification.frequency import FRF, first_mode_hz, measured_frf, model_frf, two_mass_tf
 from jointbench.identification.identify import identify
 from jointbench.identification.log import atomic_write_text, write_log

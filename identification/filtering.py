@@ -8,11 +8,6 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import signal
 
-PAPER_WN = 176.0       # rad/s, the Butterworth frequency used in section 4
-PAPER_ND = 26          # decimation factor used in section 4
-PAPER_RATE = 350.87    # Hz, the prototype's acquisition rate
-
-
 @dataclass(frozen=True)
 class FilterSettings:
     """The bandpass chain: Butterworth order `m` and frequency `wn` [rad/s], decimation `Nd`,
@@ -137,57 +132,3 @@ def decimate_parallel(y: np.ndarray, W: np.ndarray, settings: FilterSettings
     yd, Wd, index = yd[keep], Wd[keep], index[keep]
     ok = np.all(np.isfinite(Wd), axis=1) & np.isfinite(yd)
     return yd[ok], Wd[ok], index[ok]
-
-
-PAPER_F1 = 3.9          # Hz, the loaded prototype's first mode quoted in section 4
-RATE_MARGIN = 2.0       # design_rate_hz: sample rate over eq. (29)'s
-
-
-def default_settings(rate_hz: float, f1_hz: float | None = None, m: int = 4) -> FilterSettings:
-    """The filter for a log at `rate_hz` whose first mode is `f1_hz`.
-
-    At the paper's rate 350.87 Hz, with no f1 or one within 20 % of the paper's 3.9 Hz: the
-    paper's wn = 176 rad/s, Nd = 26 (section 4). Otherwise from f1: wn from eq. (28)
-    (nd = 2, wc = 6 w1, Ac = sqrt(2)/2, capped at 0.8 of the Nyquist frequency) and Nd placing
-    the decimated cutoff 0.8 Fs / (2 Nd) at 5.4 / 3.9 f1, the paper's ratio (so that the band
-    holds the mode). The paper's Nd = 26 at 350.87 Hz would cut at 5.4 Hz, below a 15-19 Hz
-    mode of the six-axis arm. Raises ValueError without f1 at another rate."""
-    ts = 1.0 / rate_hz
-    paper_rate = abs(rate_hz / PAPER_RATE - 1.0) < 0.01
-    if paper_rate and (f1_hz is None or abs(f1_hz / PAPER_F1 - 1.0) <= 0.2):
-        return FilterSettings(wn=PAPER_WN, m=m, Nd=PAPER_ND, ts=ts)
-    if f1_hz is None:
-        raise ValueError("at a sample rate other than 350.87 Hz the filter is derived from the "
-                         "first mode: give f1 (Hz) or explicit wn and Nd")
-    from jointbench.identification.design import design_bandpass
-    wn = min(design_bandpass(f1_hz, nd=2, m=m).wn_rad_s, 0.8 * np.pi * rate_hz)
-    Nd = max(1, int(round(0.8 * rate_hz / (2 * f1_hz * 5.4 / 3.9))))
-    return FilterSettings(wn=wn, m=m, Nd=Nd, ts=ts)
-
-
-def design_rate_hz(f1_hz: float, m: int = 4, margin: float = RATE_MARGIN) -> float:
-    """An acquisition rate for an axis whose first mode is f1: `margin` times the Fs of
-    eq. (29) (nd = 2, wc = 6 w1, Ac = sqrt(2)/2, rc = 1), that is about 105 f1 for m = 4.
-
-    Eq. (29) bounds the central-difference distortion sinc(w Ts)^2 at wc; at f1 it leaves
-    (w1 Ts)^2 / 3 = 0.47 %, which biases K by about -0.2 % and Jm by +0.2 % (measured on the
-    arm without friction, joint-motor model). Twice the rate quarters it (0.12 %, K and Jm
-    within 0.05 %). For the arm's 14.7-19.5 Hz modes: 1.5-2.1 kHz."""
-    from jointbench.identification.design import design_bandpass
-    if not margin >= 1.0:
-        raise ValueError(f"margin must be >= 1 (a rate below eq. (29)'s), got {margin!r}")
-    return margin * design_bandpass(f1_hz, nd=2, m=m).fs_hz
-
-
-GENERIC_WN_RATIO = 0.1   # Butterworth cutoff / sample rate when no first mode is known
-GENERIC_ND = 10          # decimation factor when no first mode is known
-
-
-def generic_settings(rate_hz: float, m: int = 4) -> FilterSettings:
-    """Settings for a log whose first mode is unknown (no f1), at any rate: the Butterworth at
-    a tenth of the sample rate and Nd = 10 (decimated cutoff 0.04 Fs). These are the ratios of
-    the EMPS reference identification (1 kHz, 100 Hz, Nd = 10; Janot, Gautier, Brunot 2019)
-    and they keep the rigid-body band (tens of Hz at 1 kHz) while rejecting the noise the
-    double differentiation amplifies."""
-    return FilterSettings(wn=2 * np.pi * GENERIC_WN_RATIO * rate_hz, m=m, Nd=GENERIC_ND,
-                          ts=1.0 / rate_hz)

@@ -10,7 +10,8 @@ import numpy as np
 from jointbench.identification import regressors
 from jointbench.identification.checks import check_excitation, check_signals
 from jointbench.identification.estimate import LSResult, NotIdentifiable, block_weighted, least_squares
-from jointbench.identification.filtering import FilterSettings, default_settings, generic_settings
+from jointbench.identification.defaults import settings_for
+from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.log import Log, LogError
 from jointbench.identification.physical import InversionError, PhysicalResult, invert_motor_only, table3
 
@@ -51,20 +52,6 @@ def _check_length(log: Log, settings: FilterSettings, nd: int) -> None:
         raise LogError(f"{len(log)} samples are too few for this filter and decimation "
                        f"(Nd = {settings.Nd}, derivatives to order {nd}): at least {need} "
                        "are needed", log.path)
-
-
-def settings_for(log: Log, f1_hz: float | None = None) -> tuple[FilterSettings, str | None]:
-    """The default filter for `log`: `default_settings` (the paper's at 350.87 Hz, else from
-    f1), and when neither applies (another rate, no f1) `generic_settings`; the second item
-    is a note saying so, or None."""
-    try:
-        return default_settings(log.sample_rate_hz, f1_hz), None
-    except ValueError:
-        if f1_hz is not None:
-            raise
-    s = generic_settings(log.sample_rate_hz)
-    return s, (f"no first mode given at {log.sample_rate_hz:g} Hz: generic filter wn = "
-               f"{s.wn:.4g} rad/s ({s.wn / (2 * np.pi):.4g} Hz, a tenth of the rate), Nd = {s.Nd}")
 
 
 STIFFNESS_REL_SIGMA = 0.5  # auto: K and JL must be known to better than 50 % (1 sigma)

@@ -23,8 +23,9 @@ import numpy as np
 from scipy import optimize
 
 from jointbench.identification.estimate import LSResult
+from jointbench.identification.parameters import MOTOR_ONLY_PHYSICAL
 
-PHYSICAL = ("Jm", "K", "JL", "FVm", "FV", "FSm")
+PHYSICAL = MOTOR_ONLY_PHYSICAL
 
 
 class InversionError(ValueError):

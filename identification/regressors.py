@@ -23,11 +23,8 @@ import numpy as np
 from jointbench.identification.filtering import (FilterSettings, decimate_parallel, derivatives, lowpass,
                                       zoh_align)
 from jointbench.identification.log import Log, LogError
+from jointbench.identification.parameters import JOINT_MOTOR, MOTOR_ONLY, MOTOR_ONLY_CORRECTED, RIGID
 
-JOINT_MOTOR = ("Jm", "FVm", "FSm", "K", "JL", "MX", "MY", "FV", "FS")
-MOTOR_ONLY = ("X1", "X2", "X3", "X4", "X5", "X6", "X7")
-MOTOR_ONLY_CORRECTED = MOTOR_ONLY + ("X8", "X9", "X10", "X11")
-RIGID = ("J", "FV", "FS", "offset")
 MODELS = ("joint-motor", "motor-only", "rigid")
 
 

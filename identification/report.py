@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 
 from jointbench.identification.identify import Identification
+from jointbench.identification.parameters import units
 
 # The paper's published values (section 4), for side-by-side tables.
 PAPER_TABLE1 = {"Jm": (174.7996, 2.7741, 0.7952), "K": (20341.0458, 437.1569, 1.0746),
@@ -20,19 +21,6 @@ PAPER_TABLE2 = {"X1": (0.0021, 0.0001, 2.5977), "X2": (0.0046, 0.0022, 23.6303),
 PAPER_TABLE3 = {"Jm": 172.1890, "K": 19552.6214, "JL": 40.3601, "FSm": 5.1624,
                 "FVm": 1157.4716, "FV": 89.0974}
 TABLE1_ORDER = ("Jm", "K", "JL", "FSm", "FVm", "FV", "MX", "MY", "FS")
-UNITS_REVOLUTE = {"Jm": "kg m^2", "JL": "kg m^2", "J": "kg m^2", "K": "N m/rad",
-                  "FVm": "N m s/rad", "FV": "N m s/rad", "FSm": "N m", "FS": "N m",
-                  "MX": "kg m", "MY": "kg m", "offset": "N m"}
-UNITS_PRISMATIC = {"J": "kg", "FV": "N s/m", "FS": "N", "offset": "N", "K": "N/m",
-                   "Jm": "kg", "JL": "kg", "FVm": "N s/m", "FSm": "N", "MX": "kg", "MY": "kg"}
-
-
-def units(prismatic: bool) -> dict[str, str]:
-    """Units of the physical parameter names (CONTRACT: a prismatic axis uses m and N in place
-    of rad and N m, so inertias are masses in kg)."""
-    return dict(UNITS_PRISMATIC if prismatic else UNITS_REVOLUTE)
-
-
 def model_truth(model: str, truth: dict[str, float] | None) -> dict[str, float]:
     """The truth in the parameters of `model`: for the rigid model (eq. 6 with q = qm, CONTRACT
     section 3) J = Jm + JL, FV = FVm + FV, FS = FSm + FS; the other models use the truth as is."""

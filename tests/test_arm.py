@@ -25,7 +25,7 @@ from jointbench.bench.sim.axes import build_experiment_model
 from jointbench.bench.cli import main
 from jointbench.bench.sim.experiment import default_chirp, run_experiment
 from jointbench.identification.design import design_bandpass
-from jointbench.identification.filtering import default_settings, design_rate_hz
+from jointbench.identification.defaults import default_settings, design_rate_hz
 from jointbench.identification.identify import identify
 from jointbench.identification.log import read_log
 from jointbench.models import model_path

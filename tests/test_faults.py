@@ -124,7 +124,7 @@ def test_single_sine_does_not_identify_the_flexible_models(sine_run, tmp_path, c
 
 
 def identify_settings(log: Log):
-    from jointbench.identification.identify import settings_for
+    from jointbench.identification.defaults import settings_for
     return settings_for(log)[0]
 
 

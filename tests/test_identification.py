@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from jointbench.bench.cli import main
-from jointbench.identification import filtering
+from jointbench.identification import defaults, filtering
 from jointbench.identification import regressors as models
 from jointbench.identification.estimate import NotIdentifiable, least_squares
 from jointbench.identification.identify import identify
@@ -158,7 +158,7 @@ def test_five_point_stencil_removes_the_differentiation_bias(tmp_path):
     path.write_text(spec.to_xml())
     res = run_experiment(path, seed=1, sensors=Sensors.ideal())
     truth = {k: float(res.log.meta[f"truth_{k}"]) for k in ("K", "Jm", "JL")}
-    base = filtering.default_settings(filtering.PAPER_RATE)
+    base = defaults.default_settings(defaults.PAPER_RATE)
     err = {}
     for stencil in (3, 5):
         s = filtering.FilterSettings(wn=base.wn, m=base.m, Nd=base.Nd, ts=res.log.ts,

@@ -16,13 +16,14 @@ import numpy as np
 
 from jointbench.bench.effects import HiddenEffect
 from jointbench.identification.effects import EFFECTS, NONE
+from jointbench.identification.defaults import PAPER_RATE
 
 # (model, joint, sample rate): the prototype at the paper's rate; arm joints at 1 kHz, where
 # the central differences keep their 15-19 Hz modes (eq. 29 wants about 53 f1).
-AXES = (("prototype", None, 350.87), ("arm6", "axis1", 1000.0), ("arm6", "axis2", 1000.0),
+AXES = (("prototype", None, PAPER_RATE), ("arm6", "axis1", 1000.0), ("arm6", "axis2", 1000.0),
         ("arm6", "axis4", 1000.0), ("arm6", "axis6", 1000.0))
 # Joints whose link carries a gravity torque (the `gravity` effect needs one).
-GRAVITY_AXES = (("prototype", None, 350.87), ("arm6", "axis2", 1000.0))
+GRAVITY_AXES = (("prototype", None, PAPER_RATE), ("arm6", "axis2", 1000.0))
 
 
 @dataclass(frozen=True)

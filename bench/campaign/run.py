@@ -316,7 +316,8 @@ def _sensors(settings: RunSettings, model_ref: str, joint: str | None):
 
 
 def _filter(settings: RunSettings, log):
-    from jointbench.identification.filtering import FilterSettings, default_settings
+    from jointbench.identification.filtering import FilterSettings
+    from jointbench.identification.defaults import default_settings
 
     if settings.wn is None and settings.Nd is None and settings.stencil == 3:
         return None

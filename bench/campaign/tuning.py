@@ -22,9 +22,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from jointbench.identification.defaults import PAPER_F1, PAPER_ND, PAPER_RATE, PAPER_WN, nd_from_f1
+
 DEFAULT_ND = (4, 8, 13, 20, 26, 30, 34, 38, 42, 46, 52)
-PAPER = (176.0, 26)
-PAPER_F1_HZ = 3.9
+PAPER = (PAPER_WN, PAPER_ND)
+PAPER_F1_HZ = PAPER_F1
 
 
 @dataclass(frozen=True)
@@ -137,11 +139,11 @@ def tune_filter(model: str, joint: str | None, wn_grid: tuple[float, ...],
     from jointbench.identification.design import design_bandpass
 
     exp = build_experiment_model(model, joint)
-    rate = 350.87
+    rate = PAPER_RATE
     f1 = exp.truth.f1_hz
 
-    def nd_rule(f1_hz: float) -> int:  # identification.filtering.default_settings' rule
-        return max(1, int(round(0.8 * rate / (2 * f1_hz * 5.4 / 3.9))))
+    def nd_rule(f1_hz: float) -> int:
+        return nd_from_f1(rate, f1_hz)
 
     d_paper = design_bandpass(PAPER_F1_HZ, nd=2, m=4)
     d_true = design_bandpass(f1, nd=2, m=4)

@@ -174,7 +174,7 @@ def _sample_rate(args: argparse.Namespace, effect) -> float:
     if args.rate != "auto":
         return float(args.rate)
     from jointbench.bench.sim.axes import build_experiment_model
-    from jointbench.identification.filtering import design_rate_hz
+    from jointbench.identification.defaults import design_rate_hz
 
     exp = build_experiment_model(args.model, args.joint, config=_parse_config(args.config),
                                  lock=args.lock, effect=effect)
@@ -233,7 +233,7 @@ def _settings_from_args(args, log):
     """FilterSettings from the identify options, or None for identify's own default
     (identification.identify.settings_for)."""
     from jointbench.identification.filtering import FilterSettings
-    from jointbench.identification.identify import settings_for
+    from jointbench.identification.defaults import settings_for
 
     if args.wn is not None and args.fc is not None:
         raise UsageError("give the Butterworth frequency once: --wn (rad/s) or --fc (Hz)")

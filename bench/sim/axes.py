@@ -23,6 +23,7 @@ import numpy as np
 from jointbench.bench.effects import HiddenEffect, apply_to_spec
 from jointbench.models import Axis, ModelStructureError, find_axes, load_model, torque_limit
 from jointbench.models.truth import AxisTruth, axis_truth
+from jointbench.identification.defaults import PAPER_RATE
 
 LOCKS = ("rigid", "brake")
 # Effects that act on the spring or split motor and link friction: meaningless on a rigid axis.
@@ -138,7 +139,7 @@ def _static_equilibrium(model: mujoco.MjModel, axis: Axis, qpos: np.ndarray,
 def build_experiment_model(model: str | Path = "prototype", joint: str | None = None,
                            config: dict[str, float] | None = None, center: float | None = None,
                            lock: str = "rigid", effect: HiddenEffect | None = None,
-                           substeps: int = 1, sample_rate_hz: float = 350.87,
+                           substeps: int = 1, sample_rate_hz: float = PAPER_RATE,
                            tau_max: float | None = None) -> ExperimentModel:
     """Compile the experiment model of axis `joint` (default: the first axis).
 

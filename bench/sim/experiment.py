@@ -26,8 +26,9 @@ from jointbench.bench.effects import HiddenEffect, LoopEffects, loop_effects_fro
 from jointbench.bench.sim.reference import Chirp
 from jointbench.bench.sim.sensors import Sensors
 from jointbench.identification.log import Log
+from jointbench.identification.defaults import PAPER_RATE
 
-SAMPLE_RATE_HZ = 350.87  # the paper's acquisition rate
+SAMPLE_RATE_HZ = PAPER_RATE  # the paper's acquisition rate, the mission's
 DEFAULT_SUBSTEPS = 1      # RK4; see README "Substeps" for the convergence check
 
 

@@ -21,7 +21,8 @@ import numpy as np
 
 from jointbench.identification.discrepancy import Candidate, InverseDiagnosis, Nominal, diagnose_inverse
 from jointbench.identification.effects import EFFECTS
-from jointbench.identification.filtering import FilterSettings, default_settings, PAPER_RATE
+from jointbench.identification.filtering import FilterSettings
+from jointbench.identification.defaults import default_settings, PAPER_RATE
 from jointbench.identification.frequency import first_mode_hz, measured_frf
 from jointbench.identification.log import Log
 
@@ -42,7 +43,7 @@ def diagnosis_settings(log: Log) -> tuple[FilterSettings, str]:
         return (default_settings(rate, f1),
                 f"first mode {f1:.2f} Hz from the measured q / tau_m response; wn and Nd "
                 "from eqs. (28)-(29)")
-    from jointbench.identification.filtering import generic_settings
+    from jointbench.identification.defaults import generic_settings
     return (generic_settings(rate),
             "no link position: generic band (Butterworth at 0.1 Fs, Nd = 10)")
 
