@@ -61,6 +61,7 @@ def secant_root(residual, x0: float, slope: float, rtol: float, kick: float) -> 
         a, b, ra = b, b - rb * (b - a) / (rb - ra), rb
     return float(b)
 
+
 def _rotate_body(body: mujoco.MjsBody, pos: np.ndarray, quat: np.ndarray,
                  jpos: np.ndarray, jaxis: np.ndarray, angle: float) -> None:
     """Bake a hinge rotation `angle` about (jpos, jaxis) into the body's frame."""
@@ -102,37 +103,63 @@ def full_qpos(model: mujoco.MjModel, axes: list[Axis], config: dict[str, float])
     return qpos
 
 
-def _static_equilibrium(model: mujoco.MjModel, axis: Axis, qpos: np.ndarray,
-                        tau_extra: float = 0.0) -> tuple[np.ndarray, float]:
-    """Settle the moving axis' motor so that the spring holds the link at rest (eq. 5 with
-    qd = qdd = 0) and return (qpos, tau0) with tau0 the holding motor torque. A rigid axis
-    stays where it is; tau0 holds gravity, passive forces and any passive actuator (offset)."""
-    data = mujoco.MjData(model)
-    qpos = qpos.copy()
-    if axis.rigid:
-        data.qpos[:] = qpos
-        data.qvel[:] = 0.0
-        data.ctrl[:] = 0.0
-        mujoco.mj_forward(model, data)
-        d = axis.motor_dof
-        tau0 = float(data.qfrc_bias[d] - data.qfrc_passive[d] - data.qfrc_actuator[d]) + tau_extra
-        return qpos, tau0
+# Secant settings of `static_position` per free coordinate: (relative tolerance, first kick).
+_SETTLE = {"motor": (1e-9, 1e-9), "link": (1e-10, 1e-12)}
 
-    def residual(qm: float) -> float:
-        data.qpos[:] = qpos
-        data.qpos[axis.motor_qpos] = qm
-        data.qvel[:] = 0.0
-        mujoco.mj_forward(model, data)
-        return float(data.qfrc_passive[axis.link_dof] - data.qfrc_bias[axis.link_dof])
 
-    # From the linear-spring guess qm = q + Q / K (the residual rises with qm at slope K).
-    K = float(model.tendon_stiffness[axis.tendon]) or 1.0
-    b = secant_root(residual, float(qpos[axis.link_qpos]), K, rtol=1e-9, kick=1e-9)
-    qpos[axis.motor_qpos] = b
+def _at_rest(model: mujoco.MjModel, data: mujoco.MjData, qpos: np.ndarray) -> None:
+    """Forward kinematics and forces of `qpos` with every velocity zero."""
     data.qpos[:] = qpos
     data.qvel[:] = 0.0
     mujoco.mj_forward(model, data)
-    tau0 = -float(data.qfrc_passive[axis.motor_dof] - data.qfrc_bias[axis.motor_dof]) + tau_extra
+
+
+def static_position(model: mujoco.MjModel, axis: Axis, qpos: np.ndarray,
+                    free: str = "motor") -> float:
+    """The position of the `free` coordinate ("motor" or "link") at which the spring holds the
+    link at rest, every other coordinate as in `qpos` (eq. 5 with qd = qdd = 0): secant
+    iterations from zero deflection (the residual is linear for a linear spring, rising with
+    q_m and falling with q at slope K). A rigid axis stays where it is."""
+    if axis.rigid:
+        return float(qpos[axis.motor_qpos])
+    moving, start = (axis.motor_qpos, axis.link_qpos) if free == "motor" else \
+        (axis.link_qpos, axis.motor_qpos)
+    data = mujoco.MjData(model)
+    q = qpos.copy()
+
+    def residual(x: float) -> float:
+        q[moving] = x
+        _at_rest(model, data, q)
+        return float(data.qfrc_passive[axis.link_dof] - data.qfrc_bias[axis.link_dof])
+
+    K = float(model.tendon_stiffness[axis.tendon]) or 1.0
+    rtol, kick = _SETTLE[free]
+    return secant_root(residual, float(qpos[start]), K if free == "motor" else -K, rtol, kick)
+
+
+def static_link_position(model: mujoco.MjModel, axis: Axis, qpos: np.ndarray) -> float:
+    """Link position at rest with the motor held at qpos[axis.motor_qpos] (`static_position`);
+    equals q_m for a rigid axis."""
+    return static_position(model, axis, qpos, "link")
+
+
+def _static_equilibrium(model: mujoco.MjModel, axis: Axis, qpos: np.ndarray,
+                        tau_extra: float = 0.0) -> tuple[np.ndarray, float]:
+    """Settle the moving axis' motor so that the spring holds the link at rest
+    (`static_position`) and return (qpos, tau0) with tau0 the holding motor torque. A rigid
+    axis stays where it is; tau0 holds gravity, passive forces and any passive actuator
+    (offset)."""
+    data = mujoco.MjData(model)
+    qpos = qpos.copy()
+    d = axis.motor_dof
+    if axis.rigid:
+        data.ctrl[:] = 0.0
+        _at_rest(model, data, qpos)
+        tau0 = float(data.qfrc_bias[d] - data.qfrc_passive[d] - data.qfrc_actuator[d]) + tau_extra
+        return qpos, tau0
+    qpos[axis.motor_qpos] = static_position(model, axis, qpos, "motor")
+    _at_rest(model, data, qpos)
+    tau0 = -float(data.qfrc_passive[d] - data.qfrc_bias[d]) + tau_extra
     return qpos, tau0
 
 

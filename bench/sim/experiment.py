@@ -1,6 +1,6 @@
 """One virtual identification experiment: a joint tracks a chirp, the others are locked.
 
-Per control tick k (period T = 1 / 350.87 s by default):
+Per control tick k (period T = 1 / 350.87 s by default; `bench.sim.loop.run_loop`):
   1. the encoders sample the motor and link angles (quantised);
   2. the CONTRACT section 2 controller computes tau_m[k] from the motor encoder;
   3. the log records (t_k, q_m, q, tau_m, q_ref);
@@ -21,7 +21,9 @@ import mujoco
 import numpy as np
 
 from jointbench.bench.sim.axes import ExperimentModel, build_experiment_model
-from jointbench.bench.sim.controller import Gains, PIController, gains_rule
+from jointbench.bench.sim.controller import Gains, gains_rule
+from jointbench.bench.sim.loop import (INSTABILITY_WARNINGS, LoopChecks, LoopTrace,
+                                       first_warning, run_loop)
 from jointbench.bench.effects import HiddenEffect, LoopEffects, loop_effects_from_model
 from jointbench.bench.sim.reference import Chirp
 from jointbench.bench.sim.sensors import Sensors
@@ -44,8 +46,6 @@ CHATTER_REVERSALS = 20       # this many sample-to-sample jumps between -tau_max
 CHATTER_SAMPLES = 3          # at most this many samples apart on average, is a limit cycle
                              # at over Fs/6 (58 Hz at 350.87 Hz), far above the reference
                              # (<= 30 Hz, whose bang-bang saturation jumps once per half period)
-_INSTABILITY_WARNINGS = (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL,
-                         mujoco.mjtWarning.mjWARN_BADQACC)
 
 
 @contextmanager
@@ -105,16 +105,15 @@ def run_experiment(model: str | Path = "prototype", joint: str | None = None, *,
     gains = gains or gains_rule(truth.Jm, truth.JL, truth.K, exp.tau_max, T)
     reductions = 0
     while True:
-        sim = _simulate(exp, chirp, sensors, gains, seed, substeps, sample_rate_hz, effect,
-                        progress)
+        t, q_ref, trace = _simulate(exp, chirp, sensors, gains, seed, substeps, sample_rate_hz,
+                                    effect, progress)
         # The default reference shrinks until nothing saturates: near the antiresonance
         # sqrt(K / JL) the motor needs far more torque than the acceleration cap foresees.
-        if not auto or sim["ctrl"].saturated == 0 or reductions >= 6:
+        if not auto or trace.saturated == 0 or reductions >= 6:
             break
         reductions += 1
         chirp = replace(chirp, amplitude=0.7 * chirp.amplitude,
                         max_acceleration=0.6 * chirp.max_acceleration)
-    ctrl, t, q_m, q, tau, q_ref = (sim[k] for k in ("ctrl", "t", "q_m", "q", "tau", "q_ref"))
     meta = {"sample_rate_hz": _fmt(sample_rate_hz), "gravity": _fmt(truth.g)}
     meta.update(gains.to_meta())
     meta.update({
@@ -124,8 +123,8 @@ def run_experiment(model: str | Path = "prototype", joint: str | None = None, *,
         "chirp": f"{chirp.method} {chirp.f0:g}-{chirp.f1:g} Hz, amplitude {chirp.amplitude:g} rad, "
                  f"{chirp.duration:g} s, taper {chirp.taper:g} s",
         "locked_config": " ".join(f"{k}={v:.6g}" for k, v in exp.config.items()),
-        "saturated_samples": str(ctrl.saturated),
-        "actuator_clamped_samples": str(sim["clamped"]),
+        "saturated_samples": str(trace.saturated),
+        "actuator_clamped_samples": str(trace.clamped),
         "amplitude_reductions": str(reductions),
     })
     if truth.gear_ratio is not None:
@@ -138,26 +137,24 @@ def run_experiment(model: str | Path = "prototype", joint: str | None = None, *,
     meta["truth_effect"] = "none"
     if effect is not None:
         meta.update(effect.to_meta())
-    log = Log(t=t, q_m=q_m, tau_m=tau, q=q, q_ref=q_ref, meta=meta)
-    return ExperimentResult(log=log, q_m_true=sim["q_m_true"], q_true=sim["q_true"],
-                            tau_applied=sim["tau_app"], saturated=ctrl.saturated, experiment=exp,
-                            clamped=sim["clamped"])
+    log = Log(t=t, q_m=trace.q_m, tau_m=trace.tau_m, q=trace.q, q_ref=q_ref, meta=meta)
+    return ExperimentResult(log=log, q_m_true=trace.q_m_true, q_true=trace.q_true,
+                            tau_applied=trace.tau_applied, saturated=trace.saturated,
+                            experiment=exp, clamped=trace.clamped)
 
 
 def _simulate(exp: ExperimentModel, chirp: Chirp, sensors: Sensors, gains: Gains, seed: int,
               substeps: int, sample_rate_hz: float, effect: HiddenEffect | None,
-              progress: Callable[[float], None] | None) -> dict:
-    """The control loop of the module docstring; returns the sampled signals."""
+              progress: Callable[[float], None] | None) -> tuple[np.ndarray, np.ndarray, LoopTrace]:
+    """The control loop of the module docstring (`bench.sim.loop.run_loop`); returns the
+    sample times, the reference and the sampled signals."""
     m, ax, truth = exp.model, exp.axis, exp.truth
     T = 1.0 / sample_rate_hz
     n = int(round(chirp.duration * sample_rate_hz)) + 1
     t = np.arange(n) * T
-    quant_m, quant_l = sensors.motor_quantizer(), sensors.link_quantizer()
     # Start the reference at the measured motor angle: then e[0] = 0 and the logged
     # tau_m[0] is the integrator's initial state, as CONTRACT section 2 reads it back.
-    q_ref = chirp(t) - chirp.center + quant_m(float(exp.qpos_init[ax.motor_qpos]))
-    rng = np.random.default_rng(seed)
-    noise = sensors.torque_noise(rng, n)
+    q_ref = chirp(t) - chirp.center + sensors.motor_quantizer()(float(exp.qpos_init[ax.motor_qpos]))
 
     d = mujoco.MjData(m)
     d.qpos[:] = exp.qpos_init
@@ -166,69 +163,32 @@ def _simulate(exp: ExperimentModel, chirp: Chirp, sensors: Sensors, gains: Gains
     if effect is None:
         # An extended MJCF (jointbench diagnose) may carry bench-loop effects as numerics.
         loop = loop_effects_from_model(m, ax.name) or loop
-    ctrl = PIController(gains, T, exp.tau0)
-    q_m = np.empty(n)
-    q = np.empty(n)
-    tau = np.empty(n)
-    q_m_true = np.empty(n)
-    q_true = np.empty(n)
-    tau_app = np.empty(n)
-    qpos, qvel, ctrl_arr = d.qpos, d.qvel, d.ctrl
-    im, il, dm, act = ax.motor_qpos, ax.link_qpos, ax.motor_dof, ax.actuator
-    step = mujoco.mj_step
-    q_ref_list = q_ref.tolist()
-    noise_list = noise.tolist()
-    every = max(1, n // 100)
+    act = ax.actuator
     rk4 = int(m.opt.integrator) == int(mujoco.mjtIntegrator.mjINT_RK4)
     fault = _Faults(ax.name, T, chirp.amplitude, float(gains.tau_max),
                     float(np.max(np.abs(m.actuator_ctrlrange[act])))
                     if m.actuator_ctrllimited[act] else math.inf,
-                    [d.warning[int(w)] for w in _INSTABILITY_WARNINGS],
+                    [d.warning[int(w)] for w in INSTABILITY_WARNINGS],
                     2 * math.pi * truth.f1_hz * m.opt.timestep, 2.78 if rk4 else 2.0)
-    track_limit, torque_limit, ctrl_limit = fault.track_limit, fault.torque_limit, fault.ctrl_limit
-    bad_qpos, bad_qvel, bad_qacc = fault.bad
-    with _mujoco_warnings() as texts:
-        for k in range(n):
-            qm_k = qpos[im]
-            ql_k = qpos[il]
-            if not (abs(qm_k) < DIVERGED_POSITION and abs(ql_k) < DIVERGED_POSITION):
-                fault.diverged(k, qm_k, ql_k)
-            meas_m = quant_m(qm_k)
-            meas_l = quant_l(ql_k)
-            r_k = q_ref_list[k]
-            if abs(r_k - meas_m) > track_limit:
-                fault.lost_track(k, r_k - meas_m)
-            u = ctrl.step(meas_m, r_k)
-            if abs(u) >= torque_limit:
-                fault.saturated(k, u)
-            applied = u + noise_list[k]
-            if loop.active:
-                applied += loop.torque(qm_k, qvel[dm])
-            if abs(applied) > ctrl_limit:
-                fault.clamped += 1
-            q_m[k], q[k], tau[k] = meas_m, meas_l, u
-            q_m_true[k], q_true[k], tau_app[k] = qm_k, ql_k, applied
-            ctrl_arr[act] = applied
-            step(m, d, substeps)
-            if bad_qpos.number or bad_qvel.number or bad_qacc.number:
-                fault.mujoco_unstable(k + 1, texts)
-            if progress is not None and k % every == 0:
-                progress(k / n)
-    for w in range(len(d.warning)):
-        if d.warning[w].number:
-            raise SimulationError(
-                f"joint {ax.name}: MuJoCo warning {mujoco.mjtWarning(w).name} "
-                f"({d.warning[w].number} times, last at t = {d.time:.4f} s)"
-                + (f": {texts[-1]}" if texts else ""))
-    return {"ctrl": ctrl, "t": t, "q_m": q_m, "q": q, "tau": tau, "q_ref": q_ref,
-            "q_m_true": q_m_true, "q_true": q_true, "tau_app": tau_app,
-            "clamped": fault.clamped}
+    with _mujoco_warnings() as fault.texts:
+        trace = run_loop(m, d, ax, gains, T, exp.tau0, q_ref, substeps=substeps,
+                         sensors=sensors, seed=seed, loop=loop if loop.active else None,
+                         checks=fault, progress=progress)
+    warning = first_warning(d)
+    if warning is not None:
+        texts = fault.texts
+        raise SimulationError(
+            f"joint {ax.name}: MuJoCo warning {warning[0]} "
+            f"({warning[1]} times, last at t = {d.time:.4f} s)"
+            + (f": {texts[-1]}" if texts else ""))
+    return t, q_ref, trace
 
 
-class _Faults:
+class _Faults(LoopChecks):
     """The fault checks of one run (`_simulate`): each failing check raises SimulationError
-    naming the joint, the simulated time and the reason. Also counts the samples whose applied
-    torque MuJoCo's ctrlrange cut (`clamped`)."""
+    naming the joint, the simulated time and the reason."""
+
+    position_limit = link_limit = DIVERGED_POSITION
 
     def __init__(self, joint: str, T: float, amplitude: float, tau_max: float,
                  ctrl_limit: float, bad: list, w1_dt: float, w_dt_limit: float):
@@ -243,7 +203,7 @@ class _Faults:
                       "for the model's stiffest mode")
         self.track_limit = max(TRACKING_LIMIT * amplitude, TRACKING_FLOOR)
         self.torque_limit = min(tau_max, ctrl_limit)  # the controller's or MuJoCo's clip
-        self.clamped = 0
+        self.texts: list[str] = []  # MuJoCo's warning texts of the run (`_mujoco_warnings`)
         self._last_sign = 0.0
         self._last_k = -2
         self._reversals: list[int] = []
@@ -275,8 +235,9 @@ class _Faults:
                               "(kv too large for the sampling period)")
         self._last_sign, self._last_k = sign, k
 
-    def mujoco_unstable(self, k: int, texts: list[str]) -> None:
+    def mujoco_unstable(self, k: int) -> None:
         names = [w for w, stat in zip(("qpos", "qvel", "qacc"), self.bad) if stat.number]
+        texts = self.texts
         self._fail(k, f"MuJoCo found NaN, infinite or huge {'/'.join(names)} and reset the "
                       f"state ({texts[-1] if texts else 'no message'}): {self.cause}")
 

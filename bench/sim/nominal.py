@@ -30,9 +30,9 @@ import math
 from dataclasses import dataclass
 
 import mujoco
-import numpy as np
 
-from jointbench.bench.sim.axes import secant_root
+# static_link_position is imported from here by bench.sim.replay.
+from jointbench.bench.sim.axes import static_link_position  # noqa: F401
 from jointbench.identification.identify import Identification
 from jointbench.identification.log import Log, atomic_write_text
 from jointbench.models import Axis, ModelStructureError, find_axes
@@ -274,24 +274,3 @@ def write_xml(spec: mujoco.MjSpec, path) -> None:
     included; the replay and the experiment set the timestep from the sample rate anyway)."""
     spec.compile()
     atomic_write_text(path, spec.to_xml())
-
-
-def static_link_position(model: mujoco.MjModel, axis: Axis, qpos: np.ndarray) -> float:
-    """Link position at rest with the motor held at qpos[axis.motor_qpos]: the spring balances
-    gravity and the passive forces on the link (eq. 5 with qd = qdd = 0), by secant iterations
-    (the residual is linear in q for a linear spring). Equals q_m for a rigid axis."""
-    if axis.rigid:
-        return float(qpos[axis.motor_qpos])
-    data = mujoco.MjData(model)
-    q = qpos.copy()
-
-    def residual(x: float) -> float:
-        q[axis.link_qpos] = x
-        data.qpos[:] = q
-        data.qvel[:] = 0.0
-        mujoco.mj_forward(model, data)
-        return float(data.qfrc_passive[axis.link_dof] - data.qfrc_bias[axis.link_dof])
-
-    # The residual falls with q at slope K (the spring), from q = q_m.
-    K = float(model.tendon_stiffness[axis.tendon]) or 1.0
-    return secant_root(residual, float(qpos[axis.motor_qpos]), -K, rtol=1e-10, kick=1e-12)

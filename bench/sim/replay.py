@@ -25,7 +25,8 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from jointbench.bench.sim.controller import Gains, PIController
+from jointbench.bench.sim.controller import Gains
+from jointbench.bench.sim.loop import LoopChecks, first_warning, run_loop
 from jointbench.bench.sim.nominal import static_link_position
 from jointbench.bench.sim.sensors import Sensors
 from jointbench.identification.log import Log, LogError
@@ -60,6 +61,21 @@ def _with_timestep(model: mujoco.MjModel, dt: float) -> mujoco.MjModel:
     m = copy.copy(model)
     m.opt.timestep = dt
     return m
+
+
+class _ReplayChecks(LoopChecks):
+    """The replay's one check in the loop: q_m beyond a million times the logged motion
+    (at least 1e6) is a diverged replay."""
+
+    def __init__(self, log: Log, T: float):
+        self.log, self.T = log, T
+        self.position_limit = 1e6 * max(1.0, float(np.max(np.abs(log.q_m))))
+
+    def diverged(self, k: int, q_m: float, q: float) -> None:
+        if not abs(q_m) < self.position_limit:
+            raise ReplayError(f"replay of {self.log.path or 'the log'} diverged at t = "
+                              f"{k * self.T:.4f} s (q_m = {q_m:.3g}): the model is unstable "
+                              "under the logged gains")
 
 
 def replay(model: mujoco.MjModel, axis: Axis, log: Log, disturbance: np.ndarray | None = None,
@@ -109,47 +125,17 @@ def replay(model: mujoco.MjModel, axis: Axis, log: Log, disturbance: np.ndarray 
     d.qvel[:] = 0.0
     mujoco.mj_forward(m, d)
 
-    ctrl = PIController(gains, T, float(log.tau_m[0]) if tau0 is None else float(tau0))
-    exact = Sensors.ideal()
-    quant_m = (sensors or exact).motor_quantizer()
-    quant_l = (sensors or exact).link_quantizer()
-    noise = (sensors or exact).torque_noise(np.random.default_rng(seed), n).tolist()
-    q_m = np.empty(n)
-    q = None if axis.rigid else np.empty(n)
-    tau = np.empty(n)
-    qpos, ctrl_arr, qfrc = d.qpos, d.ctrl, d.qfrc_applied
-    im, il, act, dl = axis.motor_qpos, axis.link_qpos, axis.actuator, axis.link_dof
-    q_ref = log.q_ref.tolist()
-    dist = disturbance.tolist() if disturbance is not None else None
-    at_motor = disturbance_at == "motor"
-    step = mujoco.mj_step
-    scale = max(1.0, float(np.max(np.abs(log.q_m))))
-    for k in range(n):
-        qm_k = qpos[im]
-        if not abs(qm_k) < 1e6 * scale:
-            raise ReplayError(f"replay of {log.path or 'the log'} diverged at t = {k * T:.4f} s "
-                              f"(q_m = {qm_k:.3g}): the model is unstable under the logged gains")
-        meas_m = quant_m(qm_k)
-        u = ctrl.step(meas_m, q_ref[k])
-        if dist is not None:
-            if at_motor:
-                u += dist[k]
-            else:
-                qfrc[dl] = dist[k]
-        q_m[k] = meas_m
-        if q is not None:
-            q[k] = quant_l(qpos[il])
-        tau[k] = u
-        applied = u + noise[k]
-        ctrl_arr[act] = applied if loop is None else applied + loop.torque(qm_k,
-                                                                           d.qvel[axis.motor_dof])
-        step(m, d, substeps)
-    for w in range(len(d.warning)):
-        if d.warning[w].number:
-            raise ReplayError(f"replay of {log.path or 'the log'}: MuJoCo warning "
-                              f"{mujoco.mjtWarning(w).name} ({d.warning[w].number} times)")
-    return ReplayResult(t=np.asarray(log.t, dtype=float).copy(), q_m=q_m, q=q, tau_m=tau,
-                        saturated=ctrl.saturated, disturbance=disturbance,
+    checks = _ReplayChecks(log, T)
+    trace = run_loop(m, d, axis, gains, T, float(log.tau_m[0]) if tau0 is None else float(tau0),
+                     log.q_ref, substeps=substeps, sensors=sensors, seed=seed, loop=loop,
+                     disturbance=disturbance, disturbance_at=disturbance_at, checks=checks)
+    warning = first_warning(d)
+    if warning is not None:
+        raise ReplayError(f"replay of {log.path or 'the log'}: MuJoCo warning {warning[0]} "
+                          f"({warning[1]} times)")
+    return ReplayResult(t=np.asarray(log.t, dtype=float).copy(), q_m=trace.q_m,
+                        q=None if axis.rigid else trace.q, tau_m=trace.tau_m,
+                        saturated=trace.saturated, disturbance=disturbance,
                         disturbance_at=disturbance_at)
 
 

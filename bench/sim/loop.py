@@ -1,0 +1,148 @@
+"""The closed-loop tick: the one stepper of the virtual experiment and of the replay of a log.
+
+Per control tick k (period T, CONTRACT section 2):
+  1. the encoders sample the motor and link positions (quantised by `Sensors`);
+  2. the controller (`PIController`) computes tau_m[k] from the motor encoder and q_ref[k];
+  3. a disturbance, when given, adds to tau_m[k] (at the motor) or goes into qfrc_applied
+     (at the link);
+  4. the rotor receives tau_m[k] + torque noise (+ bench-loop effects of the rotor state),
+     held over the tick (zero-order hold) while MuJoCo integrates `substeps` steps.
+The fault checks (`LoopChecks`) compare the state with limits each tick and stop the run
+through their handlers; the callers (`bench.sim.experiment`, `bench.sim.replay`) own the
+starting state, the limits and the messages.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable, Sequence
+
+import mujoco
+import numpy as np
+
+from jointbench.bench.effects import LoopEffects
+from jointbench.bench.sim.controller import Gains, PIController
+from jointbench.bench.sim.sensors import Sensors
+from jointbench.models import Axis
+
+INSTABILITY_WARNINGS = (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL,
+                        mujoco.mjtWarning.mjWARN_BADQACC)
+
+
+@dataclass(frozen=True)
+class LoopTrace:
+    """The signals of one run, one value per tick: `q_m`, `q` the encoder readings [rad or m]
+    (`q` reads the motor joint on a rigid axis), `tau_m` the torque a log records (the
+    controller's output plus a disturbance at the motor) [N m or N], `q_m_true`, `q_true` the
+    exact positions, `tau_applied` the torque the actuator received; `saturated` ticks clipped
+    at tau_max, `clamped` ticks whose applied torque exceeded `LoopChecks.ctrl_limit`."""
+
+    q_m: np.ndarray
+    q: np.ndarray
+    tau_m: np.ndarray
+    q_m_true: np.ndarray
+    q_true: np.ndarray
+    tau_applied: np.ndarray
+    saturated: int
+    clamped: int
+
+
+class LoopChecks:
+    """The fault checks of a run. The stepper compares against the limits inline (cheap) and
+    calls the handler when one is crossed; a handler raises to stop the run or returns to go
+    on. The defaults check nothing."""
+
+    position_limit = math.inf  # |q_m| must stay under it (a NaN fails too)
+    link_limit = math.inf      # |q| must stay under it
+    track_limit = math.inf     # |q_ref - q_m(measured)| must stay under it
+    torque_limit = math.inf    # |tau_m| reaching it calls `saturated`
+    ctrl_limit = math.inf      # |applied torque| over it counts as clamped
+
+    def diverged(self, k: int, q_m: float, q: float) -> None:
+        """|q_m| or |q| is over its limit (or not a number) at tick k."""
+
+    def lost_track(self, k: int, error: float) -> None:
+        """The motor is `error` from the reference at tick k."""
+
+    def saturated(self, k: int, u: float) -> None:
+        """The controller's output `u` reached the torque limit at tick k."""
+
+    def mujoco_unstable(self, k: int) -> None:
+        """MuJoCo flagged a bad qpos, qvel or qacc during the steps before tick k."""
+
+
+def first_warning(data: mujoco.MjData) -> tuple[str, int] | None:
+    """The first MuJoCo warning raised on `data` as (name, count), None when there is none."""
+    for w in range(len(data.warning)):
+        if data.warning[w].number:
+            return mujoco.mjtWarning(w).name, int(data.warning[w].number)
+    return None
+
+
+def run_loop(model: mujoco.MjModel, data: mujoco.MjData, axis: Axis, gains: Gains,
+             period: float, tau0: float, q_ref: Sequence[float], *, substeps: int = 1,
+             sensors: Sensors | None = None, seed: int = 0, loop: LoopEffects | None = None,
+             disturbance: Sequence[float] | None = None, disturbance_at: str = "link",
+             checks: LoopChecks | None = None,
+             progress: Callable[[float], None] | None = None) -> LoopTrace:
+    """Run len(q_ref) ticks of the module docstring from the state in `data` (stepped in
+    place). `period` T [s]; `tau0` the integrator's initial state I[-1]; `sensors` quantise
+    the encoders and draw the torque noise from `seed` (default: exact, no noise); `loop`
+    adds its torque to the applied one; `disturbance` [N m or N per tick] enters at
+    `disturbance_at` ("link" or "motor"); `progress(fraction)` is called about 100 times.
+    Raises whatever the `checks` handlers raise."""
+    sensors = sensors or Sensors.ideal()
+    checks = checks or LoopChecks()
+    n = len(q_ref)
+    quant_m, quant_l = sensors.motor_quantizer(), sensors.link_quantizer()
+    noise = sensors.torque_noise(np.random.default_rng(seed), n).tolist()
+    ctrl = PIController(gains, period, tau0)
+    q_m, q, tau = np.empty(n), np.empty(n), np.empty(n)
+    q_m_true, q_true, tau_app = np.empty(n), np.empty(n), np.empty(n)
+    qpos, qvel, ctrl_arr, qfrc = data.qpos, data.qvel, data.ctrl, data.qfrc_applied
+    im, il, dm, dl, act = (axis.motor_qpos, axis.link_qpos, axis.motor_dof, axis.link_dof,
+                           axis.actuator)
+    step = mujoco.mj_step
+    refs = np.asarray(q_ref, dtype=float).tolist()  # Python floats: the fast scalar path
+    dist = None if disturbance is None else np.asarray(disturbance, dtype=float).tolist()
+    at_motor = disturbance_at == "motor"
+    pos_limit, link_limit = checks.position_limit, checks.link_limit
+    track_limit, torque_limit, ctrl_limit = checks.track_limit, checks.torque_limit, \
+        checks.ctrl_limit
+    bad_qpos, bad_qvel, bad_qacc = (data.warning[int(w)] for w in INSTABILITY_WARNINGS)
+    every = max(1, n // 100)
+    clamped = 0
+    for k in range(n):
+        qm_k = qpos[im]
+        ql_k = qpos[il]
+        # Before quantising: round() of an infinite or NaN position raises.
+        if not (abs(qm_k) < pos_limit and abs(ql_k) < link_limit):
+            checks.diverged(k, qm_k, ql_k)
+        meas_m = quant_m(qm_k)
+        r_k = refs[k]
+        if abs(r_k - meas_m) > track_limit:
+            checks.lost_track(k, r_k - meas_m)
+        u = ctrl.step(meas_m, r_k)
+        if abs(u) >= torque_limit:
+            checks.saturated(k, u)
+        if dist is not None:
+            if at_motor:
+                u += dist[k]
+            else:
+                qfrc[dl] = dist[k]
+        applied = u + noise[k]
+        if loop is not None:
+            applied += loop.torque(qm_k, qvel[dm])
+        if abs(applied) > ctrl_limit:
+            clamped += 1
+        q_m[k], q[k], tau[k] = meas_m, quant_l(ql_k), u
+        q_m_true[k], q_true[k], tau_app[k] = qm_k, ql_k, applied
+        ctrl_arr[act] = applied
+        step(model, data, substeps)
+        if bad_qpos.number or bad_qvel.number or bad_qacc.number:
+            checks.mujoco_unstable(k + 1)
+        if progress is not None and k % every == 0:
+            progress(k / n)
+    return LoopTrace(q_m=q_m, q=q, tau_m=tau, q_m_true=q_m_true, q_true=q_true,
+                     tau_applied=tau_app, saturated=ctrl.saturated, clamped=clamped)
