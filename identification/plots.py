@@ -8,14 +8,13 @@ from __future__ import annotations
 
 import math
 import os
-import tempfile
 from dataclasses import dataclass
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from jointbench.identification.design import butterworth_magnitude, central_difference_magnitude
+from jointbench.identification.log_write import save_figure_atomic
 
 if TYPE_CHECKING:
     import matplotlib.figure
@@ -44,29 +43,13 @@ def figure1_setup() -> Figure1Setup:
     return Figure1Setup(wn=100.0, ts=math.pi / 1.0e3, m=2)
 
 
-def save_figure_atomic(fig: matplotlib.figure.Figure, path: str | os.PathLike[str]) -> Path:
-    """Save ``fig`` as PNG at ``path`` atomically.
-
-    Writes a temporary file in the destination directory then ``os.replace`` s it, so a
-    reader never sees a half-written PNG (os.replace is atomic on one filesystem).
-
-    Raises:
-        OSError: if the directory does not exist or is not writable.
-    """
-    dest = Path(path)
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=".tmp", dir=dest.parent or ".")
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fig.savefig(fh, format="png")
-        os.replace(tmp_name, dest)
-    except BaseException:
-        # Do not leave temporary files behind on failure.
-        try:
-            os.unlink(tmp_name)
-        except FileNotFoundError:
-            pass
-        raise
-    return dest
+def _finish(fig: matplotlib.figure.Figure, path: str | os.PathLike[str] | None
+            ) -> matplotlib.figure.Figure:
+    """Lay the figure out and save it at `path` when given (`save_figure_atomic`)."""
+    fig.tight_layout()
+    if path is not None:
+        save_figure_atomic(fig, path)
+    return fig
 
 
 def plot_figure1(
@@ -119,10 +102,7 @@ def plot_figure1(
     ax.set_title(f"Figure 1: magnitude of filters (m = {m})")
     ax.grid(True, which="both", lw=0.3)
     ax.legend(loc="lower left")
-    fig.tight_layout()
-    if path is not None:
-        save_figure_atomic(fig, path)
-    return fig
+    return _finish(fig, path)
 
 
 
@@ -145,10 +125,7 @@ def plot_validation(t: np.ndarray, measured: np.ndarray, predicted: np.ndarray,
     axr.set_ylabel("error (N m)")
     axr.set_xlabel("t (s)")
     axr.grid(True, lw=0.3)
-    fig.tight_layout()
-    if path is not None:
-        save_figure_atomic(fig, path)
-    return fig
+    return _finish(fig, path)
 
 
 def plot_frf(f_hz: np.ndarray, measured: np.ndarray, models: dict[str, np.ndarray],
@@ -175,7 +152,4 @@ def plot_frf(f_hz: np.ndarray, measured: np.ndarray, models: dict[str, np.ndarra
     axm.legend(fontsize=8)
     for a in (axm, axp):
         a.grid(True, which="both", lw=0.3)
-    fig.tight_layout()
-    if path is not None:
-        save_figure_atomic(fig, path)
-    return fig
+    return _finish(fig, path)

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from jointbench.identification import log as log_module
+from jointbench.identification import log_read, log_write
 from jointbench.identification.log import (Log, LogError, atomic_write_text, parse_log, read_log,
                                 unit_warnings, write_log)
 
@@ -163,7 +164,7 @@ def test_size_limit_is_documented_and_configurable(tmp_path, monkeypatch):
 def test_stream_without_size_is_cut_at_the_limit():
     """A pipe or device has no size to check first: the count of bytes read stops it."""
     body = b"t,q_m,tau_m\n" + b"".join(b"%d,0,0\n" % k for k in range(10000))
-    lines = log_module._stream_lines(io.BytesIO(body), "pipe", max_bytes=1000)
+    lines = log_read._stream_lines(io.BytesIO(body), "pipe", max_bytes=1000)
     with pytest.raises(LogError, match=r"pipe:\d+: the file is larger than the 1000 bytes"):
         list(lines)
 
@@ -215,7 +216,7 @@ def test_atomic_write_interrupted_leaves_old_content_and_no_temporary(tmp_path, 
     def interrupt(fd):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(log_module.os, "fsync", interrupt)
+    monkeypatch.setattr(log_write.os, "fsync", interrupt)
     with pytest.raises(KeyboardInterrupt):
         atomic_write_text(path, "new\n" * 1000)
     assert path.read_text() == "old\n"

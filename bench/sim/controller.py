@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from jointbench.identification.log import Log, LogError
+from jointbench.identification.log import Log, LogError, format_meta_number
 
 
 @dataclass(frozen=True)
@@ -31,8 +31,8 @@ class Gains:
     velocity_feedforward: bool = True
 
     def to_meta(self) -> dict[str, str]:
-        return {"kp": f"{self.kp:.10g}", "kv": f"{self.kv:.10g}", "ki": f"{self.ki:.10g}",
-                "tau_max": f"{self.tau_max:.10g}",
+        return {"kp": format_meta_number(self.kp), "kv": format_meta_number(self.kv),
+                "ki": format_meta_number(self.ki), "tau_max": format_meta_number(self.tau_max),
                 "velocity_feedforward": "true" if self.velocity_feedforward else "false"}
 
     @classmethod

@@ -27,7 +27,7 @@ from jointbench.bench.sim.loop import (INSTABILITY_WARNINGS, LoopChecks, LoopTra
 from jointbench.bench.effects import HiddenEffect, LoopEffects, loop_effects_from_model
 from jointbench.bench.sim.reference import Chirp
 from jointbench.bench.sim.sensors import Sensors
-from jointbench.identification.log import Log
+from jointbench.identification.log import Log, format_meta_number
 from jointbench.identification.defaults import PAPER_RATE
 
 SAMPLE_RATE_HZ = PAPER_RATE  # the paper's acquisition rate, the mission's
@@ -75,10 +75,6 @@ class ExperimentResult:
     clamped: int = 0  # samples where MuJoCo's actuator ctrlrange cut the applied torque
 
 
-def _fmt(x: float) -> str:
-    return f"{x:.10g}"
-
-
 def run_experiment(model: str | Path = "prototype", joint: str | None = None, *,
                    duration: float = 60.0, seed: int = 0, chirp: Chirp | None = None,
                    amplitude: float | None = None, config: dict[str, float] | None = None,
@@ -114,7 +110,8 @@ def run_experiment(model: str | Path = "prototype", joint: str | None = None, *,
         reductions += 1
         chirp = replace(chirp, amplitude=0.7 * chirp.amplitude,
                         max_acceleration=0.6 * chirp.max_acceleration)
-    meta = {"sample_rate_hz": _fmt(sample_rate_hz), "gravity": _fmt(truth.g)}
+    meta = {"sample_rate_hz": format_meta_number(sample_rate_hz),
+            "gravity": format_meta_number(truth.g)}
     meta.update(gains.to_meta())
     meta.update({
         "joint": ax.name, "source": f"jointbench virtual experiment, model {exp.source.name}",
@@ -128,12 +125,12 @@ def run_experiment(model: str | Path = "prototype", joint: str | None = None, *,
         "amplitude_reductions": str(reductions),
     })
     if truth.gear_ratio is not None:
-        meta["gear_ratio"] = _fmt(truth.gear_ratio)
+        meta["gear_ratio"] = format_meta_number(truth.gear_ratio)
     meta.update(sensors.to_meta())
     for key, value in truth.as_dict().items():
         if key not in ("g", "gear_ratio"):
-            meta[f"truth_{key}"] = _fmt(value)
-    meta["truth_center"] = _fmt(exp.center)
+            meta[f"truth_{key}"] = format_meta_number(value)
+    meta["truth_center"] = format_meta_number(exp.center)
     meta["truth_effect"] = "none"
     if effect is not None:
         meta.update(effect.to_meta())

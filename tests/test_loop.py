@@ -1,0 +1,136 @@
+"""The closed-loop stepper (bench/sim/loop.py) on tiny models against analytic expectations."""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+import pytest
+
+from jointbench.bench.sim.axes import static_link_position, static_position
+from jointbench.bench.sim.controller import Gains
+from jointbench.bench.sim.loop import LoopChecks, first_warning, run_loop
+from jointbench.bench.sim.nominal import compile_axis, rigid_axis, two_mass_axis
+from jointbench.bench.sim.sensors import Sensors
+
+T = 1.0 / 350.87
+J = 0.5          # kg m^2, the rotor
+TAU = 2.0        # N m
+OPEN = Gains(kp=0.0, kv=0.0, ki=0.0, tau_max=100.0)  # tau_m[k] = I[-1] = tau0 for ever
+
+
+def rotor(substeps: int = 1):
+    """A rigid frictionless rotor J on a hinge, no gravity torque (mass on the axis)."""
+    model, axis = compile_axis(rigid_axis(J, 0.0, 0.0, timestep=T / substeps))
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    return model, data, axis
+
+
+@pytest.mark.parametrize("substeps", [1, 4])
+def test_constant_torque_on_rigid_rotor_is_a_parabola(substeps):
+    """tau held over each tick (zero-order hold): q(t) = tau / (2 J) t^2 from rest, which RK4
+    integrates exactly (up to rounding) whatever the number of substeps."""
+    model, data, axis = rotor(substeps)
+    n = 200
+    trace = run_loop(model, data, axis, OPEN, T, TAU, np.zeros(n), substeps=substeps)
+    t = np.arange(n) * T
+    np.testing.assert_allclose(trace.q_m, 0.5 * TAU / J * t**2, rtol=1e-9, atol=1e-15)
+    np.testing.assert_array_equal(trace.q_m, trace.q_m_true)  # exact sensors by default
+    np.testing.assert_array_equal(trace.q, trace.q_m)        # one joint: q reads q_m
+    assert np.all(trace.tau_m == TAU) and np.all(trace.tau_applied == TAU)
+    assert trace.saturated == 0 and trace.clamped == 0
+    assert first_warning(data) is None
+
+
+def test_first_tick_gives_the_logged_initial_torque():
+    """CONTRACT section 2: q_m[-1] = q_m[0], q_ref[-1] = q_ref[0], I[-1] = tau_m[0]: with the
+    reference starting at the measured position, tau_m[0] is the integrator's initial state
+    whatever the gains."""
+    model, data, axis = rotor()
+    data.qpos[axis.motor_qpos] = 0.3
+    mujoco.mj_forward(model, data)
+    gains = Gains(kp=40.0, kv=2500.0, ki=25000.0, tau_max=3000.0)
+    q_ref = 0.3 + 0.01 * np.sin(np.arange(20) * T * 10.0)
+    trace = run_loop(model, data, axis, gains, T, 12.5, q_ref)
+    assert trace.tau_m[0] == 12.5
+    assert trace.tau_m[1] != 12.5  # the loop acts from the second tick on
+
+
+def test_disturbance_at_the_motor_is_recorded_at_the_link_it_is_not():
+    n = 100
+    t = np.arange(n) * T
+    dist = np.full(n, 1.0)
+    model, data, axis = rotor()
+    motor = run_loop(model, data, axis, OPEN, T, TAU, np.zeros(n), disturbance=dist,
+                     disturbance_at="motor")
+    assert np.all(motor.tau_m == TAU + 1.0)
+    np.testing.assert_allclose(motor.q_m, 0.5 * (TAU + 1.0) / J * t**2, rtol=1e-9, atol=1e-15)
+    model, data, axis = rotor()
+    link = run_loop(model, data, axis, OPEN, T, TAU, np.zeros(n), disturbance=dist)
+    assert np.all(link.tau_m == TAU)
+    np.testing.assert_allclose(link.q_m, 0.5 * (TAU + 1.0) / J * t**2, rtol=1e-9, atol=1e-15)
+
+
+def test_sensors_quantise_and_noise_is_seeded():
+    n = 100
+    sensors = Sensors(motor_resolution=1e-3, link_resolution=1e-3, torque_noise_std=0.5)
+    runs = []
+    for seed in (3, 3, 4):
+        model, data, axis = rotor()
+        runs.append(run_loop(model, data, axis, OPEN, T, TAU, np.zeros(n), sensors=sensors,
+                             seed=seed))
+    a, b, c = runs
+    np.testing.assert_array_equal(a.q_m, b.q_m)
+    assert not np.array_equal(a.tau_applied, c.tau_applied)
+    np.testing.assert_allclose(a.q_m / 1e-3, np.round(a.q_m_true / 1e-3), atol=1e-9)
+    noise = Sensors(0, 0, 0.5).torque_noise(np.random.default_rng(3), n)
+    np.testing.assert_array_equal(a.tau_applied, TAU + noise)
+    assert np.all(a.tau_m == TAU)  # the noise is applied, not recorded
+
+
+def test_saturation_and_checks_handlers():
+    class Stop(LoopChecks):
+        position_limit = 0.01
+        torque_limit = 1.0
+
+        def __init__(self):
+            self.saturated_ticks = []
+
+        def saturated(self, k, u):
+            self.saturated_ticks.append(k)
+
+        def diverged(self, k, q_m, q):
+            raise RuntimeError(f"tick {k}")
+
+    model, data, axis = rotor()
+    checks = Stop()
+    # tau_max 1.5 clips the held 2 N m: q = 1.5 / (2 J) t^2 crosses 0.01 rad at t = 0.0816 s
+    gains = Gains(kp=0.0, kv=0.0, ki=0.0, tau_max=1.5)
+    with pytest.raises(RuntimeError, match="tick 29"):
+        run_loop(model, data, axis, gains, T, TAU, np.zeros(100), checks=checks)
+    assert checks.saturated_ticks == list(range(29))
+    assert math.sqrt(0.01 * 2 * J / 1.5) / T == pytest.approx(28.65, abs=0.01)
+
+
+def test_loop_effects_add_to_the_applied_torque():
+    class Constant:
+        def torque(self, q_m, qd_m):
+            return -0.5
+
+    model, data, axis = rotor()
+    trace = run_loop(model, data, axis, OPEN, T, TAU, np.zeros(50), loop=Constant())
+    assert np.all(trace.tau_applied == TAU - 0.5) and np.all(trace.tau_m == TAU)
+
+
+def test_static_positions_of_a_spring_under_gravity():
+    """Eq. (5) at rest: K (q_m - q) = the gravity torque on the link, solved for either side."""
+    K, MX = 1000.0, 2.0
+    model, axis = compile_axis(two_mass_axis(0.1, 0.0, 0.0, K, 1.0, MX=MX, timestep=T))
+    qpos = model.qpos0.copy()
+    q = static_link_position(model, axis, qpos)      # motor at 0
+    assert K * (0.0 - q) == pytest.approx(MX * 9.81 * math.cos(q), rel=1e-8)
+    qpos[axis.link_qpos] = 0.2
+    qm = static_position(model, axis, qpos, "motor")  # link at 0.2
+    assert K * (qm - 0.2) == pytest.approx(MX * 9.81 * math.cos(0.2), rel=1e-8)
