@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from jointbench.identification.effects.base import Design, Effect, Rows, sign0
+from jointbench.identification.effects.base import Design, Effect, Rows, column_value, sign0
 
 
 def reference(rows: Rows) -> dict:
@@ -22,12 +22,8 @@ def design(rows: Rows, fixed: dict) -> Design:
     return rows.extend(("a", col, None))
 
 
-def params(v: dict, fixed: dict, rows: Rows) -> dict[str, float]:
-    return {"asymmetry": v["a"]}
-
-
 EFFECT = Effect(
     "asymmetric_friction", "asymmetry", "", "",
     "viscous and Coulomb friction that differ with the direction of motion",
-    needs_link=False, rigid_axis=False, block=0, k=1, design=design, params=params,
-    reference=reference)
+    needs_link=False, rigid_axis=False, block=0, k=1, design=design,
+    params=column_value("a", "asymmetry"), reference=reference)

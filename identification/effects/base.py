@@ -68,6 +68,16 @@ class Effect:
         return self.unit_prismatic if prismatic else self.unit
 
 
+def column_value(column: str, parameter: str) -> Callable[[dict, dict, Rows], dict]:
+    """`params` of an effect that reports one fitted column under its parameter name."""
+    return lambda v, fixed, rows: {parameter: v[column]}
+
+
+def searched_value(key: str) -> Callable[[dict, dict, Rows], dict]:
+    """`params` of an effect that reports its searched value alone (no extra column)."""
+    return lambda v, fixed, rows: {key: fixed[key]}
+
+
 def sign0(x: np.ndarray) -> np.ndarray:
     """sign(x) with NaN (undefined derivative samples) counted as 0."""
     return np.sign(np.nan_to_num(x))

@@ -2,15 +2,11 @@
 
 from __future__ import annotations
 
-from jointbench.identification.effects.base import Design, Effect, Rows, sign0
+from jointbench.identification.effects.base import Design, Effect, Rows, column_value, sign0
 
 
 def design(rows: Rows, fixed: dict) -> Design:
     return rows.extend(("FS", None, sign0(rows.sig.qd)))
-
-
-def params(v: dict, fixed: dict, rows: Rows) -> dict[str, float]:
-    return {"FS": v["FS"]}
 
 
 def check(v: dict, rows: Rows) -> str:
@@ -19,5 +15,5 @@ def check(v: dict, rows: Rows) -> str:
 
 EFFECT = Effect(
     "link_coulomb", "FS", "N m", "N", "Coulomb friction FS sign(qd) on the link side",
-    needs_link=True, rigid_axis=False, block=1, k=1, design=design, params=params,
-    check=check)
+    needs_link=True, rigid_axis=False, block=1, k=1, design=design,
+    params=column_value("FS", "FS"), check=check)

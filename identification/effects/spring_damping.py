@@ -2,16 +2,12 @@
 
 from __future__ import annotations
 
-from jointbench.identification.effects.base import Design, Effect, Rows
+from jointbench.identification.effects.base import Design, Effect, Rows, column_value
 
 
 def design(rows: Rows, fixed: dict) -> Design:
     dd = rows.sig.qmd - rows.sig.qd
     return rows.extend(("D", dd, -dd))
-
-
-def params(v: dict, fixed: dict, rows: Rows) -> dict[str, float]:
-    return {"D": v["D"]}
 
 
 def check(v: dict, rows: Rows) -> str:
@@ -22,4 +18,4 @@ EFFECT = Effect(
     "spring_damping", "D", "N m s/rad", "N s/m",
     "viscous damping D (qmd - qd) in parallel with the joint spring",
     needs_link=True, rigid_axis=False, block=1, k=1, design=design,
-    params=params, check=check)
+    params=column_value("D", "D"), check=check)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import signal
 
-from jointbench.identification.effects.base import Design, Effect, Rows
+from jointbench.identification.effects.base import Design, Effect, Rows, searched_value
 from jointbench.identification.filtering import zoh_align
 
 
@@ -34,12 +34,8 @@ def grid(rows: Rows) -> np.ndarray:
     return np.r_[0.0, np.geomspace(0.2 * ts, 50 * ts, 40)]
 
 
-def params(v: dict, fixed: dict, rows: Rows) -> dict[str, float]:
-    return {"lag_s": fixed["lag_s"]}
-
-
 EFFECT = Effect(
     "torque_lag", "lag_s", "s", "s",
     "the applied torque lags the command (first-order current-loop lag)",
-    needs_link=False, rigid_axis=True, block=0, k=1, design=design, params=params,
-    search="lag_s", grid=grid)
+    needs_link=False, rigid_axis=True, block=0, k=1, design=design,
+    params=searched_value("lag_s"), search="lag_s", grid=grid)
