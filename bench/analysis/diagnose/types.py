@@ -32,6 +32,9 @@ class ForwardView:
 
 @dataclass(frozen=True)
 class Diagnosis:
+    """One log's diagnosis: the filter, the inverse view's ranking and named cause, the
+    nominal and extended parameters, the forward views and the files written."""
+
     log: Log
     settings: FilterSettings
     settings_note: str
