@@ -119,6 +119,10 @@ def plot_inverse(d: Diagnosis, path: Path) -> Path:
     return save_figure_atomic(fig, path)
 
 
+def _replays(d: Diagnosis):
+    return ((d.forward_nominal, "nominal replay"), (d.forward_extended, "extended replay"))
+
+
 def plot_forward(d: Diagnosis, path: Path) -> Path | None:
     if d.forward_nominal is None:
         return None
@@ -131,8 +135,7 @@ def plot_forward(d: Diagnosis, path: Path) -> Path | None:
         series.insert(1, ("q", log.q, "q"))
     for ax, (name, meas, attr) in zip(axes, series):
         ax.plot(log.t, meas, "k", lw=0.8, label="measured")
-        for f, lab in ((d.forward_nominal, "nominal replay"),
-                       (d.forward_extended, "extended replay")):
+        for f, lab in _replays(d):
             if f is not None and getattr(f, attr) is not None:
                 ax.plot(f.t, getattr(f, attr), lw=0.6, label=lab)
         ax.set_ylabel(name)
@@ -160,7 +163,7 @@ def plot_forward_frf(d: Diagnosis, path: Path) -> Path | None:
     f, h = frf(getattr(log, out), log.tau_m)
     band = (f > 0.2) & (f < min(40, fs / 4))
     ax.loglog(f[band], h[band], "k", label="measured")
-    for fv, lab in ((d.forward_nominal, "nominal replay"), (d.forward_extended, "extended replay")):
+    for fv, lab in _replays(d):
         if fv is not None and getattr(fv, out) is not None:
             f2, h2 = frf(getattr(fv, out), fv.tau_m)
             ax.loglog(f2[band], h2[band], lw=0.8, label=lab)
