@@ -149,7 +149,7 @@ def _discrepancy_example(out: Path, duration: float, seed: int, say) -> None:
     the log goes to diagnose, which must find it, extend the model and measure the gain."""
     import dataclasses
 
-    from jointbench.bench.analysis.diagnose.run import diagnose, summary_text
+    from jointbench.bench.analysis.diagnose import diagnose, summary_text
     from jointbench.bench.effects import HiddenEffect
     from jointbench.identification.log import write_log
 

@@ -15,7 +15,7 @@ import sys
 import time
 
 from jointbench.bench.campaign.battery import cases, confusion, run_case
-from jointbench.bench.analysis.diagnose.run import diagnose
+from jointbench.bench.analysis.diagnose import diagnose
 from jointbench.identification.effects import EFFECTS, NONE
 
 

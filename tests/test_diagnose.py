@@ -14,7 +14,7 @@ import pytest
 
 from jointbench.bench.campaign.battery import Case, cases, run_case
 from jointbench.bench.cli import main
-from jointbench.bench.analysis.diagnose.run import diagnose
+from jointbench.bench.analysis.diagnose import diagnose
 from jointbench.identification.effects import EFFECTS, NONE
 from jointbench.identification.log import write_log
 

@@ -14,8 +14,8 @@ from pathlib import Path
 import pytest
 
 from jointbench.bench.cli import main
-from jointbench.bench.analysis.diagnose.run import diagnose
-from jointbench.bench.analysis.diagnose.forward import cross_validate
+from jointbench.bench.analysis.diagnose import diagnose
+from jointbench.bench.analysis.diagnose import cross_validate
 from jointbench.identification.log import read_log
 
 DATA = Path(__file__).parent / "data" / "emps"

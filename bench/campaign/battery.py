@@ -9,14 +9,16 @@ sizes `diagnose` calls practically significant (identification.discrepancy.SIZE_
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from jointbench.bench.effects import HiddenEffect
+from jointbench.bench.effects import BENCH_EFFECTS, HiddenEffect
+from jointbench.bench.sim.experiment import run_experiment
 from jointbench.identification.effects import EFFECTS, NONE
 from jointbench.identification.defaults import PAPER_RATE
+from jointbench.models import load_model, torque_limit
+from jointbench.models.truth import axis_truth
 
 # (model, joint, sample rate): the prototype at the paper's rate; arm joints at 1 kHz, where
 # the central differences keep their 15-19 Hz modes (eq. 29 wants about 53 f1).
@@ -51,40 +53,19 @@ class Case:
 
 def draw_strength(effect: str, rng: np.random.Generator, tau_max: float, f1_hz: float,
                   K: float) -> tuple[float, dict[str, float]]:
-    """A random strength for `effect` on an axis with this torque limit, mode and stiffness."""
+    """A random strength for `effect` on an axis with this torque limit, mode and stiffness
+    (the effect's `draw` in bench.effects)."""
     u = rng.uniform
     sign = 1.0 if rng.random() < 0.5 else -1.0
-    if effect == "gravity":
-        return sign * u(0.15, 0.45), {}
-    if effect == "link_coulomb":
-        return u(0.015, 0.03) * tau_max, {}
-    if effect == "torque_ripple":
-        return u(0.015, 0.03) * tau_max, {}
-    if effect == "backlash":
-        return u(0.001, 0.003), {}
-    if effect == "spring_damping":
-        return u(0.2, 0.5) * K / (2 * math.pi * f1_hz), {}
-    if effect == "torque_lag":
-        return u(0.15, 0.3) / (2 * math.pi * f1_hz), {}
-    if effect == "hardening":
-        # Engagement at a fraction of the deflection a tenth of the torque limit gives (about
-        # the RMS deflection of the default chirp on every axis), so the stiffer spring takes
-        # part on every axis without being engaged all the time.
-        return u(1.0, 2.0), {"deflection": u(0.25, 0.5) * 0.1 * tau_max / K}
-    if effect == "offset":
-        return sign * u(0.01, 0.025) * tau_max, {}
-    if effect == "asymmetric_friction":
-        return sign * u(0.3, 0.5), {}
-    raise ValueError(f"unknown effect {effect!r}")
+    if effect not in BENCH_EFFECTS:
+        raise ValueError(f"unknown effect {effect!r}")
+    return BENCH_EFFECTS[effect].draw(u, sign, tau_max, f1_hz, K)
 
 
 def cases(per_effect: int = 5, seed: int = 2026, effects: tuple[str, ...] | None = None,
           axes: tuple = AXES, clean: int | None = None) -> list[Case]:
     """`per_effect` cases for every effect and `clean` (default `per_effect`) clean ones,
     cycling over `axes`."""
-    from jointbench.models import load_model, torque_limit
-    from jointbench.models.truth import axis_truth
-
     rng = np.random.default_rng(seed)
     names = list(effects or (NONE, *EFFECTS))
     truth_cache: dict = {}
@@ -108,8 +89,7 @@ def cases(per_effect: int = 5, seed: int = 2026, effects: tuple[str, ...] | None
 
 
 def run_case(case: Case, duration: float = 40.0):
-    """The case's virtual experiment (bench.experiment.run_experiment): its log."""
-    from jointbench.bench.sim.experiment import run_experiment
+    """The case's virtual experiment (bench.sim.experiment.run_experiment): its log."""
     return run_experiment(case.model, case.joint, duration=duration, seed=case.seed,
                           effect=case.hidden, sample_rate_hz=case.rate_hz).log
 

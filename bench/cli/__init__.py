@@ -398,7 +398,7 @@ def cmd_tune_filter(args: argparse.Namespace) -> int:
 
 
 def cmd_diagnose(args: argparse.Namespace) -> int:
-    from jointbench.bench.analysis.diagnose.run import diagnose, summary_text
+    from jointbench.bench.analysis.diagnose import diagnose, summary_text
     from jointbench.identification.log import atomic_write_text
     from jointbench.identification.log import read_log
 
@@ -423,7 +423,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     d = diagnose(log, out_dir=out, forward=not args.no_forward, progress=say)
     xval = None
     if other is not None:
-        from jointbench.bench.analysis.diagnose.forward import cross_validate
+        from jointbench.bench.analysis.diagnose import cross_validate
         say(f"cross-validation on {args.validate}")
         xval = cross_validate(d, other, dist, args.disturbance_at)
     if args.json:

@@ -24,11 +24,11 @@ from jointbench.bench.effects import HiddenEffect, apply_to_spec
 from jointbench.models import Axis, ModelStructureError, find_axes, load_model, torque_limit
 from jointbench.models.truth import AxisTruth, axis_truth
 from jointbench.identification.defaults import PAPER_RATE
+from jointbench.identification.effects import EFFECTS
 
 LOCKS = ("rigid", "brake")
 # Effects that act on the spring or split motor and link friction: meaningless on a rigid axis.
-RIGID_AXIS_REFUSES = ("backlash", "spring_damping", "hardening", "link_coulomb",
-                      "asymmetric_friction")
+RIGID_AXIS_REFUSES = tuple(name for name, e in EFFECTS.items() if not e.rigid_axis)
 
 
 @dataclass(frozen=True)

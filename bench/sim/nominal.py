@@ -33,6 +33,7 @@ import mujoco
 
 # static_link_position is imported from here by bench.sim.replay.
 from jointbench.bench.sim.axes import static_link_position  # noqa: F401
+from jointbench.bench.effects.offset import add_offset_load
 from jointbench.identification.identify import Identification
 from jointbench.identification.log import Log, atomic_write_text
 from jointbench.models import Axis, ModelStructureError, find_axes
@@ -123,19 +124,6 @@ def _check(values: dict[str, float], positive: tuple[str, ...],
     for k in nonnegative:
         if values[k] < 0:
             raise ValueError(f"{k} = {values[k]:g} must be >= 0 for a physical axis")
-
-
-def add_offset_load(spec: mujoco.MjSpec, name: str, joint: str, offset: float) -> None:
-    """A passive actuator `{name}_offset` on `joint` with constant force -offset (gain 0,
-    affine bias): a constant load the motor holds with tau_m = offset."""
-    load = spec.add_actuator()
-    load.name = f"{name}_offset"
-    load.target = joint
-    load.trntype = mujoco.mjtTrn.mjTRN_JOINT
-    load.gaintype = mujoco.mjtGain.mjGAIN_FIXED
-    load.gainprm[0] = 0.0
-    load.biastype = mujoco.mjtBias.mjBIAS_AFFINE
-    load.biasprm[:3] = [-offset, 0.0, 0.0]
 
 
 def rigid_axis(J: float, FV: float, FS: float, offset: float = 0.0, *, timestep: float,

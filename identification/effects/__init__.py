@@ -1,38 +1,22 @@
-"""The names of the unmodelled effects (CONTRACT section 4): one source of truth.
+"""The unmodelled effects (CONTRACT section 4), identification half: one registry.
 
-Each entry gives the effect's strength parameter: its name in `extended_parameters` and its
-unit on a revolute axis. The bench hides effects by these names; `diagnose` names them.
+`EFFECTS` maps each name, in CONTRACT order, to its `Effect` (one module per effect): the
+strength parameter's name in `extended_parameters` and its unit, and the extended regression
+`diagnose`'s inverse view tests (identification.discrepancy). The bench half
+(jointbench.bench.effects) hides the same names in a simulation. To add an effect: one module
+here, one in bench/effects, and one entry in each registry.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from jointbench.identification.effects import (asymmetric_friction, backlash, gravity,
+                                               hardening, link_coulomb, offset, spring_damping,
+                                               torque_lag, torque_ripple)
+from jointbench.identification.effects.base import Effect, Rows, deadzone, sign0
 
-
-@dataclass(frozen=True)
-class EffectInfo:
-    name: str
-    parameter: str
-    unit: str
-    what: str
-
-
-EFFECTS: dict[str, EffectInfo] = {e.name: e for e in (
-    EffectInfo("gravity", "gravity_offset_rad", "rad",
-               "gravity torque MX g cos q + MY g sin q acting away from the rest position"),
-    EffectInfo("link_coulomb", "FS", "N m", "Coulomb friction FS sign(qd) on the link side"),
-    EffectInfo("torque_ripple", "ripple_amplitude", "N m",
-               "torque ripple periodic in the motor angle (cogging, drive ripple)"),
-    EffectInfo("backlash", "backlash_rad", "rad",
-               "dead zone of half-width b in the transmission deflection qm - q"),
-    EffectInfo("spring_damping", "D", "N m s/rad",
-               "viscous damping D (qmd - qd) in parallel with the joint spring"),
-    EffectInfo("torque_lag", "lag_s", "s",
-               "the applied torque lags the command (first-order current-loop lag)"),
-    EffectInfo("hardening", "hardening_ratio", "",
-               "stiffness that rises with deflection (piecewise linear)"),
-    EffectInfo("offset", "offset", "N m", "a constant torque (sensor offset, constant load)"),
-    EffectInfo("asymmetric_friction", "asymmetry", "",
-               "viscous and Coulomb friction that differ with the direction of motion"),
-)}
+EFFECTS: dict[str, Effect] = {m.EFFECT.name: m.EFFECT for m in (
+    gravity, link_coulomb, torque_ripple, backlash, spring_damping, torque_lag, hardening,
+    offset, asymmetric_friction)}
 NONE = "none"
+
+__all__ = ["EFFECTS", "NONE", "Effect", "Rows", "deadzone", "sign0"]

@@ -2,40 +2,36 @@
 parameters identified on the log, replay the logged experiment in closed loop (CONTRACT
 section 2, bench.replay) and are compared with the measured q_m, q and tau_m.
 
-The named effect goes into the MJCF where MuJoCo expresses it (bench.effects.apply_to_spec):
-backlash as a dead-band tendon, spring damping as tendon damping, hardening as a stacked
-dead-band tendon, link Coulomb friction as frictionloss, torque lag as an exact first-order
-filter actuator, gravity as the link's mass and centre of mass, an offset as a passive
-constant-bias actuator. Torque ripple and asymmetric friction depend on the motor angle and
-velocity in ways no MuJoCo actuator bias does: they are written as custom numerics
-(`X_ripple` = amplitude, period, phase; `X_asymmetry` = a, FVm, FSm) that the bench loop
-applies (bench.effects.loop_effects_from_model), in the replay and in `jointbench simulate`.
+The named effect goes into the MJCF where MuJoCo expresses it (bench.effects.write_extended,
+each effect's module there): backlash as a dead-band tendon, spring damping as tendon damping,
+hardening as a stacked dead-band tendon, link Coulomb friction as frictionloss, torque lag as
+an exact first-order filter actuator, gravity as the link's mass and centre of mass, an offset
+as a passive constant-bias actuator. Torque ripple and asymmetric friction depend on the
+motor angle and velocity in ways no MuJoCo actuator bias does: they are written as custom
+numerics (`X_ripple` = amplitude, period, phase; `X_asymmetry` = a, FVm, FSm) that the bench
+loop applies (bench.effects.loop_effects_from_model), in the replay and in `jointbench simulate`.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
 from pathlib import Path
 from typing import Callable
 
 import mujoco
 import numpy as np
 
+from jointbench.bench.analysis.diagnose.types import Diagnosis, ForwardView
+from jointbench.bench.effects import loop_effects_from_model, write_extended
+from jointbench.bench.effects.base import positive_part as _pos
 from jointbench.bench.sim import nominal as nominal_axes
-from jointbench.bench.analysis.diagnose.run import Diagnosis, ForwardView
-from jointbench.bench.effects import HiddenEffect, apply_to_spec, loop_effects_from_model
 from jointbench.bench.sim.replay import ReplayError, replay
+from jointbench.identification.discrepancy import nominal as nominal_rows, predict, with_parameters
 from jointbench.identification.log import Log
 
 
 def _axis_name(d: Diagnosis) -> str:
     return d.log.meta.get("joint") or "axis1"
-
-
-def _pos(p: dict, key: str) -> float:
-    v = float(p.get(key, 0.0))
-    return v if v > 0 and math.isfinite(v) else 0.0
 
 
 def build_spec(d: Diagnosis, extended: bool) -> mujoco.MjSpec:
@@ -49,7 +45,8 @@ def build_spec(d: Diagnosis, extended: bool) -> mujoco.MjSpec:
     common = dict(timestep=log.ts, tau_max=log.meta_float("tau_max"), gravity=log.gravity,
                   prismatic=log.prismatic, name=name)
     if "K" in d.nominal_parameters:
-        FS = _pos(p, "FS") if c is not None and c.effect == "link_coulomb" else 0.0
+        # FS: only link_coulomb's extended parameters hold it (the nominal moves it out).
+        FS = _pos(p, "FS")
         spec = nominal_axes.two_mass_axis(
             Jm=p["Jm"], FVm=_pos(p, "FVm"), FSm=_pos(p, "FSm"), K=p["K"], JL=p["JL"],
             FV=_pos(p, "FV"), FS=FS, MX=0.0 if log.prismatic else p.get("MX", 0.0),
@@ -59,27 +56,8 @@ def build_spec(d: Diagnosis, extended: bool) -> mujoco.MjSpec:
         spec = nominal_axes.rigid_axis(J=p["J"], FV=_pos(p, "FV"), FS=_pos(p, "FS"),
                                        offset=0.0, **common)
         K = 0.0
-    if c is None:
-        return spec
-    eff = c.effect
-    if eff in ("backlash", "spring_damping", "torque_lag"):
-        value = p[{"backlash": "backlash_rad", "spring_damping": "D",
-                   "torque_lag": "lag_s"}[eff]]
-        apply_to_spec(spec, name, HiddenEffect(eff, max(value, 0.0)), K)
-    elif eff == "hardening":
-        apply_to_spec(spec, name, HiddenEffect(eff, max(p["hardening_ratio"], 0.0),
-                                               {"deflection": p["deflection_rad"]}), K)
-    elif eff == "offset":
-        nominal_axes.add_offset_load(spec, name, f"{name}_motor" if K else name, p["offset"])
-    elif eff == "torque_ripple":
-        spec.add_numeric(name=f"{name}_ripple", data=[p["ripple_amplitude"],
-                                                      p["ripple_period_rad"],
-                                                      p["ripple_phase_rad"]])
-    elif eff == "asymmetric_friction":
-        FVm = _pos(p, "FVm") if K else _pos(p, "FV")
-        FSm = _pos(p, "FSm") if K else _pos(p, "FS")
-        spec.add_numeric(name=f"{name}_asymmetry", data=[p["asymmetry"], FVm, FSm])
-    # gravity and link_coulomb are in the parameters already.
+    if c is not None:
+        write_extended(spec, name, c.effect, p, K)
     return spec
 
 
@@ -148,8 +126,6 @@ def cross_validate(d: Diagnosis, other: Log, disturbance: np.ndarray | None = No
     and the forward view (closed-loop replay with `disturbance` applied to the link or
     carriage, or at the motor input: EMPS's pulses are volts at the drive input, already in
     the logged force, so they go in as gtau x pulses at the motor)."""
-    from jointbench.identification.discrepancy import nominal as nominal_rows, predict, with_parameters
-
     rows = with_parameters(nominal_rows(other, d.settings), d.inverse.nominal.X)
     out: dict = {"inverse": {}, "forward": {}}
     models = {"nominal": None, "extended": d.named}

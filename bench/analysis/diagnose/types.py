@@ -1,0 +1,115 @@
+"""The results of `jointbench diagnose` as data: the diagnosis of one log and the forward view
+of one model (CONTRACT sections 3 and 4), with the JSON answer of `diagnose --json`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from jointbench.identification.discrepancy import Candidate, InverseDiagnosis
+from jointbench.identification.filtering import FilterSettings
+from jointbench.identification.log import Log
+from jointbench.identification.output import finite_json
+
+BLOCK_NAMES = ("motor equation (eq. 6): torque residual, % of the measured torque RMS",
+               "link equation (eq. 5): residual, % of the spring torque K (qm - q) RMS")
+
+
+@dataclass(frozen=True)
+class ForwardView:
+    """Replay errors (CONTRACT section 2 closed loop) of one model against the log."""
+
+    q_m_rms: float           # [rad or m]
+    q_rms: float | None
+    tau_rel_pct: float       # 100 ||tau_sim - tau|| / ||tau||
+    q_m_rel_pct: float       # 100 ||q_m_sim - q_m|| / ||q_m - mean||
+    t: np.ndarray
+    q_m: np.ndarray
+    q: np.ndarray | None
+    tau_m: np.ndarray
+
+
+@dataclass(frozen=True)
+class Diagnosis:
+    """One log's diagnosis: the filter, the inverse view's ranking and named cause, the
+    nominal and extended parameters, the forward views and the files written."""
+
+    log: Log
+    settings: FilterSettings
+    settings_note: str
+    inverse: InverseDiagnosis
+    nominal_parameters: dict[str, float]
+    extended_parameters: dict[str, float]
+    forward_nominal: ForwardView | None = None
+    forward_extended: ForwardView | None = None
+    forward_note: str = ""
+    files: tuple[str, ...] = ()
+
+    @property
+    def named(self) -> Candidate | None:
+        return self.inverse.named
+
+    @property
+    def named_cause(self) -> str:
+        return self.inverse.named_cause
+
+    @property
+    def view_block(self) -> int:
+        return self.named.block if self.named else 0
+
+    @property
+    def inverse_before_after(self) -> tuple[float, float]:
+        nom = self.inverse.nominal
+        before = nom.relative_error_pct(nom.residual, self.view_block)
+        if not self.named:
+            return before, before
+        return before, self.named.after_pct
+
+    def to_json(self) -> dict:
+        before, after = self.inverse_before_after
+        out = {
+            "named_cause": self.named_cause,
+            "candidates": [_candidate_json(c) for c in self.inverse.candidates],
+            "extended_parameters": self.extended_parameters,
+            "gain": {"metric": "inverse view, " + BLOCK_NAMES[self.view_block],
+                     "before": before, "after": after,
+                     "ratio": before / after if after > 0 else None},
+            "nominal_parameters": self.nominal_parameters,
+            "filter": {"wn_rad_s": self.settings.wn, "order": self.settings.m,
+                       "decimate": self.settings.Nd, "how": self.settings_note},
+        }
+        if self.forward_nominal is not None:
+            fwd = {"nominal": _forward_json(self.forward_nominal)}
+            if self.forward_extended is not None:
+                fwd["extended"] = _forward_json(self.forward_extended)
+            out["forward"] = fwd
+        if self.forward_note:
+            out["forward_note"] = self.forward_note
+        untested = {c.effect: c.reason for c in self.inverse.candidates if not c.testable}
+        if untested:
+            out["untested"] = untested
+        if self.files:
+            out["files"] = list(self.files)
+        return finite_json(out)
+
+
+def _forward_json(f: ForwardView) -> dict:
+    out = {"tau_rel_pct": f.tau_rel_pct, "q_m_rms": f.q_m_rms, "q_m_rel_pct": f.q_m_rel_pct}
+    if f.q_rms is not None:
+        out["q_rms"] = f.q_rms
+    return out
+
+
+def _candidate_json(c: Candidate) -> dict:
+    out = {"effect": c.effect, "significant": c.significant, "testable": c.testable}
+    if c.testable:
+        out.update({"explained_pct": c.explained_pct, "score": c.delta_bic,
+                    "p_value": c.p_value, "size_pct": c.size_pct,
+                    "before_pct": c.before_pct, "after_pct": c.after_pct,
+                    "parameters": c.parameters})
+        if c.unphysical:
+            out["unphysical"] = c.unphysical
+    else:
+        out["reason"] = c.reason
+    return out

@@ -1,0 +1,34 @@
+"""`hardening` on the bench: a second spring of stiffness ratio x K stacked in parallel with
+the joint spring, engaging beyond +-deflection (option, joint-side units)."""
+
+from __future__ import annotations
+
+import mujoco
+
+from jointbench.bench.effects.base import BenchEffect, Uniform, nonnegative
+
+OPTIONS = {"deflection": 0.003}   # |qm - q| beyond which stiffness rises by ratio K
+
+
+def mjcf(spec: mujoco.MjSpec, axis: str, strength: float, options: dict, K: float) -> None:
+    d = options["deflection"]
+    extra = spec.add_tendon(name=f"{axis}_hardening")
+    extra.stiffness[0] = strength * K
+    extra.springlength = [-d, d]
+    extra.wrap_joint(f"{axis}_motor", 1.0)
+    extra.wrap_joint(axis, -1.0)
+
+
+def extended(p: dict) -> tuple[float, dict]:
+    return max(p["hardening_ratio"], 0.0), {"deflection": p["deflection_rad"]}
+
+
+def draw(u: Uniform, sign: float, tau_max: float, f1_hz: float, K: float):
+    # Engagement at a fraction of the deflection a tenth of the torque limit gives (about
+    # the RMS deflection of the default chirp on every axis), so the stiffer spring takes
+    # part on every axis without being engaged all the time.
+    return u(1.0, 2.0), {"deflection": u(0.25, 0.5) * 0.1 * tau_max / K}
+
+
+EFFECT = BenchEffect("hardening", draw, options=OPTIONS, check=nonnegative, mjcf=mjcf,
+                     extended=extended)

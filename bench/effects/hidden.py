@@ -1,0 +1,72 @@
+"""What a user asks a virtual experiment to hide: `--effect backlash=0.002`, options after
+colons: `--effect hardening=1.0:deflection=0.004`."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from jointbench.bench.effects.registry import BENCH_EFFECTS
+from jointbench.identification.effects import EFFECTS
+
+# Options each effect accepts, with defaults (joint-side units).
+OPTIONS: dict[str, dict[str, float]] = {n: b.options for n, b in BENCH_EFFECTS.items()}
+
+
+@dataclass(frozen=True)
+class HiddenEffect:
+    """An effect of CONTRACT section 4 with its strength (the unit of EFFECTS[name])."""
+
+    name: str
+    strength: float
+    options: dict[str, float] = field(default_factory=dict)
+
+    def __post_init__(self):
+        if self.name not in EFFECTS:
+            raise ValueError(f"unknown effect '{self.name}' (known: {', '.join(EFFECTS)})")
+        if not math.isfinite(self.strength):
+            raise ValueError(f"effect '{self.name}': strength must be finite")
+        why = BENCH_EFFECTS[self.name].check(self.strength)
+        if why:
+            raise ValueError(f"effect '{self.name}': {why}")
+        unknown = set(self.options) - set(OPTIONS[self.name])
+        if unknown:
+            raise ValueError(f"effect '{self.name}' has no option {', '.join(sorted(unknown))} "
+                             f"(options: {', '.join(OPTIONS[self.name]) or 'none'})")
+
+    def option(self, key: str) -> float:
+        return self.options.get(key, OPTIONS[self.name][key])
+
+    @property
+    def all_options(self) -> dict[str, float]:
+        """Every option of the effect, defaults filled in."""
+        return {key: self.option(key) for key in OPTIONS[self.name]}
+
+    def to_meta(self) -> dict[str, str]:
+        meta = {"truth_effect": self.name,
+                f"truth_{EFFECTS[self.name].parameter}": f"{self.strength:.10g}"}
+        for key, value in self.options.items():
+            meta[f"truth_effect_{key}"] = f"{value:.10g}"
+        return meta
+
+
+def parse_effect(text: str) -> HiddenEffect:
+    """`name=strength[:option=value...]` -> HiddenEffect; ValueError says what is wrong."""
+    head, *rest = text.split(":")
+    if "=" not in head:
+        raise ValueError(f"effect '{text}': expected NAME=STRENGTH, e.g. backlash=0.002")
+    name, value = head.split("=", 1)
+    try:
+        strength = float(value)
+    except ValueError:
+        raise ValueError(f"effect '{text}': strength '{value}' is not a number") from None
+    options = {}
+    for item in rest:
+        if "=" not in item:
+            raise ValueError(f"effect '{text}': option '{item}' must read KEY=VALUE")
+        key, val = item.split("=", 1)
+        try:
+            options[key.strip()] = float(val)
+        except ValueError:
+            raise ValueError(f"effect '{text}': option value '{val}' is not a number") from None
+    return HiddenEffect(name.strip(), strength, options)

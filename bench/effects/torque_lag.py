@@ -1,0 +1,28 @@
+"""`torque_lag` on the bench: the motor actuator through MuJoCo's exact first-order filter of
+time constant T [s]."""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+
+from jointbench.bench.effects.base import BenchEffect, Uniform, nonnegative
+
+
+def mjcf(spec: mujoco.MjSpec, axis: str, strength: float, options: dict, K: float) -> None:
+    act = spec.actuator(f"{axis}_motor")
+    act.dyntype = mujoco.mjtDyn.mjDYN_FILTEREXACT
+    act.dynprm[0] = strength
+    act.actlimited = 0
+
+
+def extended(p: dict) -> tuple[float, dict]:
+    return max(p["lag_s"], 0.0), {}
+
+
+def draw(u: Uniform, sign: float, tau_max: float, f1_hz: float, K: float):
+    return u(0.15, 0.3) / (2 * math.pi * f1_hz), {}
+
+
+EFFECT = BenchEffect("torque_lag", draw, check=nonnegative, mjcf=mjcf, extended=extended)

@@ -1,0 +1,120 @@
+"""The nominal model of the inverse view (module docstring of identification.discrepancy):
+its columns, its block-weighted least squares and the extended designs effects build on it."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from jointbench.identification.discrepancy.signals import Signals, signals, stack
+from jointbench.identification.effects.base import Column, Design, sign0
+from jointbench.identification.filtering import FilterSettings
+from jointbench.identification.log import Log
+from jointbench.identification.parameters import JOINT_MOTOR, RIGID
+
+# Eq. (13) with MX, MY folded into P (gravity at rest at qs) and FS moved out (link_coulomb).
+NOMINAL_TWO_MASS = tuple(n for n in JOINT_MOTOR if n not in ("MX", "MY", "FS")) + ("P",)
+NOMINAL_RIGID = RIGID[:3]   # J FV FS: the offset is the `offset` effect
+
+
+def nominal_columns(sig: Signals, tau: np.ndarray | None = None,
+                    deflection: np.ndarray | None = None) -> Design:
+    """y and the nominal columns; `tau` replaces the measured torque (torque lag),
+    `deflection` the spring deflection qm - q (backlash's dead zone)."""
+    tau = sig.tau if tau is None else tau
+    if not sig.has_link:
+        y = stack(sig, tau, None)
+        W = np.column_stack([stack(sig, c, None)
+                             for c in (sig.qmdd, sig.qmd, sign0(sig.qmd))])
+        return y, W, NOMINAL_RIGID
+    dk = sig.qm - sig.q if deflection is None else deflection
+    z = None
+    y = stack(sig, tau, z)
+    cols = [stack(sig, sig.qmdd, z), stack(sig, sig.qmd, z), stack(sig, sign0(sig.qmd), z),
+            stack(sig, dk, -dk), stack(sig, z, sig.qdd), stack(sig, z, sig.qd),
+            stack(sig, z, sig.g * np.sin(sig.q - sig.qs))]
+    return y, np.column_stack(cols), NOMINAL_TWO_MASS
+
+
+def solve(W: np.ndarray, y: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, float]:
+    """Row-weighted least squares with column scaling: X and the weighted RSS."""
+    Ww, yw = W * w[:, None], y * w
+    scale = np.linalg.norm(Ww, axis=0)
+    scale[scale == 0] = 1.0
+    X, *_ = np.linalg.lstsq(Ww / scale, yw, rcond=None)
+    X = X / scale
+    r = yw - Ww @ X
+    return X, float(r @ r)
+
+
+@dataclass(frozen=True)
+class Nominal:
+    """Weighted stacked regression of the nominal model on the decimated rows."""
+
+    names: tuple[str, ...]
+    y: np.ndarray           # stacked (motor rows, then link rows)
+    W: np.ndarray
+    block: np.ndarray
+    weights: np.ndarray
+    X: np.ndarray
+    rss: float              # weighted residual sum of squares
+    reference_rms: tuple[float, ...]   # per block: RMS of what the block predicts
+    sig: Signals
+
+    @property
+    def residual(self) -> np.ndarray:
+        return self.y - self.W @ self.X
+
+    def value(self, name: str) -> float:
+        return float(self.X[self.names.index(name)])
+
+    def block_rms(self, residual: np.ndarray, b: int) -> float:
+        rows = self.block == b
+        return float(np.sqrt(np.mean(residual[rows] ** 2))) if rows.any() else float("nan")
+
+    def relative_error_pct(self, residual: np.ndarray, b: int) -> float:
+        """100 ||residual|| / ||reference|| on block b: the inverse view's error metric."""
+        return 100.0 * self.block_rms(residual, b) / self.reference_rms[b]
+
+    def extend(self, *columns: Column) -> Design:
+        """y, W and names with raw-rate (name, motor, link) columns added (an effect)."""
+        cols = [stack(self.sig, motor, link) for _, motor, link in columns]
+        return (self.y, np.column_stack([self.W, *cols]),
+                self.names + tuple(name for name, _, _ in columns))
+
+    def columns(self, tau: np.ndarray | None = None,
+                deflection: np.ndarray | None = None) -> Design:
+        """The nominal design rebuilt with another torque or spring deflection."""
+        return nominal_columns(self.sig, tau, deflection)
+
+    def fit(self, y: np.ndarray, W: np.ndarray) -> tuple[np.ndarray, float]:
+        """Least squares of a design on these rows with the nominal's block weights."""
+        return solve(W, y, self.weights)
+
+
+def nominal(log: Log, settings: FilterSettings) -> Nominal:
+    """Identify the nominal model (block-weighted least squares, as for eq. 13)."""
+    sig = signals(log, settings)
+    y, W, names = nominal_columns(sig)
+    n = len(sig.index)
+    block = np.r_[np.zeros(n, int), np.ones(n, int)] if sig.has_link else np.zeros(n, int)
+    X, _ = solve(W, y, np.ones(len(y)))
+    w = np.ones(len(y))
+    for bl in np.unique(block):
+        rows = block == bl
+        s = np.sqrt(np.mean((y[rows] - W[rows] @ X) ** 2))
+        w[rows] = 1.0 / s if s > 0 else 1.0
+    X, rss = solve(W, y, w)
+    ref = [float(np.sqrt(np.mean(y[block == 0] ** 2)))]
+    if sig.has_link:
+        K = X[names.index("K")]
+        ref.append(float(np.sqrt(np.mean((K * W[block == 1, names.index("K")]) ** 2))))
+    return Nominal(names=names, y=y, W=W, block=block, weights=w, X=X, rss=rss,
+                   reference_rms=tuple(ref), sig=sig)
+
+
+def with_parameters(nom: Nominal, X: np.ndarray) -> Nominal:
+    """`nom`'s rows with another estimate X (same names): a model identified elsewhere."""
+    return dataclasses.replace(nom, X=np.asarray(X, float))

@@ -1,0 +1,83 @@
+"""The band-limited raw-rate signals of one log (section 3.2) that every column of the
+discrepancy regression is built from, and their common decimation."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import signal
+
+from jointbench.identification.filtering import FilterSettings, derivatives, lowpass, zoh_align
+from jointbench.identification.log import Log, LogError
+
+
+@dataclass(frozen=True)
+class Signals:
+    """Band-limited raw-rate signals of one log (section 3.2), shared by every column."""
+
+    ts: float
+    g: float
+    qm: np.ndarray
+    qmd: np.ndarray
+    qmdd: np.ndarray
+    tau: np.ndarray          # measured torque, ZOH-aligned and low-passed
+    tau_raw: np.ndarray      # measured torque, as logged
+    q: np.ndarray | None
+    qd: np.ndarray | None
+    qdd: np.ndarray | None
+    qs: float                # rest position assumed by the nominal gravity term
+    settings: FilterSettings
+    sl: slice                # raw samples that every derivative defines
+    index: np.ndarray        # raw index of each decimated row
+
+    @property
+    def has_link(self) -> bool:
+        return self.q is not None
+
+    def lp(self, x: np.ndarray) -> np.ndarray:
+        s = self.settings
+        return lowpass(x, s.wn, s.ts, s.m)
+
+    def dec(self, x: np.ndarray) -> np.ndarray:
+        """The raw-rate column x on the decimated rows (scipy.signal.decimate, zero phase)."""
+        s = self.settings
+        x = np.asarray(x, dtype=float)[self.sl]
+        xd = signal.decimate(x, s.Nd, zero_phase=True) if s.Nd > 1 else x
+        e = s.edge
+        return xd[e:len(xd) - e]
+
+
+def signals(log: Log, settings: FilterSettings) -> Signals:
+    """Filter and differentiate the log once (eq. 22 after the Butterworth of eq. 25)."""
+    s = settings
+    qm, qmd, qmdd = derivatives(lowpass(log.q_m, s.wn, s.ts, s.m), s.ts, 2, s.stencil)
+    q = qd = qdd = None
+    if log.q is not None:
+        q, qd, qdd = derivatives(lowpass(log.q, s.wn, s.ts, s.m), s.ts, 2, s.stencil)
+    n = len(log.t)
+    if n < s.min_samples(2):
+        raise LogError(f"{n} samples are too few for the diagnosis filter (Nd = {s.Nd}): at "
+                       f"least {s.min_samples(2)} are needed", log.path)
+    sl = slice(max(2, s.skip), n - 2)
+    m = len(range(*sl.indices(n)))
+    nd = (m + s.Nd - 1) // s.Nd if s.Nd > 1 else m
+    index = sl.start + np.arange(nd) * s.Nd
+    index = index[s.edge:nd - s.edge]
+    head = max(1, min(n // 100, 20))
+    qs = float(np.mean((log.q if log.q is not None else log.q_m)[:head]))
+    tau_f = lowpass(zoh_align(log.tau_m), s.wn, s.ts, s.m)
+    return Signals(ts=s.ts, g=log.gravity, qm=qm, qmd=qmd, qmdd=qmdd, tau=tau_f,
+                   tau_raw=np.asarray(log.tau_m, float), q=q, qd=qd, qdd=qdd, qs=qs,
+                   settings=s, sl=sl, index=index)
+
+
+def stack(sig: Signals, motor: np.ndarray | None, link: np.ndarray | None) -> np.ndarray:
+    """One regression column: the motor-equation rows, then (with q) the link-equation rows;
+    None is a zero block."""
+    n = len(sig.index)
+    m = sig.dec(motor) if motor is not None else np.zeros(n)
+    if not sig.has_link:
+        return m
+    li = sig.dec(link) if link is not None else np.zeros(n)
+    return np.concatenate([m, li])

@@ -1,0 +1,89 @@
+"""The identification half of an effect (CONTRACT section 4): its names and units, and what
+the inverse view of `diagnose` (identification.discrepancy) needs to test it. No MuJoCo here;
+the bench half (jointbench.bench.effects) writes the same names into a simulation.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable, Protocol
+
+import numpy as np
+
+Design = tuple[np.ndarray, np.ndarray, tuple[str, ...]]   # y, W, column names
+Column = tuple[str, "np.ndarray | None", "np.ndarray | None"]   # name, motor row, link row
+
+
+class Rows(Protocol):
+    """The nominal regression of one log an effect extends (identification.discrepancy.Nominal).
+    `sig` holds its band-limited raw-rate signals (qm, qmd, q, qd, tau_raw, qs, g, ts, sl, lp)."""
+
+    sig: Any
+
+    def value(self, name: str) -> float:
+        """A nominal parameter."""
+
+    def extend(self, *columns: Column) -> Design:
+        """The nominal columns plus these raw-rate columns (motor and link equation rows)."""
+
+    def columns(self, tau: np.ndarray | None = None,
+                deflection: np.ndarray | None = None) -> Design:
+        """The nominal columns rebuilt with another torque or spring deflection."""
+
+
+@dataclass(frozen=True)
+class Effect:
+    """One unmodelled effect: names, units and its extended regression.
+
+    `design(rows, fixed)` builds the extended regression with the nonlinear values `fixed`;
+    those come from `reference(rows)` (values carried over from the nominal) and, for
+    `search`, from a scalar search of the weighted residual over `grid(rows)`. The linear
+    parameters come from least squares; `params(values, fixed, rows)` turns them into the
+    reported parameters, `check(values, rows)` says why a fit is not a physical instance.
+    """
+
+    name: str
+    parameter: str            # its strength in `extended_parameters`
+    unit: str                 # of `parameter` on a revolute axis
+    unit_prismatic: str
+    what: str
+    # The inverse view needs the link position q: its columns use q, or the rigid
+    # motor-side model could not tell it from the nominal.
+    needs_link: bool
+    # A rigid bench axis (no spring, one friction) can hide it. Differs from needs_link for
+    # gravity (a rigid link has gravity; its column is the link equation's) and
+    # asymmetric_friction (seen on the motor side, but the bench scales the drive-chain
+    # friction FVm, FSm, which a rigid axis does not split from the link's).
+    rigid_axis: bool
+    block: int                # 0 motor equation, 1 link equation: where its size is measured
+    k: int                    # extra parameters, nonlinear ones included
+    design: Callable[[Rows, dict], Design]
+    params: Callable[[dict, dict, Rows], dict[str, float]]
+    check: Callable[[dict, Rows], str] | None = None
+    search: str = ""          # the nonlinear parameter searched, a key of `fixed`
+    grid: Callable[[Rows], np.ndarray] | None = None
+    reference: Callable[[Rows], dict] | None = None
+
+    def unit_for(self, prismatic: bool) -> str:
+        return self.unit_prismatic if prismatic else self.unit
+
+
+def column_value(column: str, parameter: str) -> Callable[[dict, dict, Rows], dict]:
+    """`params` of an effect that reports one fitted column under its parameter name."""
+    return lambda v, fixed, rows: {parameter: v[column]}
+
+
+def searched_value(key: str) -> Callable[[dict, dict, Rows], dict]:
+    """`params` of an effect that reports its searched value alone (no extra column)."""
+    return lambda v, fixed, rows: {key: fixed[key]}
+
+
+def sign0(x: np.ndarray) -> np.ndarray:
+    """sign(x) with NaN (undefined derivative samples) counted as 0."""
+    return np.sign(np.nan_to_num(x))
+
+
+def deadzone(d: np.ndarray, b: float) -> np.ndarray:
+    """d - b sign(d) beyond +-b, 0 inside: the spring deflection of a transmission with
+    backlash of half-width b (MuJoCo's two-valued tendon springlength)."""
+    return np.sign(d) * np.maximum(np.abs(d) - b, 0.0)

@@ -1,0 +1,42 @@
+"""`hardening`: a stiffness that rises by Kh beyond a deflection (piecewise linear, harmonic-
+drive style): a second spring with a dead band in parallel with K."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from jointbench.identification.effects.base import Design, Effect, Rows, deadzone
+
+
+def design(rows: Rows, fixed: dict) -> Design:
+    sig = rows.sig
+    dz = deadzone(sig.qm - sig.q, fixed["deflection_rad"])
+    return rows.extend(("Kh", dz, -dz))
+
+
+def grid(rows: Rows) -> np.ndarray:
+    # Geometric grid: the engagement may sit near the encoder scale on a stiff joint.
+    sig = rows.sig
+    dmax = float(np.percentile(np.abs((sig.qm - sig.q)[sig.sl]), 99))
+    return np.geomspace(0.02 * dmax, 0.9 * dmax, 60)
+
+
+def params(v: dict, fixed: dict, rows: Rows) -> dict[str, float]:
+    return {"hardening_ratio": v["Kh"] / v["K"], "deflection_rad": fixed["deflection_rad"],
+            "K": v["K"]}
+
+
+def check(v: dict, rows: Rows) -> str:
+    # K -> 0 with a large Kh is a dead band: that is backlash, not hardening.
+    K0 = rows.value("K")
+    if v["K"] < 0.25 * K0 or v["Kh"] <= 0:
+        return (f"K = {v['K']:.4g} and Kh = {v['Kh']:.4g}: not a stiffness rising "
+                f"from the nominal K = {K0:.4g} (a dead band is backlash)")
+    return ""
+
+
+EFFECT = Effect(
+    "hardening", "hardening_ratio", "", "",
+    "stiffness that rises with deflection (piecewise linear)",
+    needs_link=True, rigid_axis=False, block=1, k=2, design=design, params=params,
+    check=check, search="deflection_rad", grid=grid)
