@@ -331,7 +331,9 @@ def identification_time(log: Log) -> dict[str, float]:
 def experiments_per_second(runs: int, workers: int | None) -> tuple[float, float, str]:
     """A campaign of `runs` 60 s prototype experiments (both identification models) on
     LocalExecutor(workers): (runs per second, mean simulation s per run, engine)."""
-    from jointbench.bench.campaign.run import CampaignSpec, RunSettings, run_campaign
+    from jointbench.bench.campaign.run import run_campaign
+    from jointbench.bench.campaign.settings import RunSettings
+    from jointbench.bench.campaign.spec import CampaignSpec
     from jointbench.bench.campaign.executors import LocalExecutor
 
     spec = CampaignSpec(base=RunSettings(duration=60.0), runs=runs, seed=99)

@@ -1,5 +1,5 @@
-"""Campaigns (bench/campaign.py), their engines (bench/executors.py), the Monte Carlo
-statistics (identification/summary.py) and the filter search (bench/tuning.py).
+"""Campaigns (bench/campaign/), their engines (bench/campaign/executors.py), the Monte Carlo
+statistics (identification/summary.py) and the filter search (bench/campaign/tuning.py).
 
 Short experiments (10 s) keep the file fast; the 200-run coverage measurement is in
 benchmarks/campaign.py."""
@@ -18,8 +18,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from jointbench.bench.campaign.run import (CampaignError, CampaignSpec, CampaignTable, RunSettings, read_table,
-                            run_campaign, scattered_factors, scattered_mjcf, summarize)
+from jointbench.bench.campaign.run import run_campaign
+from jointbench.bench.campaign.scatter import scattered_factors, scattered_mjcf
+from jointbench.bench.campaign.settings import CampaignError, RunSettings
+from jointbench.bench.campaign.spec import CampaignSpec
+from jointbench.bench.campaign.summary import summarize
+from jointbench.bench.campaign.table import CampaignTable, read_table
 from jointbench.bench.campaign.executors import LocalExecutor, SerialExecutor
 from jointbench.identification.summary import coverage, parameter_stats, wilson_interval
 

@@ -16,8 +16,10 @@ import numpy as np
 import pytest
 
 from jointbench.bench.sim.axes import build_experiment_model
-from jointbench.bench.campaign.run import (CampaignError, CampaignSpec, RunSettings, run_task, summarize,
-                            summary_text)
+from jointbench.bench.campaign.run import run_task
+from jointbench.bench.campaign.settings import CampaignError, RunSettings
+from jointbench.bench.campaign.spec import CampaignSpec
+from jointbench.bench.campaign.summary import summarize, summary_text
 from jointbench.bench.cli import main
 from jointbench.bench.analysis.debias import (DebiasError, debias, debias_table,
                           friction_timeconst_of, replica_seed)

@@ -14,17 +14,20 @@ and with the model's true f1; so a grid point that only fits the search noise sh
 
 from __future__ import annotations
 
-import argparse
-import json
 import math
-import sys
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from jointbench.bench.sim.axes import build_experiment_model
+from jointbench.bench.sim.experiment import run_experiment
+from jointbench.identification import output
 from jointbench.identification.defaults import PAPER_F1, PAPER_ND, PAPER_RATE, PAPER_WN, nd_from_f1
+from jointbench.identification.design import design_bandpass
+from jointbench.identification.filtering import FilterSettings
+from jointbench.identification.identify import identify
+from jointbench.identification.parameters import STIFFNESS_AND_INERTIAS
 
-DEFAULT_ND = (4, 8, 13, 20, 26, 30, 34, 38, 42, 46, 52)
 PAPER = (PAPER_WN, PAPER_ND)
 PAPER_F1_HZ = PAPER_F1
 
@@ -39,16 +42,12 @@ class TuneTask:
     seed: int
     pairs: tuple[tuple[float, int], ...]
     id_model: str = "joint-motor"
-    params: tuple[str, ...] = ("K", "Jm", "JL")
+    params: tuple[str, ...] = STIFFNESS_AND_INERTIAS
 
 
 def evaluate(task: TuneTask) -> np.ndarray:
     """Relative errors [%] against truth, shape (pairs, params); NaN where the pair fails.
     Runs in a worker (top-level, plain data)."""
-    from jointbench.bench.sim.experiment import run_experiment
-    from jointbench.identification.filtering import FilterSettings
-    from jointbench.identification.identify import identify
-
     out = np.full((len(task.pairs), len(task.params)), np.nan)
     try:
         log = run_experiment(task.model, task.joint, duration=task.duration, seed=task.seed).log
@@ -132,12 +131,9 @@ def _run(executor, tasks: list[TuneTask], progress) -> np.ndarray:
 def tune_filter(model: str, joint: str | None, wn_grid: tuple[float, ...],
                 Nd_grid: tuple[int, ...], seeds: int, executor, duration: float = 60.0,
                 seed: int = 0, id_model: str = "joint-motor",
-                params: tuple[str, ...] = ("K", "Jm", "JL"), progress=None) -> TuneResult:
+                params: tuple[str, ...] = STIFFNESS_AND_INERTIAS, progress=None) -> TuneResult:
     """Grid search of (wn, Nd) on `seeds` experiments, then the optimum and the reference
     settings on `seeds` fresh ones."""
-    from jointbench.bench.sim.axes import build_experiment_model
-    from jointbench.identification.design import design_bandpass
-
     exp = build_experiment_model(model, joint)
     rate = PAPER_RATE
     f1 = exp.truth.f1_hz
@@ -170,7 +166,7 @@ def tune_filter(model: str, joint: str | None, wn_grid: tuple[float, ...],
     v_rms = rms(val)
     cands = []
     for k, (label, w, n, note) in enumerate(refs):
-        per = {p: float(np.sqrt(np.mean(val[:, k, q] ** 2))) for q, p in enumerate(params)}
+        per = {p: output.rms(val[:, k, q]) for q, p in enumerate(params)}
         cands.append(Candidate(label, w, n, ref_search[k], float(v_rms[k]), per, note))
     return TuneResult(model=model, joint=exp.axis.name, f1_hz=f1, id_model=id_model,
                       params=params, seeds=seeds, duration=duration, wn_grid=tuple(wn_grid),
@@ -199,71 +195,12 @@ def result_text(r: TuneResult) -> str:
     return "\n".join(lines)
 
 
-def _grid(text: str, kind: type) -> tuple:
-    """'a:b:n' (n values, geometric for wn, linear for Nd) or a comma list."""
-    try:
-        if ":" in text:
-            lo, hi, n = text.split(":")
-            if kind is float:
-                vals = np.geomspace(float(lo), float(hi), int(n))
-                return tuple(float(round(v, 1)) for v in vals)
-            return tuple(sorted({int(round(v)) for v in np.linspace(int(lo), int(hi), int(n))}))
-        return tuple(kind(v) for v in text.split(","))
-    except ValueError:
-        raise ValueError(f"grid '{text}': expected LO:HI:N or V1,V2,... of "
-                         f"{'numbers' if kind is float else 'integers'}") from None
+def geometric_wn(lo: float, hi: float, n: int) -> tuple[float, ...]:
+    """n values of wn [rad/s] from lo to hi, geometric, rounded to 0.1 rad/s. ValueError from
+    numpy for a range it cannot space (e.g. lo = 0)."""
+    return tuple(float(round(v, 1)) for v in np.geomspace(lo, hi, n))
 
 
-def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
-    p.add_argument("--model", default="prototype", help="prototype, arm6 or an MJCF file")
-    p.add_argument("--joint", help="axis to move (default: the first)")
-    p.add_argument("--seeds", type=int, default=6,
-                   help="search experiments; as many fresh ones validate (default 6)")
-    p.add_argument("--seed", type=int, default=0, help="campaign seed (default 0)")
-    p.add_argument("--duration", type=float, default=60.0, help="experiment length in s")
-    p.add_argument("--wn", default="60:1000:9",
-                   help="wn grid [rad/s]: LO:HI:N geometric, or V1,V2,... (default 60:1000:9)")
-    p.add_argument("--nd", default=",".join(map(str, DEFAULT_ND)),
-                   help="Nd grid: LO:HI:N or V1,V2,... (default " + ",".join(map(str, DEFAULT_ND)) + ")")
-    p.add_argument("--id-model", default="joint-motor", choices=("joint-motor", "motor-only"))
-    p.add_argument("--params", default="K,Jm,JL", help="parameters in the objective (default K,Jm,JL)")
-    p.add_argument("--workers", type=int, help="local worker processes (default: all cores)")
-    p.add_argument("--scheduler", help="an existing Dask cluster: tcp://HOST:PORT")
-    p.add_argument("--json", action="store_true", help="print the result as one JSON object")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
-    return p
-
-
-def main(args: argparse.Namespace) -> int:
-    """`jointbench tune-filter`."""
-    from jointbench.bench.campaign.run import Progress, jsonable
-    from jointbench.bench.campaign.executors import make_executor
-
-    if args.seeds < 1:
-        raise ValueError(f"--seeds must be >= 1, got {args.seeds}")
-    if args.seed < 0:
-        raise ValueError(f"--seed must be >= 0, got {args.seed}")
-    if not (math.isfinite(args.duration) and args.duration > 0):
-        raise ValueError(f"--duration must be positive, got {args.duration}")
-    wn_grid = _grid(args.wn, float)
-    Nd_grid = _grid(args.nd, int)
-    if any(not (math.isfinite(w) and w > 0) for w in wn_grid) or any(n < 1 for n in Nd_grid):
-        raise ValueError("grid values must be positive (wn) and >= 1 (Nd)")
-    allowed = ("K", "Jm", "JL", "FVm", "FSm", "FV", "FS")
-    params = tuple(p.strip() for p in args.params.split(",") if p.strip())
-    if not params or any(p not in allowed for p in params):
-        raise ValueError(f"--params: choose among {', '.join(allowed)}")
-    executor = make_executor(args.workers, args.scheduler)
-    bar = Progress(2 * args.seeds, enabled=not args.quiet and sys.stderr.isatty(),
-                   label="tune-filter")
-    try:
-        r = tune_filter(args.model, args.joint, wn_grid, Nd_grid, args.seeds, executor,
-                        duration=args.duration, seed=args.seed, id_model=args.id_model,
-                        params=params, progress=bar.update)
-    finally:
-        executor.close()
-    if args.json:
-        print(json.dumps(jsonable(r.as_dict()), allow_nan=False))
-    else:
-        print(result_text(r))
-    return 0
+def linear_nd(lo: int, hi: int, n: int) -> tuple[int, ...]:
+    """Up to n decimation factors from lo to hi, linear, rounded, unique and sorted."""
+    return tuple(sorted({int(round(v)) for v in np.linspace(lo, hi, n)}))

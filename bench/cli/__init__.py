@@ -386,13 +386,13 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 
 def cmd_campaign(args: argparse.Namespace) -> int:
-    from jointbench.bench.campaign.run import main as campaign_main
+    from jointbench.bench.cli.campaign import run as campaign_main
 
     return campaign_main(args)
 
 
 def cmd_tune_filter(args: argparse.Namespace) -> int:
-    from jointbench.bench.campaign.tuning import main as tuning_main
+    from jointbench.bench.cli.tune_filter import run as tuning_main
 
     return tuning_main(args)
 
@@ -563,8 +563,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "command (default link)")
     g.set_defaults(func=cmd_diagnose)
 
-    from jointbench.bench.campaign import run as campaign
-    from jointbench.bench.campaign import tuning  # light at import: numpy and the argument lists
+    from jointbench.bench.cli import campaign, tune_filter as tuning  # light at import
 
     campaign.add_arguments(sub.add_parser(
         "campaign", help="N virtual experiments identified, a table row per run, bias, "

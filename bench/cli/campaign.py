@@ -1,0 +1,180 @@
+"""`jointbench campaign`: N virtual experiments, each identified, one table row per run, and the
+Monte Carlo summary (bias, empirical std, mean reported sigma, +-2 sigma coverage).
+
+The spec (bench.campaign.spec), the runs (bench.campaign.run), the resumable table
+(bench.campaign.table) and the summary (bench.campaign.summary) live in bench/campaign/.
+Engines (bench.campaign.executors): all local cores by default, `--workers N`, or an existing
+Dask cluster with `--scheduler tcp://HOST:PORT`.
+
+Light at import (argparse, the standard library and bench.campaign.settings): `run` imports
+the numerical modules when the command runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+from typing import Callable
+
+from jointbench.bench.campaign.settings import SWEEPABLE, CampaignError, RunSettings
+
+
+def _parse_sweep(text: str) -> tuple[str, tuple[float, ...]]:
+    """`NAME=V1,V2,...` -> (NAME, values of NAME's type); CampaignError says what is wrong."""
+    if "=" not in text:
+        raise CampaignError(f"--sweep '{text}': expected NAME=V1,V2,... "
+                            f"(NAME one of {', '.join(SWEEPABLE)})")
+    name, values = text.split("=", 1)
+    name = name.strip()
+    if name not in SWEEPABLE:
+        raise CampaignError(f"--sweep: cannot sweep {name!r} (sweepable: {', '.join(SWEEPABLE)})")
+    out = []
+    for v in values.split(","):
+        try:
+            x = SWEEPABLE[name](v.strip())
+        except ValueError:
+            raise CampaignError(f"--sweep {name}: value {v!r} is not "
+                                f"{'an integer' if SWEEPABLE[name] is int else 'a number'}") from None
+        if not math.isfinite(x):
+            raise CampaignError(f"--sweep {name}: value {v!r} is not finite")
+        out.append(x)
+    return name, tuple(out)
+
+
+def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    p.add_argument("--model", default="prototype",
+                   help="prototype, arm6 or an MJCF file following the axis convention")
+    p.add_argument("--joint", help="axis to move (default: the first)")
+    p.add_argument("--runs", type=int, default=200,
+                   help="runs (per sweep value with --sweep; default 200)")
+    p.add_argument("--seed", type=int, default=0, help="campaign seed (default 0)")
+    p.add_argument("--duration", type=float, default=60.0, help="experiment length in s (default 60)")
+    p.add_argument("--amplitude", type=float, help="chirp amplitude in rad (default: automatic)")
+    p.add_argument("--noise", type=float, default=1.0,
+                   help="torque noise as a multiple of the default 1.25 %% of tau_max (default 1)")
+    p.add_argument("--motor-bits", type=int, help="motor encoder bits per turn (default 17)")
+    p.add_argument("--link-bits", type=int, help="link encoder bits per turn (default 20)")
+    p.add_argument("--scatter", type=float, default=0.0,
+                   help="relative (log-normal) scatter of K, Jm, JL, FVm, FSm, FV, FS around "
+                        "the model, e.g. 0.1 (default 0)")
+    p.add_argument("--wn", type=float, help="Butterworth frequency in rad/s (default 176)")
+    p.add_argument("--decimate", type=int, help="decimation factor Nd (default 26)")
+    p.add_argument("--stencil", type=int, default=3, choices=(3, 5),
+                   help="central-difference points: 3, the paper's eq. (22) (default), or 5")
+    p.add_argument("--effect", help="hidden effect NAME=STRENGTH[:OPTION=VALUE] in every run")
+    p.add_argument("--id-models", default="joint-motor,motor-only",
+                   help="identification models, comma separated (default joint-motor,motor-only)")
+    p.add_argument("--debias", type=int, default=0, metavar="B",
+                   help="also bias-correct every two-mass estimate by B closed-loop replicas "
+                        "(bench/debias.py; each run then costs about 1 + B experiments; "
+                        "default 0: off)")
+    p.add_argument("--sweep", help="sweep one setting: NAME=V1,V2,... with NAME one of "
+                                   + ", ".join(SWEEPABLE))
+    p.add_argument("--workers", type=int,
+                   help="local worker processes (default: all cores; 1 runs in this process)")
+    p.add_argument("--scheduler", help="run on an existing Dask cluster: tcp://HOST:PORT")
+    p.add_argument("--out", default="campaign.csv",
+                   help="table file; an existing one of the same campaign is resumed "
+                        "(default campaign.csv)")
+    p.add_argument("--json", action="store_true", help="print the summary as one JSON object")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    return p
+
+
+def spec_arguments(args: argparse.Namespace, parse_effect: Callable[[str], object]) -> dict:
+    """The CampaignSpec keyword arguments (base, runs, seed, sweep, values) of the command line.
+    `parse_effect` (bench.effects', passed in: it imports MuJoCo) checks --effect. Raises
+    CampaignError, or ValueError for a malformed --effect."""
+    for name in ("duration", "noise", "scatter", "amplitude", "wn"):
+        v = getattr(args, name)
+        if v is not None and not math.isfinite(v):
+            raise CampaignError(f"--{name}: {v} is not finite")
+    if args.duration <= 0:
+        raise CampaignError(f"--duration must be positive, got {args.duration:g}")
+    if args.noise < 0:
+        raise CampaignError(f"--noise must be >= 0, got {args.noise:g}")
+    if args.scatter < 0:
+        raise CampaignError(f"--scatter must be >= 0, got {args.scatter:g}")
+    if args.effect:
+        parse_effect(args.effect)  # ValueError names what is wrong
+    base = RunSettings(model=str(args.model), joint=args.joint, duration=args.duration,
+                       amplitude=args.amplitude, noise=args.noise, motor_bits=args.motor_bits,
+                       link_bits=args.link_bits, scatter=args.scatter, wn=args.wn,
+                       Nd=args.decimate, stencil=args.stencil, effect=args.effect,
+                       debias=args.debias,
+                       id_models=tuple(m.strip() for m in args.id_models.split(",") if m.strip()))
+    sweep, values = _parse_sweep(args.sweep) if args.sweep else (None, ())
+    if not str(args.model) in ("prototype", "prototype_axis", "arm6") and not Path(args.model).is_file():
+        raise CampaignError(f"--model {args.model}: no such model file")
+    return dict(base=base, runs=args.runs, seed=args.seed, sweep=sweep, values=values)
+
+
+def _timing_line(result, timing: dict, engine: str) -> str:
+    """One line: runs done, wall time, engine, throughput and per-run costs when measured."""
+    return (f"{result.new} runs in {result.wall_s:.1f} s on {engine}"
+            + (f" ({timing['runs_per_s']:.2f} runs/s; per run: simulation "
+               f"{timing['mean_simulation_s']:.3f} s, identification "
+               f"{1e3 * timing['mean_identification_s']:.1f} ms, all models)"
+               if timing["runs_per_s"] and timing["mean_simulation_s"]
+               and timing["mean_identification_s"] else "")
+            + (f"; {result.resumed} rows resumed from the table" if result.resumed else ""))
+
+
+def run(args: argparse.Namespace) -> int:
+    """`jointbench campaign`: run (or resume) the campaign, write the table and its summaries,
+    print them. Exit status 1 when no run succeeded."""
+    import numpy as np
+
+    from jointbench.bench.campaign.executors import make_executor
+    from jointbench.bench.campaign.run import Progress, run_campaign
+    from jointbench.bench.campaign.spec import CampaignSpec
+    from jointbench.bench.campaign.summary import summary_paths, summary_text
+    from jointbench.bench.campaign.table import CampaignTable
+    from jointbench.bench.effects import parse_effect
+    from jointbench.identification.log import atomic_write_text
+    from jointbench.identification.output import finite_json
+
+    spec = CampaignSpec(**spec_arguments(args, parse_effect))
+    out = Path(args.out)
+    if out.suffix.lower() == ".xml" or (Path(str(args.model)).exists()
+                                        and out.resolve() == Path(str(args.model)).resolve()):
+        raise CampaignError(f"--out {out}: refusing to overwrite the model file")
+    executor = make_executor(args.workers, args.scheduler)
+    try:
+        tab_rows = 0
+        if out.exists():
+            tab = CampaignTable(out, spec)  # validates before any work
+            tab_rows = len(tab.rows)
+            tab.close()
+        bar = Progress(spec.total, tab_rows, enabled=not args.quiet and sys.stderr.isatty())
+        if not args.quiet:
+            print(f"campaign: {spec.total} runs ({tab_rows} already in {out}) on "
+                  f"{executor.description}", file=sys.stderr)
+        result = run_campaign(spec, out, executor, progress=bar.update)
+    finally:
+        executor.close()
+    summary = dict(result.summary)
+    summary["table"] = str(out)
+    summary["timing"] = {
+        "engine": executor.description, "workers": executor.workers,
+        "runs_this_invocation": result.new, "resumed_rows": result.resumed,
+        "wall_s": result.wall_s,
+        "runs_per_s": result.new / result.wall_s if result.wall_s > 0 and result.new else None,
+        "mean_simulation_s": float(np.mean(result.sim_s)) if result.sim_s else None,
+        "mean_identification_s": float(np.mean(result.identify_s)) if result.identify_s else None,
+    }
+    text = summary_text(summary)
+    json_path, md_path = summary_paths(out)
+    atomic_write_text(json_path, json.dumps(finite_json(summary), indent=1, allow_nan=False) + "\n")
+    timing = _timing_line(result, summary["timing"], executor.description)
+    atomic_write_text(md_path, f"# Campaign {out.name}\n\n{timing}\n\n```\n{text}\n```\n")
+    if args.json:
+        print(json.dumps(finite_json(summary), allow_nan=False))
+    else:
+        print(f"table: {out}; summary: {json_path}, {md_path}")
+        print(timing)
+        print(text)
+    return 0 if summary["ok"] > 0 else 1
