@@ -21,8 +21,9 @@ def debiased_json(res: DebiasResult, truth: dict[str, float] | None = None) -> d
     truth = {n: v for n, v in (truth or {}).items() if n in res.estimate and v}
     if truth:
         out["truth"] = truth
-        out["error_pct"] = {"ls": {n: pct_error(res.ls[n], v) for n, v in truth.items()},
-                            "debiased": {n: pct_error(res.estimate[n], v) for n, v in truth.items()}}
+        out["error_pct"] = {
+            "ls": {n: pct_error(res.ls[n], v) for n, v in truth.items()},
+            "debiased": {n: pct_error(res.estimate[n], v) for n, v in truth.items()}}
     return out
 
 

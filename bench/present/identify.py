@@ -29,8 +29,9 @@ def identify_json(result: Identification, truth: dict[str, float] | None, flags:
 
 
 def _filter_chain(source: str, log: Log, result: Identification) -> list[str]:
-    """The first lines: `source` (the file name), the Butterworth and decimation of `result` and the identification
-    chain's departures from the paper's (eq. 22, ZOH alignment, torque filter)."""
+    """The first lines: `source` (the file name), the Butterworth and decimation of `result`
+    and the identification chain's departures from the paper's (eq. 22, ZOH alignment, torque
+    filter)."""
     s = result.settings
     lines = [f"{source}: model {result.model}, {len(log)} samples at "
              f"{log.sample_rate_hz:g} Hz; filter wn = {s.wn:g} rad/s (order {s.m}), Nd = {s.Nd} "
@@ -47,12 +48,13 @@ def _filter_chain(source: str, log: Log, result: Identification) -> list[str]:
     return lines
 
 
-def identify_text(source: str, log: Log, result: Identification, truth: dict[str, float] | None,
-                  flags: list[dict], refined: RefineResult | None = None,
+def identify_text(source: str, log: Log, result: Identification,
+                  truth: dict[str, float] | None, flags: list[dict],
+                  refined: RefineResult | None = None,
                   debiased: DebiasResult | None = None) -> str:
-    """The identification of `log` (read from `source`) as text: the filter, the parameter table (and the physical one
-    for motor-only), the direct validation, the corrected 2 sigma, notes, flags and, when
-    run, the refinement and bias-correction tables."""
+    """The identification of `log` (read from `source`) as text: the filter, the parameter
+    table (and the physical one for motor-only), the direct validation, the corrected
+    2 sigma, notes, flags and, when run, the refinement and bias-correction tables."""
     lines = _filter_chain(source, log, result)
     lines += ["", parameter_table(result, truth)]
     if result.model.startswith("motor-only"):
