@@ -9,6 +9,7 @@ The dispatcher imports a command's module only when that command runs (`parser`)
 
 from __future__ import annotations
 
+import importlib
 import os
 import signal
 import sys
@@ -27,9 +28,14 @@ def main(argv: list[str] | None = None) -> int:
     if not args.command:
         parser.print_help(sys.stderr)
         return EXIT_BAD_INPUT
+    command = command_module(args.command)
+    # The command's library first: an interrupt inside an extension's import (numpy's, say)
+    # would surface as an ImportError, not as the interruption it is.
+    for name in command.LIBRARY:
+        importlib.import_module(name)
     restore_signals = trap_signals()
     try:
-        return command_module(args.command).run(args)
+        return command.run(args)
     except ValueError as err:
         # bad input: UsageError and the library's LogError, ModelStructureError,
         # NotIdentifiable, InversionError, all ValueErrors

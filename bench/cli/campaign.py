@@ -7,6 +7,8 @@ import argparse
 
 from jointbench.bench.campaign import run as _campaign
 
+LIBRARY: tuple[str, ...] = ()  # imported above
+
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """The options of `campaign` (bench.campaign.run.add_arguments)."""

@@ -8,6 +8,9 @@ from pathlib import Path
 
 from jointbench.bench.cli.common import positive
 
+# The library `run` imports, loaded by the dispatcher before it traps the signals.
+LIBRARY = ("jointbench.bench.demo",)
+
 
 def add_arguments(d: argparse.ArgumentParser) -> None:
     """The options of `demo`."""

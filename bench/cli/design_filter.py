@@ -8,6 +8,9 @@ import math
 
 from jointbench.bench.cli.common import finite, positive
 
+# The library `run` imports, loaded by the dispatcher before it traps the signals.
+LIBRARY = ("jointbench.identification.design",)
+
 
 def add_arguments(f: argparse.ArgumentParser) -> None:
     """The options of `design-filter`."""

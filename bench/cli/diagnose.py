@@ -11,6 +11,10 @@ from typing import Callable
 
 from jointbench.bench.cli.common import UsageError, finite
 
+# The library `run` imports, loaded by the dispatcher before it traps the signals.
+LIBRARY = ("jointbench.bench.analysis.diagnose.forward",
+           "jointbench.bench.analysis.diagnose.run")
+
 
 def add_arguments(g: argparse.ArgumentParser) -> None:
     """The options of `diagnose`."""

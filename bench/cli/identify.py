@@ -10,6 +10,9 @@ import sys
 
 from jointbench.bench.cli.common import UsageError, positive
 
+# The library `run` imports, loaded by the dispatcher before it traps the signals.
+LIBRARY = ("jointbench.bench.present.identify",)
+
 
 def add_arguments(i: argparse.ArgumentParser) -> None:
     """The options of `identify`."""

@@ -12,6 +12,9 @@ from pathlib import Path
 from jointbench.bench.cli.common import (UsageError, check_output_file, finite, parse_config,
                                          positive)
 
+# The library `run` imports, loaded by the dispatcher before it traps the signals.
+LIBRARY = ("jointbench.bench.present.experiment", "jointbench.bench.present.replay")
+
 
 def _rate(value: str) -> float | str:
     """--rate: a positive number of Hz, or `auto`."""

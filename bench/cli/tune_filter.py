@@ -7,6 +7,8 @@ import argparse
 
 from jointbench.bench.campaign import tuning as _tuning
 
+LIBRARY: tuple[str, ...] = ()  # imported above
+
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """The options of `tune-filter` (bench.campaign.tuning.add_arguments)."""
