@@ -129,7 +129,8 @@ def run_demo(out: Path, duration: float = 60.0, seed: int = 1) -> int:
 def _bias_correction(log, jm, mo, truth: dict[str, float], say, replicas: int = 8) -> None:
     """Both two-mass estimates bias-corrected by closed-loop replicas (bench/debias.py,
     `identify --debias`)."""
-    from jointbench.bench.analysis.debias import debias, debias_table
+    from jointbench.bench.analysis.debias import debias
+    from jointbench.bench.present.debias import debias_table
 
     d = debias(log, jm, replicas=replicas)
     say(debias_table(d, truth=truth).replace("## Bias correction", "## Bias correction of "

@@ -21,8 +21,9 @@ from jointbench.bench.campaign.settings import CampaignError, RunSettings
 from jointbench.bench.campaign.spec import CampaignSpec
 from jointbench.bench.campaign.summary import summarize, summary_text
 from jointbench.bench.cli import main
-from jointbench.bench.analysis.debias import (DebiasError, debias, debias_table,
-                          friction_timeconst_of, replica_seed)
+from jointbench.bench.analysis.debias import (DebiasError, debias, friction_timeconst_of,
+                                              replica_seed)
+from jointbench.bench.present.debias import debias_table
 from jointbench.bench.sim.experiment import run_experiment
 from jointbench.bench.sim.replay import replay
 from jointbench.bench.sim.sensors import Sensors

@@ -52,9 +52,10 @@ from jointbench.bench.sim.replay import ReplayError, replay
 from jointbench.bench.sim.sensors import Sensors
 from jointbench.identification.identify import Identification, NotIdentifiable, identify
 from jointbench.identification.log import Log, LogError
+from jointbench.identification.parameters import TWO_MASS
 
 DEFAULT_REPLICAS = 8
-PARAMETERS = ("Jm", "K", "JL", "FVm", "FSm", "FV", "FS", "MX", "MY")
+PARAMETERS = TWO_MASS
 
 
 class DebiasError(ValueError):
@@ -173,66 +174,3 @@ def friction_timeconst_of(model, axis) -> float:
     the robot does)."""
     return float(model.dof_solref[axis.motor_dof][0])
 
-
-def _pct(value: float | None, truth: float | None) -> float | None:
-    if value is None or truth is None or not truth or not math.isfinite(value):
-        return None
-    return 100.0 * (value - truth) / abs(truth)
-
-
-def debiased_json(res: DebiasResult, truth: dict[str, float] | None = None) -> dict:
-    """The "debiased" object of `identify --debias N --json`: `DebiasResult.to_json` and,
-    with a virtual log's truth, "truth" and "error_pct" {"ls": ..., "debiased": ...}."""
-    out = res.to_json()
-    out["ls"] = {n: float(v) for n, v in res.ls.items()}
-    out["ls_sigma_corrected"] = {n: (float(v) if math.isfinite(v) else None)
-                                 for n, v in res.ls_sigma.items()}
-    truth = {n: v for n, v in (truth or {}).items() if n in res.estimate and v}
-    if truth:
-        out["truth"] = truth
-        out["error_pct"] = {"ls": {n: _pct(res.ls[n], v) for n, v in truth.items()},
-                            "debiased": {n: _pct(res.estimate[n], v) for n, v in truth.items()}}
-    return out
-
-
-def debias_table(res: DebiasResult, prismatic: bool = False,
-                 truth: dict[str, float] | None = None) -> str:
-    """The bias correction as text (what `jointbench identify --debias N` prints after the LS
-    tables): per parameter the LS value, the bias the replicas show, the corrected value and
-    its 2 sigma, the replicas' spread over the LS corrected sigma and, with truth, the LS and
-    corrected errors in % and in corrected sigmas."""
-    from jointbench.identification.report import cell as num, units
-
-    unit = units(prismatic)
-    truth = {n: v for n, v in (truth or {}).items() if n in res.estimate and v}
-    lines = [f"## Bias correction (parametric bootstrap): {res.replicas} closed-loop replicas "
-             f"of the experiment on the nominal axis at the LS estimate, {res.seconds:.1f} s"
-             + (f"; {len(res.failed)} failed" if res.failed else "")]
-    head = (f"{'Parameter':<10}{'LS':>12}{'bias':>12}{'corrected':>12}{'2 sigma':>12}"
-            f"{'s*/sigma':>9}")
-    if truth:
-        head += f"{'truth':>12}{'LS err %':>10}{'(sigma)':>8}{'error %':>10}{'(sigma)':>8}"
-    head += "  unit"
-    lines += [head, "-" * len(head)]
-
-    for n, est in res.estimate.items():
-        sc = res.ls_sigma.get(n, math.nan)
-        row = (f"{n:<10}{num(res.ls[n])}{num(res.bias[n])}{num(est)}{num(2 * res.sigma[n])}"
-               f"{num(res.spread[n] / sc if sc > 0 else None, 9, '.2f')}")
-        if truth:
-            tv = truth.get(n)
-            row += num(tv)
-            row += num(_pct(res.ls[n], tv), 10, ".3f")
-            row += num((res.ls[n] - tv) / sc if tv and sc > 0 else None, 8, "+.1f")
-            row += num(_pct(est, tv), 10, ".3f")
-            row += num((est - tv) / res.sigma[n] if tv and res.sigma[n] > 0 else None, 8, "+.1f")
-        lines.append(f"{row:<{len(head) - 6}}  {unit.get(n, '')}".rstrip())
-    lines.append("")
-    lines.append("sigma: sqrt(sigma_c^2 + s*^2 / B), sigma_c the LS autocorrelation-consistent "
-                 "sigma, s* the replicas' standard deviation, B the replicas; s*/sigma: s* over "
-                 "sigma_c (about 1 when sigma_c is calibrated)")
-    for note in res.notes:
-        lines.append(f"note: {note}")
-    for reason in res.failed[:5]:
-        lines.append(f"failed: {reason}")
-    return "\n".join(lines)

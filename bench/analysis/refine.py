@@ -1,73 +1,28 @@
 """Closed-loop output-error refinement of a least-squares identification (DIDIM-style).
 
-`jointbench identify --refine`. The paper's least squares (IDIM-LS, `identification.identify`)
-is fast and needs no simulation, but its regressor carries the model's approximations: the
-motor's Coulomb friction as FSm sign(qm'), which is not the friction acting in the stick
-phases at velocity reversals (README "Accuracy": +0.2-0.3 % on Jm), and, for the motor-only
-model, the band-limited fourth derivative of q_m and second derivative of tau_m (eqs. 18-20),
-which leave K, Jm, JL about 1 % off. Output error does not differentiate the data.
-
-Here the LS estimate is the start of a closed-loop output-error fit in the spirit of DIDIM
-(M. Gautier, A. Janot, P.-O. Vandanjon, "A new closed-loop output error method for parameter
-identification of robot dynamics", IEEE Trans. Control Systems Technology 21(2), 2013):
-every candidate parameter vector theta is built into the nominal two-mass MuJoCo axis
-(`bench.nominal.two_mass_axis`: armature Jm, damping FVm, frictionloss FSm on the rotor; link
-inertia JL, damping FV, frictionloss FS, first moments MX, MY; tendon stiffness K), the logged
-experiment is replayed on it in closed loop (`bench.replay.replay`: the log's q_ref through
-the CONTRACT section 2 controller with the metadata gains, zero-order hold), and
+`jointbench identify --refine`. The least-squares estimate (`identification.identify`) is the
+start of a closed-loop output-error fit in the spirit of DIDIM (M. Gautier, A. Janot,
+P.-O. Vandanjon, IEEE Trans. Control Systems Technology 21(2), 2013): each candidate theta is
+built into the nominal two-mass MuJoCo axis (`bench.sim.nominal.two_mass_axis`), the logged
+experiment is replayed on it in closed loop (`bench.sim.replay.replay`, CONTRACT section 2),
+and
 
     min_theta  sum_k ((tau_sim[k](theta) - tau_m[k]) / s_tau)^2
-             [ + sum_k ((q_sim[k](theta) - q[k]) / s_q)^2   when q is logged ]
+             [ + sum_k ((q_sim[k](theta) - q[k]) / s_q)^2   when q is fitted ]
 
-by `scipy.optimize.least_squares` (trust-region reflective, bounds). As in DIDIM the main output
-is the simulated torque: the controller's command is what a closed loop makes sensitive to
-the inertias and the stiffness (the motor position tracks the reference whatever the model).
-The simulation is the nominal axis's, so its Coulomb friction is MuJoCo's `frictionloss`, a
-stick-slip model, not sign(qm'). s_tau and s_q are the RMS output errors at the start, so that
-each output starts with cost 1 (`cost` is the mean squared weighted residual).
+by `scipy.optimize.least_squares` (trust-region reflective, bounds); s_tau, s_q are the RMS
+output errors at the start (`cost` is the mean squared weighted residual, 1 per output at
+the start). theta_i = start_i + |start_i| x_i (x relative to the LS estimate). Bounds: Jm, K,
+JL within [1/5, 5] x start; frictions >= 0; MX, MY free. A friction LS does not give (or gives
+negative) starts at 0.1 x its counterpart (FS from FSm, FV from FVm, and back), off its bound.
+All nine parameters of eq. (13) are free for both models; the q residual is fitted for a
+joint-motor identification only.
 
-Parametrisation: theta_i = start_i + scale_i x_i with scale_i = |start_i|, so
-x is relative to the LS estimate (x = 0 at the start, 0.01 = +1 %), and the optimiser works on
-numbers of order one whatever the units. Bounds: Jm, K, JL within [0.2, 5] x start; frictions
->= 0; MX, MY free. A friction that least squares does not give (FS for motor-only) or gives
-negative starts at 0.1 x its counterpart (FS from FSm, FV from FVm, and back), inside the
-bounds: started on its bound at 0, the trust region crawls away from it (measured on the
-prototype, motor-only: 30 iterations before FS moved, against a handful from 0.1 FSm).
-
-Free parameters (default): all nine of eq. (13), Jm K JL FVm FSm FV FS MX MY, for both
-models. For a joint-motor identification the q residual is fitted beside the torque's; for
-motor-only (no q, or `--model motor-only` on a log with q) the torque alone identifies them
-all in closed loop, the link Coulomb friction FS and the first moment MX included, which the
-motor-only regressor (eqs. 18-20) leaves out or barely sees: on noise-free prototype logs
-(ideal sensors, 10 s) the refinement from the LS estimate (K, Jm, JL 0.1-0.3 % off, FSm
-+11 %, FV +15 %, FS absent, MX -2 %) recovers all nine to 5e-9 %. With MX held at its LS
-value instead (30 s), K, Jm, JL stay 0.005-0.01 % off and MY 0.15 %.
-
-Measured on the prototype with default sensors (60 s chirps, seeds 1-6; README "Refinement"):
-motor-only K, Jm, JL errors from LS's -0.85, +0.48, -0.95 % (mean; worst 1.4 %) to -0.11,
--0.04, -0.13 % (worst 0.31 %), FSm and FV from +15 and +10 % to within 2.4 %; joint-motor
-K -0.36 -> -0.09 %, Jm +0.19 -> -0.02 % (the Coulomb stick bias of the LS regressor gone),
-JL -0.23 -> -0.10 %, while its frictions, already within 1.3 % by LS, come out up to 3 % off:
-the replay runs without the torque noise (37.5 N m RMS, of the size of FSm = 41 N m), which
-in the experiment dithers the motor through its stick phases; a noise-free replay cannot
-reproduce that (seed 1, joint-motor: with the encoder quantisation alone all nine come out
-within 0.011 %; with the torque noise alone FSm +2.9 %, FVm -1.7 %, FS -2.3 %).
-10-25 s per 60 s log on one core (45-117 replays of 0.2 s).
-
-Standard deviations: `sigma` is sigma^2 (J^T J)^-1 in x at the optimum, J the finite-
-difference Jacobian of the weighted residual, sigma^2 = ||r||^2 / (n - p). This assumes white
-residuals; the closed-loop output error is the loop's response to the torque noise and is
-strongly coloured, so this sigma is optimistic: 3.5-9x smaller than the spread of K, Jm, JL
-over the six seeds. `sigma_corrected` is the autocorrelation-consistent sandwich of
-`identification.uncertainty.hac_covariance` on the problem linearised at the optimum: 0.9-2.7x
-the spread there (conservative).
-
-Limits. On the virtual bench the nominal axis has the structure of the model that made the
-data (same MuJoCo friction constraint and integrator), so without noise the refinement is
-exact; with noise what is left is the noise's spread and its dither bias on the frictions. On
-a real robot the structural error stays in the residual. Only two-mass identifications
-(joint-motor, motor-only) of revolute axes are refined; a log without q_ref or without the
-controller gains cannot be replayed (CONTRACT sections 1-2) and raises LogError.
+`sigma`: sigma^2 (J^T J)^-1 at the optimum (white residuals: optimistic, the output error is
+coloured); `sigma_corrected`: the HAC sandwich of `identification.uncertainty.hac_covariance`
+on the linearised problem. Only two-mass identifications of revolute axes are refined; a log
+without q_ref or the controller gains raises LogError. Measured accuracy, uncertainty and
+times: README, "Refinement by closed-loop output error".
 """
 
 from __future__ import annotations
@@ -86,13 +41,14 @@ from jointbench.bench.sim.nominal import SOLREF_FRICTION, compile_axis, two_mass
 from jointbench.bench.sim.replay import ReplayError, ReplayResult, forward_errors, replay
 from jointbench.identification.identify import Identification
 from jointbench.identification.log import Log, LogError
+from jointbench.identification.output import rms
+from jointbench.identification.parameters import FRICTIONS, STIFFNESS_AND_INERTIAS, TWO_MASS
 from jointbench.identification.uncertainty import hac_covariance
 from jointbench.models import Axis
 
-ALL_PARAMETERS = ("Jm", "K", "JL", "FVm", "FSm", "FV", "FS", "MX", "MY")
+ALL_PARAMETERS = TWO_MASS
 FREE = {"joint-motor": ALL_PARAMETERS, "motor-only": ALL_PARAMETERS}
-POSITIVE = ("Jm", "K", "JL")
-FRICTIONS = ("FVm", "FSm", "FV", "FS")
+POSITIVE = STIFFNESS_AND_INERTIAS
 COUNTERPART = {"FS": "FSm", "FV": "FVm", "FSm": "FS", "FVm": "FV"}
 ZERO_START_SHARE = 0.1   # a friction LS does not give starts at 0.1 x its counterpart
 BOUND_FACTOR = 5.0       # Jm, K, JL within [start / 5, 5 x start]
@@ -246,10 +202,6 @@ def simulate(log: Log, theta: dict[str, float], *, substeps: int = 1) -> ReplayR
     return replay(model, axis, log, substeps=substeps)
 
 
-def _rms(x: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(np.square(x))))
-
-
 def _standard_deviations(J: np.ndarray, r: np.ndarray, scale: np.ndarray,
                          free: tuple[str, ...], lengths: list[int]
                          ) -> tuple[dict[str, float], dict[str, float]]:
@@ -338,7 +290,7 @@ def refine(log: Log, ident: Identification, *, params: tuple[str, ...] | None = 
         raise RefineError(f"{log.path or 'the log'}: the least-squares start does not replay: "
                           f"{err}") from None
     sim0 = signals(first)
-    scales = {o: _rms(sim0[o] - measured[o]) for o in outputs}
+    scales = {o: rms(sim0[o] - measured[o]) for o in outputs}
     for o, e in scales.items():
         if not (e > 0 and math.isfinite(e)):
             raise RefineError(f"the replay's {o} equals the measurement (RMS error {e}): nothing "
@@ -413,76 +365,3 @@ def refine(log: Log, ident: Identification, *, params: tuple[str, ...] | None = 
         wall_s=time.perf_counter() - t_start, message=str(sol.message), skip=skip,
         notes=tuple(notes))
 
-
-def _pct(value: float, ref: float) -> float:
-    return 100.0 * (value - ref) / abs(ref)
-
-
-def refined_json(res: RefineResult, ident: Identification,
-                 truth: dict[str, float] | None = None) -> dict:
-    """The "refined" object of `identify --refine --json`: `RefineResult.to_json`, each
-    parameter's least-squares value ("ls", null when least squares does not give it), and
-    with a virtual log's truth "truth" and "error_pct" {"ls": ..., "refined": ...}."""
-    out = res.to_json()
-    for n, entry in out["parameters"].items():
-        v = ident.physical.get(n)
-        entry["ls"] = float(v) if v is not None and math.isfinite(v) else None
-    truth = {n: v for n, v in (truth or {}).items() if n in res.parameters and v}
-    if truth:
-        out["truth"] = truth
-        out["error_pct"] = {
-            "ls": {n: _pct(out["parameters"][n]["ls"], v) for n, v in truth.items()
-                   if n in out["parameters"] and out["parameters"][n]["ls"] is not None},
-            "refined": {n: _pct(res.parameters[n], v) for n, v in truth.items()}}
-    return out
-
-
-def refinement_table(res: RefineResult, ident: Identification,
-                     truth: dict[str, float] | None = None) -> str:
-    """The refinement as text (what `jointbench identify --refine` prints after the LS
-    tables): parameter, LS value, refined value, 2 sigma (white residuals) and, with truth,
-    the LS and refined errors."""
-    from jointbench.identification.report import cell as num, units
-
-    unit = units(ident.prismatic)
-    truth = {n: v for n, v in (truth or {}).items() if n in res.parameters and v}
-    outs = " and ".join(res.outputs)
-    lines = [f"## Refinement (closed-loop output error, DIDIM-style): {len(res.free)} "
-             f"parameters fitted to {outs} over {res.forward_after['samples']} samples;"
-             f" {res.iterations} iterations, {res.replays} replays, {res.wall_s:.1f} s"]
-    head = f"{'Parameter':<10}{'LS':>12}{'refined':>12}{'2 sigma':>12}"
-    if truth:
-        head += f"{'truth':>12}{'LS err %':>10}{'error %':>10}"
-    head += "  unit"
-    lines += [head, "-" * len(head)]
-
-    for n in ALL_PARAMETERS:
-        ls = ident.physical.get(n)
-        fitted = n in res.free
-        row = f"{n:<10}{num(ls)}{num(res.parameters[n])}"
-        row += num(2 * res.sigma[n]) if fitted else f"{'fixed':>12}"
-        if truth:
-            tv = truth.get(n)
-            row += num(tv)
-            row += num(_pct(ls, tv) if tv and ls is not None else None, 10, ".3f")
-            row += num(_pct(res.parameters[n], tv) if tv else None, 10, ".3f")
-        lines.append(f"{row:<{len(head) - 6}}  {unit.get(n, '')}".rstrip())
-    fb, fa = res.forward_before, res.forward_after
-    lines.append("")
-    lines.append(f"cost (mean squared output error over its start value): "
-                 f"{res.cost_before:.4g} -> {res.cost_after:.4g}")
-    pu, fu = fb["position_unit"], fb["torque_unit"]
-    view = (f"forward view: torque {fb['torque_rms']:.4g} -> {fa['torque_rms']:.4g} {fu} RMS "
-            f"({fb['torque_rel_pct']:.3g} % -> {fa['torque_rel_pct']:.3g} % of the measured), "
-            f"q_m {fb['position_rms']:.3g} -> {fa['position_rms']:.3g} {pu}")
-    if "link_position_rms" in fb and "link_position_rms" in fa:
-        view += f", q {fb['link_position_rms']:.3g} -> {fa['link_position_rms']:.3g} {pu}"
-    lines.append(view)
-    if res.sigma_corrected:
-        lines.append("2 sigma, autocorrelation-consistent (the column's assumes white "
-                     "residuals): " + ", ".join(f"{n} {2 * res.sigma_corrected[n]:.4g}"
-                                                for n in ("K", "Jm", "JL")
-                                                if n in res.sigma_corrected))
-    lines.append(f"optimizer: {res.message}")
-    lines += [f"note: {n}" for n in res.notes]
-    return "\n".join(lines)

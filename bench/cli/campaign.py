@@ -21,6 +21,10 @@ from typing import Callable
 
 from jointbench.bench.campaign.settings import SWEEPABLE, CampaignError, RunSettings
 
+# Imported by the dispatcher before it traps signals (see bench/cli/__init__.py).
+LIBRARY = ("jointbench.bench.campaign.run", "jointbench.bench.campaign.summary",
+           "jointbench.bench.campaign.table", "jointbench.bench.effects")
+
 
 def _parse_sweep(text: str) -> tuple[str, tuple[float, ...]]:
     """`NAME=V1,V2,...` -> (NAME, values of NAME's type); CampaignError says what is wrong."""

@@ -18,6 +18,9 @@ from jointbench.identification.parameters import FRICTIONS, STIFFNESS_AND_INERTI
 DEFAULT_ND = (4, 8, 13, 20, 26, 30, 34, 38, 42, 46, 52)
 OBJECTIVE_PARAMS = STIFFNESS_AND_INERTIAS + FRICTIONS   # what --params may name
 
+# Imported by the dispatcher before it traps signals (see bench/cli/__init__.py).
+LIBRARY = ("jointbench.bench.campaign.run", "jointbench.bench.campaign.tuning")
+
 
 def _grid(text: str, kind: type, spaced: Callable[[float, float, int], tuple]) -> tuple:
     """'LO:HI:N' (N values from LO to HI spaced by `spaced`: bench.campaign.tuning's geometric

@@ -30,6 +30,7 @@ from jointbench.bench.sim.loop import LoopChecks, first_warning, run_loop
 from jointbench.bench.sim.nominal import static_link_position
 from jointbench.bench.sim.sensors import Sensors
 from jointbench.identification.log import Log, LogError
+from jointbench.identification.output import rms
 from jointbench.models import Axis
 
 DISTURBANCE_AT = ("link", "motor")
@@ -139,10 +140,6 @@ def replay(model: mujoco.MjModel, axis: Axis, log: Log, disturbance: np.ndarray 
                         disturbance_at=disturbance_at)
 
 
-def _rms(x: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(np.square(x))))
-
-
 def forward_errors(log: Log, result: ReplayResult, skip: int = 0) -> dict[str, float | str | int]:
     """The replay against the measurement, over the samples from `skip` on (to leave out the
     start transient of a log that does not start at rest):
@@ -165,25 +162,25 @@ def forward_errors(log: Log, result: ReplayResult, skip: int = 0) -> dict[str, f
 
     k = slice(skip, None)
     qm = log.q_m[k]
-    e_pos = _rms(result.q_m[k] - qm)
-    e_tau = _rms(result.tau_m[k] - log.tau_m[k])
+    e_pos = rms(result.q_m[k] - qm)
+    e_tau = rms(result.tau_m[k] - log.tau_m[k])
     out: dict = {
         "samples": len(qm),
         "skip": skip,
         "position_unit": "m" if log.prismatic else "rad",
         "torque_unit": "N" if log.prismatic else "N m",
         "position_rms": e_pos,
-        "position_rel_pct": pct(e_pos, _rms(qm - np.mean(qm))),
-        "tracking_rel_pct": (pct(e_pos, _rms(log.q_ref[k] - qm))
+        "position_rel_pct": pct(e_pos, rms(qm - np.mean(qm))),
+        "tracking_rel_pct": (pct(e_pos, rms(log.q_ref[k] - qm))
                              if log.q_ref is not None else None),
         "torque_rms": e_tau,
-        "torque_rel_pct": pct(e_tau, _rms(log.tau_m[k])),
+        "torque_rel_pct": pct(e_tau, rms(log.tau_m[k])),
         "saturated_samples": result.saturated,
     }
     if result.q is not None and log.q is not None:
-        e_q = _rms(result.q[k] - log.q[k])
+        e_q = rms(result.q[k] - log.q[k])
         out["link_position_rms"] = e_q
-        out["link_position_rel_pct"] = pct(e_q, _rms(log.q[k] - np.mean(log.q[k])))
+        out["link_position_rel_pct"] = pct(e_q, rms(log.q[k] - np.mean(log.q[k])))
     return out
 
 
@@ -204,122 +201,3 @@ def simulated_log(log: Log, result: ReplayResult, source: str) -> Log:
     return Log(t=result.t, q_m=result.q_m, tau_m=result.tau_m, q=result.q,
                q_ref=None if log.q_ref is None else log.q_ref.copy(), extra=extra, meta=meta)
 
-
-def plot_replay(log: Log, result: ReplayResult, title: str = ""):
-    """Figure: measured and replayed q_m (and tracking error q_ref - q_m) and tau_m against t.
-    pyplot is imported here; the caller picks the backend."""
-    import matplotlib.pyplot as plt
-
-    pu, fu = ("m", "N") if log.prismatic else ("rad", "N m")
-    fig, ax = plt.subplots(3, 1, figsize=(9, 7.5), sharex=True)
-    ax[0].plot(log.t, log.q_m, lw=0.8, label="measured")
-    ax[0].plot(result.t, result.q_m, lw=0.8, ls="--", label="replay")
-    ax[0].set_ylabel(f"q_m [{pu}]")
-    if log.q_ref is not None:
-        ax[1].plot(log.t, log.q_ref - log.q_m, lw=0.8, label="measured")
-        ax[1].plot(result.t, log.q_ref - result.q_m, lw=0.8, ls="--", label="replay")
-        ax[1].set_ylabel(f"q_ref - q_m [{pu}]")
-    ax[2].plot(log.t, log.tau_m, lw=0.8, label="measured")
-    ax[2].plot(result.t, result.tau_m, lw=0.8, ls="--", label="replay")
-    ax[2].set_ylabel(f"tau_m [{fu}]")
-    ax[2].set_xlabel("t [s]")
-    for a in ax:
-        a.legend(loc="upper right", fontsize=8)
-        a.grid(alpha=0.3)
-    if title:
-        fig.suptitle(title)
-    fig.tight_layout()
-    return fig
-
-
-@dataclass(frozen=True)
-class ReplayReport:
-    """A replay run from a log file (`replay_log_file`): what was replayed on which model and
-    how it compares (`forward_errors`)."""
-
-    log: Log
-    result: ReplayResult
-    errors: dict
-    model: str                            # "nominal rigid", "nominal joint-motor" or the file
-    axis: str
-    parameters: dict[str, float] | None   # the identified parameters of a nominal model
-    notes: tuple[str, ...] = ()
-    spec: mujoco.MjSpec | None = None     # the nominal axis (None when a model was given)
-
-
-def replay_log_file(path, model: str | None = None, joint: str | None = None,
-                    config: dict[str, float] | None = None, lock: str = "rigid",
-                    substeps: int = 1, tau0: float | None = None, skip: int = 0,
-                    identify_model: str = "auto") -> ReplayReport:
-    """Read the log at `path` and replay it (`replay`) on `model` (shipped name or MJCF file,
-    through `bench.axes.build_experiment_model` with the other axes locked as `config`
-    says), or without a model on the nominal axis of its own identification
-    (`identification.identify.identify(log, identify_model)`, then `bench.nominal.for_log`).
-    """
-    from jointbench.identification.identify import identify
-    from jointbench.identification.log import read_log
-
-    log = read_log(path)
-    if log.q_ref is None:
-        raise LogError("cannot replay: the log has no column 'q_ref' (the reference the "
-                       "controller tracked)", log.path, column="q_ref")
-    gains = Gains.from_log(log)
-    notes: list[str] = []
-    if model is None:
-        from jointbench.bench.sim.nominal import compile_axis, for_log
-
-        ident = identify(log, identify_model)
-        notes += [f"identify: {n}" for n in ident.notes]
-        nominal = for_log(ident, log, joint)
-        notes += [f"nominal: {n}" for n in nominal.notes]
-        m, axis = compile_axis(nominal.spec, f"nominal {nominal.model} axis of {path}")
-        label, params, spec = f"nominal {nominal.model}", dict(nominal.parameters), nominal.spec
-    else:
-        from jointbench.bench.sim.axes import build_experiment_model
-
-        start = log.q[0] if log.q is not None else log.q_m[0]
-        exp = build_experiment_model(model, joint, config=config, center=float(start),
-                                     lock=lock, substeps=substeps,
-                                     sample_rate_hz=log.sample_rate_hz, tau_max=gains.tau_max)
-        m, axis, label, params, spec = exp.model, exp.axis, str(exp.source), None, None
-    result = replay(m, axis, log, substeps=substeps, tau0=tau0)
-    return ReplayReport(log=log, result=result, errors=forward_errors(log, result, skip),
-                        model=label, axis=axis.name, parameters=params, notes=tuple(notes),
-                        spec=spec)
-
-
-def format_report(rep: ReplayReport) -> str:
-    """The forward comparison as text (what `jointbench simulate --replay` prints)."""
-    log, e = rep.log, rep.errors
-    g = Gains.from_log(log)
-    pu, fu = e["position_unit"], e["torque_unit"]
-    lines = [f"replayed {log.path}: {len(log)} samples at {log.sample_rate_hz:g} Hz in closed "
-             f"loop (CONTRACT section 2: kp {g.kp:g}, kv {g.kv:g}, ki {g.ki:g}, tau_max "
-             f"{g.tau_max:g}, velocity feed-forward {'on' if g.velocity_feedforward else 'off'}) "
-             f"on {rep.model}, axis {rep.axis}"]
-    if rep.parameters:
-        lines.append("model: " + ", ".join(f"{k} = {v:.6g}" for k, v in rep.parameters.items()))
-
-    def pct(x, what):
-        return "" if x is None else f", {x:.3g} % of {what}"
-
-    span = f" (from sample {e['skip']})" if e["skip"] else ""
-    lines.append(f"position q_m{span}: RMS error {e['position_rms']:.4g} {pu}"
-                 f"{pct(e['position_rel_pct'], 'the motion')}"
-                 f"{pct(e['tracking_rel_pct'], 'the measured tracking error')}")
-    if "link_position_rms" in e:
-        lines.append(f"link position q: RMS error {e['link_position_rms']:.4g} {pu}"
-                     f"{pct(e['link_position_rel_pct'], 'the motion')}")
-    lines.append(f"{'force' if log.prismatic else 'torque'} tau_m{span}: RMS error "
-                 f"{e['torque_rms']:.4g} {fu}{pct(e['torque_rel_pct'], 'the measured RMS')}")
-    lines.append(f"saturated samples in the replay: {rep.result.saturated}")
-    lines += [f"note: {n}" for n in rep.notes]
-    return "\n".join(lines)
-
-
-def report_json(rep: ReplayReport) -> dict:
-    """The JSON object of `jointbench simulate --replay --json`."""
-    return {"replay": str(rep.log.path), "model": rep.model, "axis": rep.axis,
-            "parameters": rep.parameters, "samples": len(rep.log),
-            "saturated_samples": rep.result.saturated, "errors": rep.errors,
-            "notes": list(rep.notes)}

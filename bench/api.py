@@ -1,0 +1,153 @@
+"""The public Python API, for a notebook or a script (re-exported by `import jointbench`):
+
+    import jointbench as jb
+    log = jb.simulate("prototype", seed=1)     # a virtual experiment's Log
+    fit = jb.identify(log)                     # fit.table(), fit.to_json(), fit.plot()
+    d = jb.diagnose(log); d.write("out/")
+
+Computations return frozen dataclasses; their text, JSON, figures and files come from the
+presentation layer (`bench.present`, `bench.analysis.diagnose.report`), as on the command line.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Callable
+
+from jointbench.bench.analysis.diagnose.report import write as write_diagnosis
+from jointbench.bench.analysis.diagnose.run import Diagnosis, summary_text
+from jointbench.bench.analysis.diagnose.run import diagnose as diagnose_log
+from jointbench.bench.effects import HiddenEffect, parse_effect
+from jointbench.bench.present.identify import identify_json, identify_text
+from jointbench.bench.sim.experiment import run_experiment
+from jointbench.identification.checks import estimate_flags
+from jointbench.identification.filtering import FilterSettings
+from jointbench.identification.identify import Identification
+from jointbench.identification.identify import identify as identify_log
+from jointbench.identification.log import Log, read_log, unit_warnings, write_log
+from jointbench.identification.output import finite_json
+from jointbench.identification.plots import plot_validation
+
+if TYPE_CHECKING:
+    import matplotlib.figure
+
+__all__ = ["Fit", "DiagnosisResult", "Log", "simulate", "identify", "diagnose", "read_log",
+           "write_log"]
+
+LogLike = Log | str | os.PathLike
+
+
+def _as_log(log: LogLike) -> Log:
+    return log if isinstance(log, Log) else read_log(log)
+
+
+def simulate(model: str | os.PathLike = "prototype", joint: str | None = None, *,
+             duration: float = 60.0, seed: int = 0, effect: str | HiddenEffect | None = None,
+             **options) -> Log:
+    """One virtual closed-loop chirp experiment on `model` (prototype, arm6 or an MJCF file
+    following the axis convention), as a Log (CONTRACT section 1; its truth in `log.truth()`).
+    `duration` [s]; `effect` a hidden effect, e.g. "backlash=0.002" (CONTRACT section 4);
+    `options` go to `bench.sim.experiment.run_experiment` (amplitude, config, lock, sensors,
+    sample_rate_hz, ...). Raises SimulationError, ModelStructureError, ValueError."""
+    if isinstance(effect, str):
+        effect = parse_effect(effect)
+    return run_experiment(model, joint, duration=duration, seed=seed, effect=effect,
+                          **options).log
+
+
+@dataclass(frozen=True)
+class Fit:
+    """An identification of a log (`identify`): `result` the estimator's answer, `truth` the
+    log's ground truth (None for measured data), `flags` and `warnings` on the estimate and
+    the log's units."""
+
+    log: Log
+    result: Identification
+    truth: dict[str, float] | None
+    flags: tuple[dict, ...]
+    warnings: tuple[str, ...]
+
+    @property
+    def model(self) -> str:
+        return self.result.model
+
+    @property
+    def parameters(self) -> dict[str, float]:
+        """The physical parameters (SI, joint side)."""
+        return dict(self.result.physical)
+
+    @property
+    def sigma(self) -> dict[str, float]:
+        """Their standard deviations (the paper's, white residuals)."""
+        return dict(self.result.physical_sigma)
+
+    def table(self) -> str:
+        """The text `jointbench identify` prints."""
+        return identify_text(str(self.log.path or "log"), self.log, self.result, self.truth,
+                             list(self.flags))
+
+    def to_json(self) -> dict:
+        """The `identify --json` object (CONTRACT section 3), strict JSON (NaN as null)."""
+        return finite_json(identify_json(self.result, self.truth, list(self.flags),
+                                         list(self.warnings)))
+
+    def plot(self, path: str | os.PathLike | None = None) -> matplotlib.figure.Figure:
+        """The direct validation (paper's Figure 2): measured and predicted torque; saved
+        atomically to `path` when given. pyplot is used: pick the backend first."""
+        r = self.result
+        rows = r.block == 0
+        return plot_validation(r.t[rows], r.y[rows], r.y_pred[rows], r.relative_error_pct,
+                               path, title=f"Direct validation, {r.model} model")
+
+
+def identify(log: LogLike, model: str = "auto", settings: FilterSettings | None = None, *,
+             f1_hz: float | None = None) -> Fit:
+    """Identify the axis parameters of `log` (a Log or a log file) with `model`
+    (joint-motor, motor-only, motor-only-printed, rigid or auto; paper eqs. 13, 18-20, 6).
+    Raises LogError, NotIdentifiable, InversionError (ValueErrors)."""
+    log = _as_log(log)
+    result = identify_log(log, model, settings, f1_hz=f1_hz)
+    flags = estimate_flags(result.physical, result.physical_sigma, log.prismatic)
+    return Fit(log, result, log.truth() or None, tuple(flags), tuple(unit_warnings(log)))
+
+
+@dataclass(frozen=True)
+class DiagnosisResult:
+    """What the simulation gets wrong on a log (`diagnose`): the named causes, the extended
+    model and its gain; `diagnosis` holds everything the analysis found."""
+
+    diagnosis: Diagnosis
+
+    @property
+    def named_cause(self) -> str:
+        return self.diagnosis.named_cause
+
+    @property
+    def files(self) -> tuple[str, ...]:
+        return self.diagnosis.files
+
+    def table(self) -> str:
+        """The text `jointbench diagnose` prints."""
+        return summary_text(self.diagnosis)
+
+    def to_json(self) -> dict:
+        """The `diagnose --json` object (CONTRACT section 3)."""
+        return self.diagnosis.to_json()
+
+    def write(self, out: str | os.PathLike,
+              progress: Callable[[str], None] | None = None) -> DiagnosisResult:
+        """Write figures, report.md, diagnosis.json and the models into folder `out`
+        (created); the result with the files written."""
+        done = write_diagnosis(self.diagnosis, Path(out), progress or (lambda msg: None))
+        return dataclasses.replace(self, diagnosis=done)
+
+
+def diagnose(log: LogLike, forward: bool = True,
+             progress: Callable[[str], None] | None = None) -> DiagnosisResult:
+    """Diagnose `log` (a Log or a log file) against its own nominal model: the candidate
+    effects, the named causes, the extended model, its gain in the inverse and (with
+    `forward`) the closed-loop forward views. Writes nothing (see DiagnosisResult.write)."""
+    return DiagnosisResult(diagnose_log(_as_log(log), forward=forward, progress=progress))

@@ -1,0 +1,104 @@
+"""`jointbench diagnose FILE`: what the simulation gets wrong on a log, the named causes, the
+extended model and its gain (CONTRACT section 3), optionally cross-validated on another log."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Callable
+
+from jointbench.bench.cli.common import UsageError, finite
+
+# The library `run` imports, loaded by the dispatcher before it traps the signals.
+LIBRARY = ("jointbench.bench.analysis.diagnose.forward",
+           "jointbench.bench.analysis.diagnose.run")
+
+
+def add_arguments(g: argparse.ArgumentParser) -> None:
+    """The options of `diagnose`."""
+    g.add_argument("file", help="log file (CONTRACT section 1)")
+    g.add_argument("--out", help="folder for figures, report.md, nominal.xml, extended.xml")
+    g.add_argument("--json", action="store_true", help="print the CONTRACT JSON object")
+    g.add_argument("--no-forward", action="store_true",
+                   help="skip the closed-loop replay (forward view)")
+    g.add_argument("--quiet", action="store_true", help="no progress messages")
+    g.add_argument("--validate", metavar="OTHER.csv",
+                   help="cross-validation: evaluate the nominal and extended models, identified "
+                        "on FILE, on this other log (inverse and forward views)")
+    g.add_argument("--disturbance-column", metavar="COL",
+                   help="a column of the --validate log applied as a disturbance in its replay")
+    g.add_argument("--disturbance-gain", type=finite, default=1.0,
+                   help="scale of the disturbance column (default 1; EMPS pulses are volts: "
+                        "35.15065188 N/V)")
+    g.add_argument("--disturbance-at", choices=("link", "motor"), default="link",
+                   help="where the disturbance acts: on the link/carriage or added to the motor "
+                        "command (default link)")
+
+
+def _progress(args: argparse.Namespace) -> Callable[[str], None]:
+    """Progress lines on stderr, or nothing with --json or --quiet."""
+    if args.json or args.quiet:
+        return lambda msg: None
+    return lambda msg: print(f"diagnose: {msg}", file=sys.stderr, flush=True)
+
+
+def _output_folder(args: argparse.Namespace) -> Path | None:
+    out = Path(args.out) if args.out else None
+    if out is not None and out.exists() and not out.is_dir():
+        raise UsageError(f"--out {out}: exists and is not a folder")
+    return out
+
+
+def _cross_validation_text(args: argparse.Namespace, xval: dict) -> str:
+    """The cross-validation errors, one line per view and model."""
+    lines = [f"\ncross-validation on {args.validate} (models identified and extended on "
+             f"{args.file}, unchanged):"]
+    for view, rows in xval.items():
+        for label, vals in rows.items():
+            lines.append(f"  {view:8s} {label:9s} " + ", ".join(
+                f"{k} {v:.4g}" for k, v in vals.items()))
+    return "\n".join(lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Diagnose the log (and cross-validate); print the summary or the JSON object; with
+    --out the report files."""
+    from jointbench.bench.analysis.diagnose.forward import cross_validate
+    from jointbench.bench.analysis.diagnose.run import diagnose, summary_text
+    from jointbench.identification.log import LogError, atomic_write_text, read_log
+
+    log = read_log(args.file)
+    say = _progress(args)
+    out = _output_folder(args)
+    other = read_log(args.validate) if args.validate else None
+    if other is not None and Path(args.validate).resolve() == Path(args.file).resolve():
+        raise UsageError("--validate must name another log than FILE (cross-validation)")
+    dist = None
+    if args.disturbance_column:
+        if other is None:
+            raise UsageError("--disturbance-column applies to the --validate log")
+        if args.disturbance_column not in other.extra:
+            raise LogError(f"no column '{args.disturbance_column}' (columns: "
+                           f"{', '.join(['t', 'q_m', 'tau_m', *other.extra])})", other.path,
+                           column=args.disturbance_column)
+        dist = args.disturbance_gain * other.extra[args.disturbance_column]
+    d = diagnose(log, out_dir=out, forward=not args.no_forward, progress=say)
+    xval = None
+    if other is not None:
+        say(f"cross-validation on {args.validate}")
+        xval = cross_validate(d, other, dist, args.disturbance_at)
+    if args.json:
+        doc = d.to_json()
+        if xval is not None:
+            doc["cross_validation"] = {"file": str(args.validate), **xval}
+        print(json.dumps(doc))
+    else:
+        print(summary_text(d))
+        if xval is not None:
+            print(_cross_validation_text(args, xval))
+    if xval is not None and out is not None:
+        atomic_write_text(out / "cross_validation.json",
+                          json.dumps({"file": str(args.validate), **xval}, indent=2) + "\n")
+    return 0
