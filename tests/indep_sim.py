@@ -34,6 +34,7 @@ STEP_FRICTION = 2.0      # and the stiffest friction rate times dt at most this 
                          # stability limit is 2.785): the smoothed Coulomb slope FS / v_s is stiff
 ACCELERATION_SHARE = 0.4  # the chirp's rigid-body torque (Jm + JL) A w^2 stays under this share
                           # of tau_max, the rule of bench.sim.experiment.default_chirp
+DEFAULT_TAPER = 2.0       # s, the raised-cosine fades of the default reference
 MAX_REDUCTIONS = 6        # the default reference shrinks at most this many times
 
 
@@ -216,7 +217,7 @@ class Reference:
     f_lo: float = 0.05
     f_hi: float = 30.0
     amplitude: float = 0.1
-    taper: float = 2.0
+    taper: float = DEFAULT_TAPER
     max_acceleration: float = math.inf
 
     def __post_init__(self):
@@ -271,7 +272,8 @@ def simulate(family: AxisFamily, seed: int = 1, duration: float = 60.0, sweep: s
              ideal_sensors: bool = False) -> Log:
     """One closed-loop chirp experiment on `family`, as a jointbench log (CONTRACT section 1).
 
-    The default reference is `Reference(duration, sweep)` (0.05-30 Hz, 0.1 rad, 2 s tapers)
+    The default reference is `Reference(duration, sweep)` (0.05-30 Hz, 0.1 rad, 2 s tapers,
+    a quarter of the duration in logs under 8 s)
     with its acceleration capped at ACCELERATION_SHARE tau_max / (Jm + JL); the default gains
     are `gains_rule(Jm, JL, K, tau_max, T)` (the bench's rule). The link rests at `center`
     [rad] in static equilibrium (the motor deflected by the gravity torque / K, the integrator
@@ -281,8 +283,9 @@ def simulate(family: AxisFamily, seed: int = 1, duration: float = 60.0, sweep: s
     n_sub = default_substeps(family, sample_rate_hz) if substeps is None else substeps
     auto = reference is None
     if reference is None:
-        reference = Reference(duration, sweep, max_acceleration=ACCELERATION_SHARE
-                              * family.tau_max / (family.Jm + family.JL))
+        reference = Reference(duration, sweep, taper=min(DEFAULT_TAPER, duration / 4),
+                              max_acceleration=ACCELERATION_SHARE * family.tau_max
+                              / (family.Jm + family.JL))
     if gains is None:
         gains = gains_rule(family.Jm, family.JL, family.K, family.tau_max, T)
     gains = replace(gains, velocity_feedforward=feedforward)
