@@ -11,12 +11,17 @@ motor-only,
   (b) `f1+st5`: the true first mode (`f1_hz=truth`, through `defaults.settings_for`) and the
       5-point central difference (`FilterSettings.stencil = 5`).
 Printed: the errors of K, Jm and JL against the truth in %, and the filter used.
-Nothing is asserted: this measures.
+
+`--cross-check` adds the two simulators side by side: the paper's prototype simulated by
+MuJoCo (`run_experiment("prototype")`, seed 1, 60 s) and the same axis (its truth, sensors,
+gains rule, gravity and rest angle) simulated here, both identified the same way, with and
+without feedforward. Nothing is asserted: this measures.
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
 from dataclasses import replace
@@ -25,7 +30,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
-from indep_sim import FAMILIES, simulate  # noqa: E402
+from indep_sim import FAMILIES, AxisFamily, simulate  # noqa: E402
 
 from jointbench.identification.defaults import settings_for  # noqa: E402
 from jointbench.identification.estimate import NotIdentifiable  # noqa: E402
@@ -61,11 +66,49 @@ def errors(log: Log, model: str, settings: FilterSettings | None) -> tuple[list[
                    f"stencil {s.stencil}")
 
 
+def family_from_log(log: Log) -> AxisFamily:
+    """The axis a jointbench virtual log describes: its truth_* keys, tau_max and sensors."""
+    tr, meta = log.truth(), log.meta
+    return AxisFamily(
+        meta.get("joint", "axis"), "from a MuJoCo log", Jm=tr["Jm"], JL=tr["JL"], K=tr["K"],
+        FVm=tr["FVm"], FSm=tr["FSm"], FV=tr["FV"], FS=tr["FS"],
+        tau_max=float(meta["tau_max"]), torque_noise_std=float(meta["torque_noise_std"]),
+        MX=tr["MX"], MY=tr["MY"],
+        motor_counts_per_turn=2 * math.pi / float(meta["motor_encoder_resolution_rad"]),
+        link_counts_per_turn=2 * math.pi / float(meta["link_encoder_resolution_rad"]))
+
+
+def cross_check(duration: float, seed: int) -> None:
+    """The prototype by MuJoCo and by indep_sim (log sweep, the bench's default), identified
+    alike: the two simulators should give the same errors."""
+    from jointbench.bench.sim.controller import Gains  # MuJoCo only for this section
+    from jointbench.bench.sim.experiment import run_experiment
+
+    print("\ncross-check: the paper's prototype by MuJoCo and by indep_sim")
+    base = run_experiment("prototype", duration=duration, seed=seed).log
+    for feedforward in (True, False):
+        gains = replace(Gains.from_log(base), velocity_feedforward=feedforward)
+        mj = run_experiment("prototype", duration=duration, seed=seed, gains=gains).log
+        family = family_from_log(mj)
+        ours = simulate(family, seed, duration, "log", feedforward,
+                        center=float(mj.meta["truth_center"]))
+        for source, log in (("mujoco", mj), ("indep_sim", ours)):
+            for model in MODELS:
+                for label, settings in settings_cases(log).items():
+                    cells, used = errors(log, model, settings)
+                    print(f"{'prototype':<12} {family.f1_hz:6.2f} "
+                          f"{family.JL / family.Jm:6.2g} {'on' if feedforward else 'off':>3} "
+                          f"{source:<10} {model:<11} {label:<8} "
+                          + " ".join(f"{c:>8}" for c in cells) + f"  {used}", flush=True)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--duration", type=float, default=60.0)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--families", default=",".join(FAMILIES))
+    parser.add_argument("--cross-check", action="store_true",
+                        help="also the prototype by MuJoCo and by indep_sim, side by side")
     args = parser.parse_args(argv)
     header = (f"{'family':<12} {'f1 Hz':>6} {'JL/Jm':>6} {'ff':>3} {'sweep':<6} "
               f"{'model':<11} {'settings':<8} {'K %':>8} {'Jm %':>8} {'JL %':>8}  filter")
@@ -89,6 +132,8 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"{'':<12} (saturated samples {log.meta['saturated_samples']}, amplitude "
                       f"reductions {log.meta['amplitude_reductions']}, substeps "
                       f"{log.meta['substeps']})")
+    if args.cross_check:
+        cross_check(args.duration, args.seed)
     print(f"wall time {time.perf_counter() - start:.0f} s")
     return 0
 
