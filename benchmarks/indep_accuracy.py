@@ -1,0 +1,142 @@
+"""Accuracy of `identify` on logs of the independent (non-MuJoCo) simulator, tests/indep_sim.py.
+
+    .venv/bin/python benchmarks/indep_accuracy.py [--duration 60] [--seed 1] [--families a,b]
+
+For every axis family of `indep_sim.FAMILIES` (JL/Jm 0.5-10, f1 4-20 Hz), with and without
+velocity feedforward, linear and logarithmic sweeps (60 s, seed 1, default sensors: quantised
+encoders and torque noise), the log is identified by
+`jointbench.identification.identify.identify(log, model)` for the models joint-motor and
+motor-only,
+  (a) `defaults`: no settings, no f1 (what `jointbench identify FILE` does today);
+  (b) `f1+st5`: the true first mode (`f1_hz=truth`, through `defaults.settings_for`) and the
+      5-point central difference (`FilterSettings.stencil = 5`).
+Printed: the errors of K, Jm and JL against the truth in %, and the filter used.
+
+`--cross-check` adds the two simulators side by side: the paper's prototype simulated by
+MuJoCo (`run_experiment("prototype")`, seed 1, 60 s) and the same axis (its truth, sensors,
+gains rule, gravity and rest angle) simulated here, both identified the same way, with and
+without feedforward. Nothing is asserted: this measures.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+
+from indep_sim import FAMILIES, AxisFamily, simulate  # noqa: E402
+
+from jointbench.identification.defaults import settings_for  # noqa: E402
+from jointbench.identification.estimate import NotIdentifiable  # noqa: E402
+from jointbench.identification.filtering import FilterSettings  # noqa: E402
+from jointbench.identification.identify import identify  # noqa: E402
+from jointbench.identification.log import Log, LogError  # noqa: E402
+from jointbench.identification.output import pct_error  # noqa: E402
+from jointbench.identification.physical import InversionError  # noqa: E402
+
+MODELS = ("joint-motor", "motor-only")
+PARAMS = ("K", "Jm", "JL")
+
+
+def settings_cases(log: Log) -> dict[str, FilterSettings | None]:
+    """(a) the defaults (None: identify chooses), (b) the true f1 and the 5-point stencil."""
+    tuned, _ = settings_for(log, log.truth()["f1_hz"])
+    return {"defaults": None, "f1+st5": replace(tuned, stencil=5)}
+
+
+def errors(log: Log, model: str, settings: FilterSettings | None) -> tuple[list[str], str]:
+    """The K, Jm, JL errors in % as table cells, and the filter used (or the failure)."""
+    try:
+        result = identify(log, model, settings=settings)
+    except (InversionError, NotIdentifiable, LogError, ValueError) as err:
+        return ["-"] * len(PARAMS), f"failed: {err}"
+    truth = log.truth()
+    cells = []
+    for name in PARAMS:
+        err = pct_error(result.physical.get(name), truth[name])
+        cells.append("nan" if err is None else f"{err:+.2f}")
+    s = result.settings
+    return cells, (f"wn {s.wn:.0f} rad/s, Nd {s.Nd} (cut {s.decimated_cutoff_hz:.1f} Hz), "
+                   f"stencil {s.stencil}")
+
+
+def family_from_log(log: Log) -> AxisFamily:
+    """The axis a jointbench virtual log describes: its truth_* keys, tau_max and sensors."""
+    tr, meta = log.truth(), log.meta
+    return AxisFamily(
+        meta.get("joint", "axis"), "from a MuJoCo log", Jm=tr["Jm"], JL=tr["JL"], K=tr["K"],
+        FVm=tr["FVm"], FSm=tr["FSm"], FV=tr["FV"], FS=tr["FS"],
+        tau_max=float(meta["tau_max"]), torque_noise_std=float(meta["torque_noise_std"]),
+        MX=tr["MX"], MY=tr["MY"],
+        motor_counts_per_turn=2 * math.pi / float(meta["motor_encoder_resolution_rad"]),
+        link_counts_per_turn=2 * math.pi / float(meta["link_encoder_resolution_rad"]))
+
+
+def cross_check(duration: float, seed: int) -> None:
+    """The prototype by MuJoCo and by indep_sim (log sweep, the bench's default), identified
+    alike: the two simulators should give the same errors."""
+    from jointbench.bench.sim.controller import Gains  # MuJoCo only for this section
+    from jointbench.bench.sim.experiment import run_experiment
+
+    print("\ncross-check: the paper's prototype by MuJoCo and by indep_sim")
+    base = run_experiment("prototype", duration=duration, seed=seed).log
+    for feedforward in (True, False):
+        gains = replace(Gains.from_log(base), velocity_feedforward=feedforward)
+        mj = run_experiment("prototype", duration=duration, seed=seed, gains=gains).log
+        family = family_from_log(mj)
+        ours = simulate(family, seed, duration, "log", feedforward,
+                        center=float(mj.meta["truth_center"]))
+        for source, log in (("mujoco", mj), ("indep_sim", ours)):
+            for model in MODELS:
+                for label, settings in settings_cases(log).items():
+                    cells, used = errors(log, model, settings)
+                    print(f"{'prototype':<12} {family.f1_hz:6.2f} "
+                          f"{family.JL / family.Jm:6.2g} {'on' if feedforward else 'off':>3} "
+                          f"{source:<10} {model:<11} {label:<8} "
+                          + " ".join(f"{c:>8}" for c in cells) + f"  {used}", flush=True)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--duration", type=float, default=60.0)
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--families", default=",".join(FAMILIES))
+    parser.add_argument("--cross-check", action="store_true",
+                        help="also the prototype by MuJoCo and by indep_sim, side by side")
+    args = parser.parse_args(argv)
+    header = (f"{'family':<12} {'f1 Hz':>6} {'JL/Jm':>6} {'ff':>3} {'sweep':<6} "
+              f"{'model':<11} {'settings':<8} {'K %':>8} {'Jm %':>8} {'JL %':>8}  filter")
+    print(f"identify on indep_sim logs: {args.duration:g} s, seed {args.seed}, 350.87 Hz, "
+          "errors against truth in %")
+    print(header)
+    print("-" * len(header))
+    start = time.perf_counter()
+    for name in args.families.split(","):
+        family = FAMILIES[name]
+        for feedforward in (True, False):
+            for sweep in ("linear", "log"):
+                log = simulate(family, args.seed, args.duration, sweep, feedforward)
+                run = (f"{name:<12} {family.f1_hz:6.2f} {family.JL / family.Jm:6.2g} "
+                       f"{'on' if feedforward else 'off':>3} {sweep:<6}")
+                for model in MODELS:
+                    for label, settings in settings_cases(log).items():
+                        cells, used = errors(log, model, settings)
+                        print(f"{run} {model:<11} {label:<8} "
+                              + " ".join(f"{c:>8}" for c in cells) + f"  {used}", flush=True)
+                print(f"{'':<12} (saturated samples {log.meta['saturated_samples']}, amplitude "
+                      f"reductions {log.meta['amplitude_reductions']}, substeps "
+                      f"{log.meta['substeps']})")
+    if args.cross_check:
+        cross_check(args.duration, args.seed)
+    print(f"wall time {time.perf_counter() - start:.0f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
