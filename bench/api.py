@@ -17,9 +17,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable
 
-from jointbench.bench.analysis.diagnose.report import write as write_diagnosis
-from jointbench.bench.analysis.diagnose.run import Diagnosis, summary_text
-from jointbench.bench.analysis.diagnose.run import diagnose as diagnose_log
+from jointbench.bench.analysis.diagnose import Diagnosis, summary_text
+from jointbench.bench.analysis.diagnose import diagnose as diagnose_log
+from jointbench.bench.analysis.diagnose import write as write_diagnosis
 from jointbench.bench.effects import HiddenEffect, parse_effect
 from jointbench.bench.present.identify import identify_json, identify_text
 from jointbench.bench.sim.experiment import run_experiment
@@ -48,8 +48,8 @@ def simulate(model: str | os.PathLike = "prototype", joint: str | None = None, *
              duration: float = 60.0, seed: int = 0, effect: str | HiddenEffect | None = None,
              **options) -> Log:
     """One virtual closed-loop chirp experiment on `model` (prototype, arm6 or an MJCF file
-    following the axis convention), as a Log (CONTRACT section 1; its truth in `log.truth()`).
-    `duration` [s]; `effect` a hidden effect, e.g. "backlash=0.002" (CONTRACT section 4);
+    following the axis convention), as a Log (docs/log-format.md; its truth in `log.truth()`).
+    `duration` [s]; `effect` a hidden effect, e.g. "backlash=0.002" (docs/effects.md);
     `options` go to `bench.sim.experiment.run_experiment` (amplitude, config, lock, sensors,
     sample_rate_hz, ...). Raises SimulationError, ModelStructureError, ValueError."""
     if isinstance(effect, str):
@@ -90,7 +90,7 @@ class Fit:
                              list(self.flags))
 
     def to_json(self) -> dict:
-        """The `identify --json` object (CONTRACT section 3), strict JSON (NaN as null)."""
+        """The `identify --json` object (docs/cli.md), strict JSON (NaN as null)."""
         return finite_json(identify_json(self.result, self.truth, list(self.flags),
                                          list(self.warnings)))
 
@@ -134,7 +134,7 @@ class DiagnosisResult:
         return summary_text(self.diagnosis)
 
     def to_json(self) -> dict:
-        """The `diagnose --json` object (CONTRACT section 3)."""
+        """The `diagnose --json` object (docs/cli.md)."""
         return self.diagnosis.to_json()
 
     def write(self, out: str | os.PathLike,

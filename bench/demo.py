@@ -127,7 +127,7 @@ def run_demo(out: Path, duration: float = 60.0, seed: int = 1) -> int:
 
 
 def _bias_correction(log, jm, mo, truth: dict[str, float], say, replicas: int = 8) -> None:
-    """Both two-mass estimates bias-corrected by closed-loop replicas (bench/debias.py,
+    """Both two-mass estimates bias-corrected by closed-loop replicas (bench/analysis/debias.py,
     `identify --debias`)."""
     from jointbench.bench.analysis.debias import debias
     from jointbench.bench.present.debias import debias_table
@@ -146,7 +146,7 @@ def _bias_correction(log, jm, mo, truth: dict[str, float], say, replicas: int = 
 
 
 def _discrepancy_example(out: Path, duration: float, seed: int, say) -> None:
-    """One discrepancy example (CONTRACT section 3): the prototype with backlash hidden; only
+    """One discrepancy example (docs/cli.md): the prototype with backlash hidden; only
     the log goes to diagnose, which must find it, extend the model and measure the gain."""
     import dataclasses
 

@@ -8,7 +8,7 @@
    the mean paper-style sigma and the mean corrected sigma (identification/uncertainty.py,
    when present), std / sigma, and the +-2 sigma coverage with its 95 % interval. The table
    `OUT/coverage.csv` resumes if the run is interrupted (run the same command again).
-   Then the same 200 runs with `--debias 8` (bench/debias.py): every two-mass estimate also
+   Then the same 200 runs with `--debias 8` (bench/analysis/debias.py): every two-mass estimate also
    bias-corrected by 8 closed-loop replicas, whose coverage the summary gives as the models
    "joint-motor (bias-corrected)" and "motor-only (bias-corrected)" (`OUT/coverage_debias.csv`;
    about 9x the runtime of the first).

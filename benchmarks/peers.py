@@ -12,7 +12,7 @@ duration, seed)`, default sensors, seeds 101, 102, ...), each method identifies 
    Open-loop replay of the logged torque drifts away (the rigid-body mode is free and the
    link is gravity-unstable about q0), so the replay is closed-loop: `custom_rollout`
    re-runs the log's own discrete controller (bench.controller.PIController, the gains and
-   reference of the log, CONTRACT section 2) on every candidate model. sysid's own rollout
+   reference of the log, docs/controller.md) on every candidate model. sysid's own rollout
    is not used, which also steps around its current pitfalls: it maps `range(model.nu)` to
    actuators (wrong for multi-input actuators) and labels its rollout sensor rows one step
    late (row k is computed at t_k but stamped t_k+1); here row k is the state at t_k, the
@@ -157,7 +157,7 @@ def sysid_parameters(truth: dict[str, float], spec):
 
 def closed_loop_rollout(log: Log):
     """A sysid custom_rollout: every candidate model tracks the log's q_ref under the log's
-    own controller (CONTRACT section 2); returns trajectories whose row k is the sample at
+    own controller (docs/controller.md); returns trajectories whose row k is the sample at
     t_k (q_m, q, tau_m). The controller reads the simulated q_m unquantised: encoder rounding
     would make the residual piecewise constant in the parameters, and the finite-difference
     Jacobian zero (the optimiser then stops at its start)."""

@@ -235,7 +235,7 @@ def decimation_cutoff_hz(fs_hz: float, nd_decim: int) -> float:
     """Anti-alias cutoff (Hz) of decimation by Nd, as scipy.signal.decimate's default.
 
     scipy.signal.decimate's default IIR (Chebyshev I, order 8) has its cutoff at 0.8 of
-    the new Nyquist frequency: 0.8 * (Fs / 2) / Nd. With Fs = 350.87 Hz and Nd = 26 this
+    the new Nyquist frequency: 0.8 * (Fs / 2) / Nd. With the paper's Fs and Nd = 26 this
     is 5.40 Hz, the paper's 5.4 Hz (section 4.1, ERRATA).
 
     Args:

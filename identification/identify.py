@@ -92,7 +92,7 @@ def stiffness_rejection(result: Identification) -> str | None:
 
 def identify(log: Log, model: str = "auto", settings: FilterSettings | None = None,
              f1_hz: float | None = None) -> Identification:
-    """Identify the axis of `log` with `model` (CONTRACT section 3 names, plus
+    """Identify the axis of `log` with `model` (docs/cli.md names, plus
     `motor-only-printed`, the paper's eq. 18 as printed). `auto` takes joint-motor when `q`
     is logged, else motor-only, and falls back to rigid when the data does not identify a
     stiffness in the band (`stiffness_rejection`; with q, for example a rigid axis whose q

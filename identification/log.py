@@ -1,4 +1,4 @@
-"""The jointbench log: read, validate and write the CSV of CONTRACT section 1.
+"""The jointbench log: read, validate and write the CSV of docs/log-format.md.
 
 One import for the log: the schema (`Log`, `LogError`: identification.log_schema), the reader
 (parse, validate, stream, size limits: identification.log_read) and the writer (CSV text and

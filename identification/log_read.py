@@ -1,4 +1,4 @@
-"""Reading a jointbench log (CONTRACT section 1): parse, validate, stream, size limits.
+"""Reading a jointbench log (docs/log-format.md): parse, validate, stream, size limits.
 
 Errors are `LogError`, which names the file, the line and the column at fault. Reading
 streams the file line by line (`read_log`): it never loads an arbitrary amount of data
@@ -25,8 +25,8 @@ from jointbench.identification.log_schema import (BOOLEAN_META, FORMAT_KEY, FORM
                                                   REQUIRED_COLUMNS, Log, LogError, is_number,
                                                   meta_boolean, meta_number, shown)
 
-JITTER_TOLERANCE = 0.01  # CONTRACT: jitter under 1 % of the period
-DEFAULT_MAX_BYTES = 512 * 2**20  # a 60 s log at 350.87 Hz is about 2 MB
+JITTER_TOLERANCE = 0.01  # docs/log-format.md: jitter under 1 % of the period
+DEFAULT_MAX_BYTES = 512 * 2**20  # a 60 s log at the paper's rate is about 2 MB
 MAX_BYTES_ENV = "JOINTBENCH_MAX_LOG_BYTES"
 MAX_LINE_BYTES = 2**16  # one metadata line or data row
 # A revolute position that spans more than a turn, or lies more than two turns from zero,
@@ -73,7 +73,7 @@ def _check_header(header: list[str], raw: str, path, lineno: int) -> None:
     for sep in (";", "\t", "|"):
         if len(header) == 1 and sep in raw:
             raise LogError(f"the header is separated by {sep!r}; the format uses ',' "
-                           "(CONTRACT section 1)", path, lineno)
+                           "(docs/log-format.md)", path, lineno)
     for name in header:
         if not name:
             raise LogError("empty column name in the header", path, lineno)
@@ -162,7 +162,7 @@ def _parse_lines(lines: Iterable[tuple[int, str]], path) -> Log:
 
 
 def parse_log(text: str, path: str | os.PathLike | None = None) -> Log:
-    """Parse the text of a log (CONTRACT section 1). Raises LogError naming line and column."""
+    """Parse the text of a log (docs/log-format.md). Raises LogError naming line and column."""
     path = None if path is None else str(path)
     if "\x00" in text:
         lineno = text.count("\n", 0, text.index("\x00")) + 1
@@ -302,7 +302,7 @@ def read_log(path: str | os.PathLike, max_bytes: int | None = None) -> Log:
 
 def unit_warnings(log: Log) -> list[str]:
     """Warnings (not errors) about units: revolute positions that look like degrees, i.e. that
-    span more than a turn or lie more than two turns from zero (CONTRACT: radians)."""
+    span more than a turn or lie more than two turns from zero (docs/log-format.md: radians)."""
     if log.prismatic:
         return []
     odd = []
@@ -317,5 +317,5 @@ def unit_warnings(log: Log) -> list[str]:
     if not odd:
         return []
     return [f"{log.path or '<log>'}: {'; '.join(odd)}: the positions look like degrees; "
-            "CONTRACT section 1 wants radians (multiply by pi/180), or `axis: prismatic` "
+            "docs/log-format.md wants radians (multiply by pi/180), or `axis: prismatic` "
             "metadata for a linear axis"]

@@ -1,4 +1,4 @@
-"""The jointbench log schema (CONTRACT section 1): the `Log` record, its errors (`LogError`)
+"""The jointbench log schema (docs/log-format.md): the `Log` record, its errors (`LogError`)
 and the metadata keys the analyses read as numbers or booleans.
 
 A `Log` holds the sampled signals as numpy arrays and the metadata as strings; typed
@@ -25,7 +25,7 @@ BOOLEAN_META = ("velocity_feedforward",)
 
 
 class LogError(ValueError):
-    """A log that does not follow CONTRACT section 1.
+    """A log that does not follow docs/log-format.md.
 
     `str(err)` reads ``FILE:LINE: column 'c': what is wrong``; the parts that do not apply are
     left out.
@@ -46,7 +46,7 @@ class LogError(ValueError):
 
 @dataclass(frozen=True)
 class Log:
-    """A sampled experiment (CONTRACT section 1).
+    """A sampled experiment (docs/log-format.md).
 
     Attributes are arrays of equal length: `t` [s], `q_m` motor position referred to the joint
     side [rad], `tau_m` motor torque referred to the joint side [N m], optional `q` link

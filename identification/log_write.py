@@ -1,4 +1,4 @@
-"""Writing: the CSV text of a log (CONTRACT section 1) and atomic file writes (text, figures).
+"""Writing: the CSV text of a log (docs/log-format.md) and atomic file writes (text, figures).
 
 Every file jointbench writes goes through `atomic_write`: a temporary file in the same folder
 and a rename, so that an interrupted write (an exception, KeyboardInterrupt, a signal turned
@@ -30,7 +30,7 @@ def format_meta_number(x: float) -> str:
 
 
 def format_log(log: Log, precision: int = 12) -> str:
-    """The CSV text of `log` (CONTRACT section 1), metadata first."""
+    """The CSV text of `log` (docs/log-format.md), metadata first."""
     out = io.StringIO()
     out.write(f"# {FORMAT_KEY}: {FORMAT_VERSION}\n")
     for key, value in log.meta.items():

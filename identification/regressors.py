@@ -8,7 +8,7 @@
   keeps gravity, which the paper neglects: the columns g cos qm, g sin qm carry X10 = MX / c
   and X11 = MY / c, where c = 1 + G / K and G is the gravity stiffness (identification/physical.py
   derives it); neglecting it biases every X by G / K (2.6 % on the prototype).
-- `rigid`: eq. (6) with q = qm plus an offset, X = (J FV FS offset) (CONTRACT section 3).
+- `rigid`: eq. (6) with q = qm plus an offset, X = (J FV FS offset) (docs/cli.md).
 
 Every signal goes through the same zero-phase Butterworth before differentiation, so the
 linear relation survives the filtering (section 3.2).
@@ -95,7 +95,7 @@ def motor_only(log: Log, s: FilterSettings, corrected: bool = True) -> Regressor
 
 
 def rigid(log: Log, s: FilterSettings) -> Regressor:
-    """tau_m = J qm'' + FV qm' + FS sign(qm') + offset (CONTRACT section 3).
+    """tau_m = J qm'' + FV qm' + FS sign(qm') + offset (docs/cli.md).
 
     The torque is zero-order-hold aligned when `s.zoh` and Butterworth filtered when
     `s.filter_torque` (both by default); the EMPS reference chain uses neither (it pairs the

@@ -1,5 +1,5 @@
 """Tables in the layout of the paper's Tables 1-3, with truth and error columns when known,
-and the JSON answer of `identify --json` (CONTRACT section 3)."""
+and the JSON answer of `identify --json` (docs/cli.md)."""
 
 from __future__ import annotations
 
@@ -22,8 +22,7 @@ PAPER_TABLE3 = {"Jm": 172.1890, "K": 19552.6214, "JL": 40.3601, "FSm": 5.1624,
                 "FVm": 1157.4716, "FV": 89.0974}
 TABLE1_ORDER = ("Jm", "K", "JL", "FSm", "FVm", "FV", "MX", "MY", "FS")
 def model_truth(model: str, truth: dict[str, float] | None) -> dict[str, float]:
-    """The truth in the parameters of `model`: for the rigid model (eq. 6 with q = qm, CONTRACT
-    section 3) J = Jm + JL, FV = FVm + FV, FS = FSm + FS; the other models use the truth as is."""
+    """The truth in the parameters of `model`: for the rigid model (eq. 6 with q = qm, docs/cli.md) J = Jm + JL, FV = FVm + FV, FS = FSm + FS; the other models use the truth as is."""
     truth = dict(truth or {})
     if model != "rigid":
         return truth
@@ -128,7 +127,7 @@ def physical_table(result: Identification, truth: dict[str, float] | None = None
 
 
 def to_json(result: Identification, truth: dict[str, float] | None = None) -> dict:
-    """The `identify --json` object of CONTRACT section 3 (plus optional keys)."""
+    """The `identify --json` object of docs/cli.md (plus optional keys)."""
     ls = result.ls
     truth = model_truth(result.model, truth)
     params = {}

@@ -8,7 +8,7 @@ flexible axis from the paper's eqs. (5)-(6) on the joint side (SI, radians):
 
 Coulomb friction is smoothed over `v_s` (a parameter, default 1e-3 rad/s). The plant is
 integrated by fixed-step RK4, `substeps` steps per control period, with the torque held over
-the period (zero-order hold). The controller is CONTRACT section 2, written here again from the
+the period (zero-order hold). The controller is docs/controller.md, written here again from the
 contract's text (not imported), evaluated at 350.87 Hz by default on the quantised motor
 encoder; the applied torque is the command plus seeded white noise. Only the default gains
 come from the package (`bench.sim.controller.gains_rule`, which needs no MuJoCo).
@@ -180,7 +180,7 @@ def open_loop(family: AxisFamily, x0: State, tau: np.ndarray, sample_rate_hz: fl
 
 
 class ContractController:
-    """CONTRACT section 2, from its text: velocity by backward difference of the measured motor
+    """docs/controller.md, from its text: velocity by backward difference of the measured motor
     angle, PI velocity loop, optional velocity feedforward, clip at tau_max;
     q_m[-1] = q_m[0], q_ref[-1] = q_ref[0], I[-1] = tau0. Call it with (q_m[k], q_ref[k])."""
 
@@ -270,7 +270,7 @@ def simulate(family: AxisFamily, seed: int = 1, duration: float = 60.0, sweep: s
              substeps: int | None = None, gravity: float = 9.81, center: float = 0.0,
              reference: Reference | None = None, gains: Gains | None = None,
              ideal_sensors: bool = False) -> Log:
-    """One closed-loop chirp experiment on `family`, as a jointbench log (CONTRACT section 1).
+    """One closed-loop chirp experiment on `family`, as a jointbench log (docs/log-format.md).
 
     The default reference is `Reference(duration, sweep)` (0.05-30 Hz, 0.1 rad, 2 s tapers,
     a quarter of the duration in logs under 8 s)

@@ -90,7 +90,7 @@ def test_arm_truth_within_3_sigma_after_bias_correction(arm_runs):
     Least squares alone misses it: Jm lies 5-7 corrected sigma (10 paper sigma) above the
     truth on every joint, a deterministic +0.2-0.3 % bias from the motor's Coulomb stick phases
     at velocity reversals (test below; README "Accuracy on the six-axis arm"), while 60 s at
-    2 kHz pin Jm to 0.03 %. The bias correction (bench/debias.py, 4 closed-loop replicas on
+    2 kHz pin Jm to 0.03 %. The bias correction (bench/analysis/debias.py, 4 closed-loop replicas on
     the nominal axis with the arm's friction time constant) takes that bias out: measured
     (seed 1, 8 or 4 replicas) Jm +0.26 -> -0.01 % (axis1), +0.22 -> +0.03 % (axis4),
     +0.20 -> +0.01 % (axis6), K and JL within 0.06 %, every |z| < 1."""

@@ -50,7 +50,7 @@ def test_tracking_and_controller_law(prototype_run):
         ref = lowpass(log.q_ref - c, 2 * np.pi * f_hz, log.ts)
         motor = lowpass(log.q_m - c, 2 * np.pi * f_hz, log.ts)
         assert rel_rms(motor, ref) < bound, f_hz
-    # The logged torque is the CONTRACT section 2 law applied to the logged q_m and q_ref.
+    # The logged torque is the docs/controller.md law applied to the logged q_m and q_ref.
     tau = control_law(log.q_m, log.q_ref, Gains.from_log(log), log.ts, log.tau_m[0])
     # atol 1e-6 N m: rounding accumulated over 21053 integrator updates (3e-8 seen)
     np.testing.assert_allclose(tau, log.tau_m, rtol=1e-9, atol=1e-6)

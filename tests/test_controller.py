@@ -1,4 +1,4 @@
-"""Unit tests of bench/sim/controller.py: the discrete PI law of CONTRACT section 2,
+"""Unit tests of bench/sim/controller.py: the discrete PI law of docs/controller.md,
 
     w[k]     = (q_m[k] - q_m[k-1]) / T
     v_ref[k] = kp (q_ref[k] - q_m[k]) + ff (q_ref[k] - q_ref[k-1]) / T

@@ -1,4 +1,4 @@
-"""Bias correction by closed-loop replicas (bench/debias.py, `identify --debias B`).
+"""Bias correction by closed-loop replicas (bench/analysis/debias.py, `identify --debias B`).
 
 The premise, measured on the prototype (60 s, default sensors, seeds 1-9, 8-16 replicas):
 least squares leaves K, Jm, JL 0.2-0.5 % off, up to 4 corrected sigma (the closed-loop

@@ -1,5 +1,5 @@
 """The two halves of the effect registry (identification.effects, bench.effects) list the
-same names, in CONTRACT section 4's order, and every entry is complete."""
+same names, in docs/effects.md's order, and every entry is complete."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from jointbench.identification.discrepancy import RIGID_TESTS
 from jointbench.identification.effects import EFFECTS, NONE
 from jointbench.identification.parameters import PARAMETERS
 
-# CONTRACT section 4, in its order.
+# docs/effects.md, in its order.
 CONTRACT = ("gravity", "link_coulomb", "torque_ripple", "backlash", "spring_damping",
             "torque_lag", "hardening", "offset", "asymmetric_friction")
 

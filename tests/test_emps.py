@@ -53,7 +53,7 @@ def reference(emps):
 def test_data_is_the_published_benchmark(emps):
     assert emps.prismatic and len(emps) == 24841 and emps.sample_rate_hz == 1000.0
     assert emps.q is None and emps.q_ref is not None
-    # The logged force is the CONTRACT section 2 law with the metadata gains to about 3 %
+    # The logged force is the docs/controller.md law with the metadata gains to about 3 %
     # RMS (data README): ki = 0, so the law holds no integrator (I = 0). Measured 3.31 %.
     tau = control_law(emps.q_m, emps.q_ref, Gains.from_log(emps), emps.ts, 0.0)
     rel = np.sqrt(np.mean((tau - emps.tau_m) ** 2) / np.mean(emps.tau_m ** 2))
@@ -137,7 +137,7 @@ def test_replay_on_identified_rigid_axis(emps, reference):
     late = forward_errors(emps, free, skip=50)
     assert late["torque_rel_pct"] < 5.0 and late["tracking_rel_pct"] < 1.0
     assert free.saturated == 0 and free.q is None
-    # CONTRACT section 2 to the letter: with ki = 0 the integrator holds I[-1] = tau_m[0]
+    # docs/controller.md to the letter: with ki = 0 the integrator holds I[-1] = tau_m[0]
     # (89.2 N) for ever, which the position loop balances by a constant offset
     # tau_m[0] / (kp kv) = 65.1 um; the forces then agree after the start transient.
     contract = replay(model, axis, emps)

@@ -103,7 +103,7 @@ def test_constant_torque_is_held_over_the_period():
 
 @pytest.mark.parametrize("feedforward", [True, False])
 def test_controller_first_ticks_by_hand(feedforward):
-    """CONTRACT section 2 computed by hand on the first logged samples; gravity held by the
+    """docs/controller.md computed by hand on the first logged samples; gravity held by the
     integrator at k = 0 (I[-1] = tau_m[0] = MX g cos q0 + MY g sin q0); clip at tau_max."""
     fam = replace(FAMILIES["balanced"], MX=0.4, MY=-0.2)
     gains = Gains(kp=14.0, kv=11.0, ki=160.0, tau_max=4.3)

@@ -1,4 +1,4 @@
-"""The log format of CONTRACT section 1: round trip and errors that name line and column."""
+"""The log format of docs/log-format.md: round trip and errors that name line and column."""
 
 from __future__ import annotations
 
@@ -69,7 +69,7 @@ def test_binary_and_missing_files(tmp_path):
         read_log(tmp_path / "none.csv")
 
 
-# --- every malformed log gets one clear error (CONTRACT section 1, issue 5) -----------------
+# --- every malformed log gets one clear error (docs/log-format.md, issue 5) -----------------
 
 @pytest.mark.parametrize("text, match", [
     (GOOD.replace("0.1,0.1,2.0", "0.1,,2.0"), r"good.csv:6: column 'q': empty cell"),

@@ -45,7 +45,7 @@ def test_constant_torque_on_rigid_rotor_is_a_parabola(substeps):
 
 
 def test_first_tick_gives_the_logged_initial_torque():
-    """CONTRACT section 2: q_m[-1] = q_m[0], q_ref[-1] = q_ref[0], I[-1] = tau_m[0]: with the
+    """docs/controller.md: q_m[-1] = q_m[0], q_ref[-1] = q_ref[0], I[-1] = tau_m[0]: with the
     reference starting at the measured position, tau_m[0] is the integrator's initial state
     whatever the gains."""
     model, data, axis = rotor()

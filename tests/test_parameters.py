@@ -12,7 +12,7 @@ from jointbench.identification.parameters import (FRICTIONS, JOINT_MOTOR, MOTOR_
 
 
 def test_model_vectors_follow_the_paper():
-    # Eq. (11) in the regressor's column order, eq. (19), CONTRACT section 3's rigid model.
+    # Eq. (11) in the regressor's column order, eq. (19), docs/cli.md's rigid model.
     assert JOINT_MOTOR == ("Jm", "FVm", "FSm", "K", "JL", "MX", "MY", "FV", "FS")
     assert MOTOR_ONLY == tuple(f"X{i}" for i in range(1, 8))
     assert MOTOR_ONLY_CORRECTED == tuple(f"X{i}" for i in range(1, 12))
@@ -49,7 +49,7 @@ def test_revolute_units():
 def test_prismatic_units_replace_rad_and_n_m_by_m_and_n():
     u = units(prismatic=True)
     # Inertias become masses, torques forces, per radian per metre (log metadata
-    # `axis: prismatic`, CONTRACT section 1).
+    # `axis: prismatic`, docs/log-format.md).
     assert u["K"] == "N/m" and u["Jm"] == u["JL"] == u["J"] == "kg"
     assert u["FVm"] == u["FV"] == "N s/m" and u["FSm"] == u["FS"] == u["offset"] == "N"
     for name, unit in u.items():

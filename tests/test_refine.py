@@ -1,4 +1,4 @@
-"""`jointbench identify --refine` (bench/refine.py): closed-loop output error (DIDIM-style)
+"""`jointbench identify --refine` (bench/analysis/refine.py): closed-loop output error (DIDIM-style)
 from the least-squares estimate."""
 
 from __future__ import annotations
@@ -134,7 +134,7 @@ def test_cli_refine_text(short_file, capsys):
 
 
 def test_cli_refine_bad_input(prototype_log, tmp_path, capsys):
-    """A log that cannot be replayed (no q_ref, no gains, CONTRACT sections 1-2), a rigid
+    """A log that cannot be replayed (no q_ref, no gains, docs/log-format.md and docs/controller.md), a rigid
     identification and a stray option: exit 2, one line, nothing on stdout."""
     short = dataclasses.replace(prototype_log, t=prototype_log.t[:3000],
                                 q_m=prototype_log.q_m[:3000], q=prototype_log.q[:3000],

@@ -1,5 +1,5 @@
-"""Nominal axes from identified parameters (bench/nominal.py), the rigid axis convention, and
-the closed-loop replay of a logged experiment (bench/replay.py, `simulate --replay`)."""
+"""Nominal axes from identified parameters (bench/sim/nominal.py), the rigid axis convention, and
+the closed-loop replay of a logged experiment (bench/sim/replay.py, `simulate --replay`)."""
 
 from __future__ import annotations
 
@@ -64,7 +64,7 @@ def test_rigid_nominal_friction_and_offset(prismatic):
     bound 10 um/s); pushed with F > FS it slides at (F - FS) / FV (1 - exp(-t FV / J)), the
     first-order response with the Coulomb force exactly FS (rel 1e-6). The offset is a
     constant load the motor holds with tau_m = offset. The prismatic case checks that the
-    slide's friction acts (MuJoCo scales it by the body mass, bench/nominal.py)."""
+    slide's friction acts (MuJoCo scales it by the body mass, bench/sim/nominal.py)."""
     J, FV, FS, offset = 95.1, 203.4, 20.4, -3.17
     model, axis = compile_axis(rigid_axis(J, FV, FS, offset, timestep=1e-3, prismatic=prismatic,
                                           tau_max=351.5))

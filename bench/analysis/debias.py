@@ -33,7 +33,7 @@ structure (two masses, a torsional spring, MuJoCo's Coulomb friction constraint 
 stick band, `friction_timeconst`) and the same sensors. On the virtual bench that holds by
 construction; on a real robot the bias of the structural error the nominal axis does not
 have stays (jointbench diagnose looks for it). The log must be replayable (q_ref and the
-controller gains, CONTRACT sections 1-2) and carry its sensor noise in the metadata, or be
+controller gains, docs/log-format.md and docs/controller.md) and carry its sensor noise in the metadata, or be
 given `sensors`.
 """
 

@@ -4,7 +4,7 @@
 start of a closed-loop output-error fit in the spirit of DIDIM (M. Gautier, A. Janot,
 P.-O. Vandanjon, IEEE Trans. Control Systems Technology 21(2), 2013): each candidate theta is
 built into the nominal two-mass MuJoCo axis (`bench.sim.nominal.two_mass_axis`), the logged
-experiment is replayed on it in closed loop (`bench.sim.replay.replay`, CONTRACT section 2),
+experiment is replayed on it in closed loop (`bench.sim.replay.replay`, docs/controller.md),
 and
 
     min_theta  sum_k ((tau_sim[k](theta) - tau_m[k]) / s_tau)^2
@@ -110,7 +110,7 @@ class RefineResult:
 
 def require_replayable(log: Log) -> None:
     """LogError unless `log` can be replayed in closed loop: the column q_ref and the
-    controller gains kp, kv, ki, tau_max in the metadata (CONTRACT sections 1-2)."""
+    controller gains kp, kv, ki, tau_max in the metadata (docs/log-format.md and docs/controller.md)."""
     if log.q_ref is None:
         raise LogError("--refine replays the experiment in closed loop: the log has no column "
                        "'q_ref' (the reference the controller tracked)", log.path, column="q_ref")
@@ -128,7 +128,7 @@ def start_parameters(ident: Identification, free: tuple[str, ...] = ALL_PARAMETE
                           f"not to the {ident.model} model (give --model joint-motor or "
                           "motor-only)")
     if ident.prismatic:
-        raise RefineError("--refine: two-mass nominal axes are hinges only (bench/nominal.py)")
+        raise RefineError("--refine: two-mass nominal axes are hinges only (bench/sim/nominal.py)")
     p, notes = ident.physical, []
     start: dict[str, float] = {}
     missing: list[str] = []

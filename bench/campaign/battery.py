@@ -1,5 +1,5 @@
 """The hidden-effect battery of `diagnose` (issue: "the tests hide an effect and require finding
-it"): seeded virtual experiments, each hiding one effect of CONTRACT section 4 (or none) at a
+it"): seeded virtual experiments, each hiding one effect of docs/effects.md (or none) at a
 randomised strength, on the prototype axis and on arm joints. Only the log goes to `diagnose`.
 
 Strengths are drawn relative to the axis (its torque limit, first mode, stiffness), in ranges

@@ -1,4 +1,4 @@
-"""`jointbench`: the command line of CONTRACT section 3, one module per command.
+"""`jointbench`: the command line of docs/cli.md, one module per command.
 
 Exit status: 0 success, 2 bad input (one message on stderr naming the file, line or column),
 1 anything else. With --json a command prints exactly one JSON object on stdout.

@@ -73,7 +73,7 @@ def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
                    help="identification models, comma separated (default joint-motor,motor-only)")
     p.add_argument("--debias", type=int, default=0, metavar="B",
                    help="also bias-correct every two-mass estimate by B closed-loop replicas "
-                        "(bench/debias.py; each run then costs about 1 + B experiments; "
+                        "(bench/analysis/debias.py; each run then costs about 1 + B experiments; "
                         "default 0: off)")
     p.add_argument("--sweep", help="sweep one setting: NAME=V1,V2,... with NAME one of "
                                    + ", ".join(SWEEPABLE))

@@ -12,7 +12,9 @@ import threading
 from pathlib import Path
 from typing import Callable
 
-# Exit status (CONTRACT section 3).
+from jointbench.bench.options import key_numbers
+
+# Exit status (docs/cli.md).
 EXIT_OK = 0
 EXIT_FAILURE = 1    # anything else (an internal error)
 EXIT_BAD_INPUT = 2  # a message on stderr naming the file, line or column
@@ -80,16 +82,10 @@ def parse_key_values(text: str | None, flag: str, form: str, what: str = "value"
     value is for one that is not a number."""
     if not text:
         return {}
-    out = {}
-    for item in text.split(","):
-        if "=" not in item:
-            raise UsageError(f"{flag}: '{item}' must read {form}")
-        key, value = item.split("=", 1)
-        try:
-            out[key.strip()] = float(value)
-        except ValueError:
-            raise UsageError(f"{flag}: {what} '{value}' of {key} is not a number") from None
-    return out
+    return key_numbers(text.split(","),
+                       lambda item: UsageError(f"{flag}: '{item}' must read {form}"),
+                       lambda key, value: UsageError(f"{flag}: {what} '{value}' of {key} is "
+                                                     "not a number"))
 
 
 def parse_config(text: str | None) -> dict[str, float]:

@@ -20,11 +20,11 @@ def add_arguments(f: argparse.ArgumentParser) -> None:
     f.add_argument("--ac", type=finite, default=math.sqrt(2) / 2, help="distortion bound Ac (default sqrt(2)/2)")
     f.add_argument("--rc", type=finite, default=1.0, help="distortion ratio rc (default 1)")
     f.add_argument("--ratio", type=positive, default=6.0, help="wc / w1 (default 6)")
-    f.add_argument("--json", action="store_true", help="print the CONTRACT JSON object")
+    f.add_argument("--json", action="store_true", help="print the JSON object of docs/cli.md")
 
 
 def run(args: argparse.Namespace) -> int:
-    """Design the bandpass; print wc, wn, xc, Fs and Ts (text or the CONTRACT JSON object)."""
+    """Design the bandpass; print wc, wn, xc, Fs and Ts (text or the JSON object of docs/cli.md)."""
     from jointbench.identification.design import design_bandpass
 
     d = design_bandpass(args.f1, nd=args.nd, m=args.m, ac=args.ac, rc=args.rc, ratio=args.ratio)

@@ -1,5 +1,5 @@
 """`jointbench diagnose FILE`: what the simulation gets wrong on a log, the named causes, the
-extended model and its gain (CONTRACT section 3), optionally cross-validated on another log."""
+extended model and its gain (docs/cli.md), optionally cross-validated on another log."""
 
 from __future__ import annotations
 
@@ -18,9 +18,9 @@ LIBRARY = ("jointbench.bench.analysis.diagnose.forward",
 
 def add_arguments(g: argparse.ArgumentParser) -> None:
     """The options of `diagnose`."""
-    g.add_argument("file", help="log file (CONTRACT section 1)")
+    g.add_argument("file", help="log file (docs/log-format.md)")
     g.add_argument("--out", help="folder for figures, report.md, nominal.xml, extended.xml")
-    g.add_argument("--json", action="store_true", help="print the CONTRACT JSON object")
+    g.add_argument("--json", action="store_true", help="print the JSON object of docs/cli.md")
     g.add_argument("--no-forward", action="store_true",
                    help="skip the closed-loop replay (forward view)")
     g.add_argument("--quiet", action="store_true", help="no progress messages")
@@ -65,8 +65,7 @@ def _cross_validation_text(args: argparse.Namespace, xval: dict) -> str:
 def run(args: argparse.Namespace) -> int:
     """Diagnose the log (and cross-validate); print the summary or the JSON object; with
     --out the report files."""
-    from jointbench.bench.analysis.diagnose.forward import cross_validate
-    from jointbench.bench.analysis.diagnose.run import diagnose, summary_text
+    from jointbench.bench.analysis.diagnose import cross_validate, diagnose, summary_text
     from jointbench.identification.log import LogError, atomic_write_text, read_log
 
     log = read_log(args.file)

@@ -1,4 +1,4 @@
-"""`jointbench identify FILE`: the axis parameters from a log (CONTRACT section 3), optionally
+"""`jointbench identify FILE`: the axis parameters from a log (docs/cli.md), optionally
 refined by closed-loop output error (--refine) and bias-corrected (--debias B)."""
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ LIBRARY = ("jointbench.bench.present.identify",)
 
 def add_arguments(i: argparse.ArgumentParser) -> None:
     """The options of `identify`."""
-    i.add_argument("file", help="log file (CONTRACT section 1)")
+    i.add_argument("file", help="log file (docs/log-format.md)")
     i.add_argument("--model", default="auto",
                    choices=("joint-motor", "motor-only", "motor-only-printed", "rigid", "auto"))
     i.add_argument("--wn", type=positive, help="Butterworth frequency in rad/s")
@@ -35,19 +35,19 @@ def add_arguments(i: argparse.ArgumentParser) -> None:
     i.add_argument("--order", type=int, default=4, help="Butterworth order m (default 4)")
     i.add_argument("--decimate", type=int, help="decimation factor Nd")
     i.add_argument("--f1", type=positive, help="first mode in Hz (to derive wn and Nd)")
-    i.add_argument("--json", action="store_true", help="print the CONTRACT JSON object")
+    i.add_argument("--json", action="store_true", help="print the JSON object of docs/cli.md")
     i.add_argument("--refine", action="store_true",
                    help="continue from the least-squares estimate by closed-loop output error "
                         "(DIDIM-style): replay the log in MuJoCo under its controller on the "
                         "two-mass axis and fit the torque (and q); needs q_ref and the gains "
-                        "(bench/refine.py)")
+                        "(bench/analysis/refine.py)")
     i.add_argument("--refine-max-nfev", type=int, default=None, metavar="N",
                    help="--refine: residual evaluations allowed (each one replay; default 40)")
     i.add_argument("--debias", type=int, default=None, metavar="B",
                    help="bias-correct the least-squares estimate by B closed-loop replicas of "
                         "the experiment on the nominal axis with the log's sensors (parametric "
                         "bootstrap; 8 is a good start; needs q_ref, the gains and the sensor "
-                        "metadata; bench/debias.py)")
+                        "metadata; bench/analysis/debias.py)")
     i.add_argument("--friction-timeconst", type=positive, default=None, metavar="S",
                    help="--debias: Coulomb friction time constant of the nominal axis in s "
                         "(MuJoCo solreffriction; default 0.002, models/arm6.xml uses 0.00025)")

@@ -1,4 +1,4 @@
-"""`jointbench simulate`: one virtual experiment written as a log (CONTRACT section 1), or with
+"""`jointbench simulate`: one virtual experiment written as a log (docs/log-format.md), or with
 --replay LOG the logged experiment again in closed loop and its comparison with the log."""
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ def add_arguments(s: argparse.ArgumentParser) -> None:
     s.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
     s.add_argument("--out", help="log file to write (default MODEL_JOINT_seedN.csv)")
     s.add_argument("--effect", help="hide an effect: NAME=STRENGTH[:OPTION=VALUE...], e.g. "
-                                    "backlash=0.002 (CONTRACT section 4)")
+                                    "backlash=0.002 (docs/effects.md)")
     s.add_argument("--lock", choices=("rigid", "brake"), default="rigid",
                    help="how the other axes are held (default rigid)")
     s.add_argument("--config", help="locked angles of the other axes, e.g. axis2=-0.5,axis3=1.0")
@@ -52,8 +52,7 @@ def add_arguments(s: argparse.ArgumentParser) -> None:
                         "or without --model on the nominal axis identified from LOG, and "
                         "compare with the measured position and torque")
     s.add_argument("--tau0", type=finite,
-                   help="--replay: the integrator's initial state (default tau_m[0], CONTRACT "
-                        "section 2)")
+                   help="--replay: the integrator's initial state (default tau_m[0], docs/controller.md)")
     s.add_argument("--skip", type=int, default=0,
                    help="--replay: samples left out of the comparison at the start (default 0)")
     s.add_argument("--plot", metavar="PNG", help="--replay: figure of measured and replayed signals")

@@ -1,4 +1,4 @@
-"""Hidden effects for virtual experiments (CONTRACT section 4), bench half: one registry.
+"""Hidden effects for virtual experiments (docs/effects.md), bench half: one registry.
 
 `BENCH_EFFECTS` maps each name of jointbench.identification.effects.EFFECTS to its
 `BenchEffect` (one module per effect). `HiddenEffect` is what a user asks for

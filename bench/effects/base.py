@@ -1,4 +1,4 @@
-"""The bench half of an effect (CONTRACT section 4): how a virtual experiment hides it (MJCF
+"""The bench half of an effect (docs/effects.md): how a virtual experiment hides it (MJCF
 on an MjSpec, or a torque in the bench loop), how `diagnose`'s extended model carries it, and
 how the battery draws its strength. The names and units are the identification half's
 (jointbench.identification.effects).

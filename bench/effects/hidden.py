@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from jointbench.bench.options import key_numbers
 from jointbench.bench.effects.registry import BENCH_EFFECTS
 from jointbench.identification.effects import EFFECTS
 
@@ -15,7 +16,7 @@ OPTIONS: dict[str, dict[str, float]] = {n: b.options for n, b in BENCH_EFFECTS.i
 
 @dataclass(frozen=True)
 class HiddenEffect:
-    """An effect of CONTRACT section 4 with its strength (the unit of EFFECTS[name])."""
+    """An effect of docs/effects.md with its strength (the unit of EFFECTS[name])."""
 
     name: str
     strength: float
@@ -60,13 +61,7 @@ def parse_effect(text: str) -> HiddenEffect:
         strength = float(value)
     except ValueError:
         raise ValueError(f"effect '{text}': strength '{value}' is not a number") from None
-    options = {}
-    for item in rest:
-        if "=" not in item:
-            raise ValueError(f"effect '{text}': option '{item}' must read KEY=VALUE")
-        key, val = item.split("=", 1)
-        try:
-            options[key.strip()] = float(val)
-        except ValueError:
-            raise ValueError(f"effect '{text}': option value '{val}' is not a number") from None
+    options = key_numbers(
+        rest, lambda item: ValueError(f"effect '{text}': option '{item}' must read KEY=VALUE"),
+        lambda key, val: ValueError(f"effect '{text}': option value '{val}' is not a number"))
     return HiddenEffect(name.strip(), strength, options)

@@ -1,4 +1,4 @@
-"""The bench half of every effect, by name, in CONTRACT section 4's order (the order of
+"""The bench half of every effect, by name, in docs/effects.md's order (the order of
 jointbench.identification.effects.EFFECTS; tests/test_effect_registry.py checks both)."""
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """An identification (least squares, optionally refined and bias-corrected) as text and as
-the `identify --json` object of CONTRACT section 3: what `jointbench identify` prints."""
+the `identify --json` object of docs/cli.md: what `jointbench identify` prints."""
 
 from __future__ import annotations
 

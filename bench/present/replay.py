@@ -97,7 +97,7 @@ def format_report(rep: ReplayReport) -> str:
     g = Gains.from_log(log)
     pu, fu = e["position_unit"], e["torque_unit"]
     lines = [f"replayed {log.path}: {len(log)} samples at {log.sample_rate_hz:g} Hz in closed "
-             f"loop (CONTRACT section 2: kp {g.kp:g}, kv {g.kv:g}, ki {g.ki:g}, tau_max "
+             f"loop (docs/controller.md: kp {g.kp:g}, kv {g.kv:g}, ki {g.ki:g}, tau_max "
              f"{g.tau_max:g}, velocity feed-forward {'on' if g.velocity_feedforward else 'off'}) "
              f"on {rep.model}, axis {rep.axis}"]
     if rep.parameters:

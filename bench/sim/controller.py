@@ -1,4 +1,4 @@
-"""The discrete PI position/velocity controller of CONTRACT section 2.
+"""The discrete PI position/velocity controller of docs/controller.md.
 
 One implementation serves the virtual experiment and the closed-loop replay of a measured log.
 Feedback is on the motor encoder only; the torque is held between samples (zero-order hold).
@@ -42,7 +42,7 @@ class Gains:
         missing = [key for key, value in values.items() if value is None]
         if missing:
             raise LogError("cannot replay: the metadata lacks the controller gains "
-                           f"{', '.join(missing)} (CONTRACT section 2)", log.path)
+                           f"{', '.join(missing)} (docs/controller.md)", log.path)
         return cls(velocity_feedforward=log.meta_bool("velocity_feedforward", True), **values)
 
 
@@ -63,7 +63,7 @@ def gains_rule(Jm: float, JL: float, K: float, tau_max: float, T: float) -> Gain
 
 
 class PIController:
-    """State of the CONTRACT section 2 law. `step` takes the sample k and returns tau_m[k].
+    """State of the docs/controller.md law. `step` takes the sample k and returns tau_m[k].
 
     At k = 0: q_m[-1] = q_m[0], q_ref[-1] = q_ref[0] and I[-1] = tau0 (the logged initial
     torque: the experiment starts at rest in equilibrium).

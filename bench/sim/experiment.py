@@ -1,8 +1,8 @@
 """One virtual identification experiment: a joint tracks a chirp, the others are locked.
 
-Per control tick k (period T = 1 / 350.87 s by default; `bench.sim.loop.run_loop`):
+Per control tick k (period T = 1 / PAPER_RATE by default; `bench.sim.loop.run_loop`):
   1. the encoders sample the motor and link angles (quantised);
-  2. the CONTRACT section 2 controller computes tau_m[k] from the motor encoder;
+  2. the docs/controller.md controller computes tau_m[k] from the motor encoder;
   3. the log records (t_k, q_m, q, tau_m, q_ref);
   4. the rotor receives tau_m[k] + current-loop noise (+ bench-loop effects), held over the
      tick (zero-order hold) while MuJoCo integrates `substeps` steps.
@@ -44,7 +44,7 @@ TRACKING_LIMIT = 10.0        # |q_ref - q_m| over this many chirp amplitudes (at
 TRACKING_FLOOR = 0.1         # this many rad) is a loop that does not track: unstable
 CHATTER_REVERSALS = 20       # this many sample-to-sample jumps between -tau_max and +tau_max,
 CHATTER_SAMPLES = 3          # at most this many samples apart on average, is a limit cycle
-                             # at over Fs/6 (58 Hz at 350.87 Hz), far above the reference
+                             # at over Fs/6 (58 Hz at the paper's rate), far above the reference
                              # (<= 30 Hz, whose bang-bang saturation jumps once per half period)
 
 
@@ -83,7 +83,7 @@ def run_experiment(model: str | Path = "prototype", joint: str | None = None, *,
                    substeps: int = DEFAULT_SUBSTEPS, sample_rate_hz: float = SAMPLE_RATE_HZ,
                    tau_max: float | None = None,
                    progress: Callable[[float], None] | None = None) -> ExperimentResult:
-    """Run one closed-loop chirp experiment and return its log (CONTRACT section 1).
+    """Run one closed-loop chirp experiment and return its log (docs/log-format.md).
 
     Same arguments and seed, same log, bit for bit. Raises SimulationError when the state
     diverges, ModelStructureError for a model off the axis convention, ValueError for bad
@@ -150,7 +150,7 @@ def _simulate(exp: ExperimentModel, chirp: Chirp, sensors: Sensors, gains: Gains
     n = int(round(chirp.duration * sample_rate_hz)) + 1
     t = np.arange(n) * T
     # Start the reference at the measured motor angle: then e[0] = 0 and the logged
-    # tau_m[0] is the integrator's initial state, as CONTRACT section 2 reads it back.
+    # tau_m[0] is the integrator's initial state, as docs/controller.md reads it back.
     q_ref = chirp(t) - chirp.center + sensors.motor_quantizer()(float(exp.qpos_init[ax.motor_qpos]))
 
     d = mujoco.MjData(m)

@@ -1,6 +1,6 @@
 """The closed-loop tick: the one stepper of the virtual experiment and of the replay of a log.
 
-Per control tick k (period T, CONTRACT section 2):
+Per control tick k (period T, docs/controller.md):
   1. the encoders sample the motor and link positions (quantised by `Sensors`);
   2. the controller (`PIController`) computes tau_m[k] from the motor encoder and q_ref[k];
   3. a disturbance, when given, adds to tau_m[k] (at the motor) or goes into qfrc_applied

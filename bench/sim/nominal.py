@@ -2,7 +2,7 @@
 models/__init__.py, so that `models.find_axes`, `bench.replay.replay` and
 `jointbench simulate --model FILE.xml` accept them.
 
-- `rigid_axis`: the rigid model of CONTRACT section 3, tau_m = J qmdd + FV qmd + FS sign(qmd)
+- `rigid_axis`: the rigid model of docs/cli.md, tau_m = J qmdd + FV qmd + FS sign(qmd)
   + offset: one joint `X` (hinge, or slide for a prismatic axis) with damping FV,
   frictionloss FS and inertia J, half as armature (the rotor, Jm in the truth) and half in
   the moving body (JL): MuJoCo scales a slide joint's friction constraint by the body's own
@@ -164,7 +164,7 @@ def two_mass_axis(Jm: float, FVm: float, FSm: float, K: float, JL: float, FV: fl
     if prismatic:
         raise ValueError("two-mass nominal axes are hinges only: a slide joint's Coulomb "
                          "friction needs the rotor mass in a body, the truth reading needs it "
-                         "as armature (bench/nominal.py)")
+                         "as armature (bench/sim/nominal.py)")
     spec = _new_spec(f"nominal_two_mass_{name}", timestep, gravity)
     rotor = spec.worldbody.add_body()
     rotor.name = f"{name}_rotor"

@@ -1,7 +1,7 @@
 """Closed-loop replay of a logged experiment on a MuJoCo axis (forward simulation).
 
 The log's reference q_ref is tracked again by the controller its metadata describes
-(CONTRACT section 2, `bench.controller.PIController` with `Gains.from_log`), on any model
+(docs/controller.md, `bench.controller.PIController` with `Gains.from_log`), on any model
 that follows the axis convention (a nominal axis from `bench.nominal`, a shipped or user
 MJCF through `bench.axes.build_experiment_model`). Per sample k (period T of the log):
   1. the motor position q_m[k] is measured as it is (no noise, no quantisation);
@@ -10,7 +10,7 @@ MJCF through `bench.axes.build_experiment_model`). Per sample k (period T of the
      disturbance on the link (or carriage) goes into qfrc_applied, both held over the sample
      (zero-order hold) while MuJoCo integrates `substeps` steps of T / substeps.
 The replay starts at rest at the logged q_m[0] (and q[0] when logged; else the link at its
-static equilibrium) with the integrator holding I[-1] = tau_m[0] (CONTRACT section 2), unless
+static equilibrium) with the integrator holding I[-1] = tau_m[0] (docs/controller.md), unless
 another `tau0` is given.
 
 `forward_errors` compares the replay with the measured signals: that is the forward view of
@@ -88,7 +88,7 @@ def replay(model: mujoco.MjModel, axis: Axis, log: Log, disturbance: np.ndarray 
     link (carriage) through qfrc_applied (`disturbance_at="link"`), or added to the motor
     command after the controller (`"motor"`, as a pulse injected into a drive's input; then
     the recorded tau_m includes it, as the drive's own log would). `tau0`: the integrator's
-    initial state, default tau_m[0] (CONTRACT section 2). `loop`: bench-loop effects
+    initial state, default tau_m[0] (docs/controller.md). `loop`: bench-loop effects
     (bench.effects.LoopEffects, e.g. from an extended MJCF's numerics) whose torque, a function
     of the rotor angle and velocity, adds to the applied motor torque. `sensors`: measure as
     the virtual experiment does (`bench.experiment`): the controller and the returned q_m, q
@@ -185,7 +185,7 @@ def forward_errors(log: Log, result: ReplayResult, skip: int = 0) -> dict[str, f
 
 
 def simulated_log(log: Log, result: ReplayResult, source: str) -> Log:
-    """The replay as a log (CONTRACT section 1): the measured log's metadata (rate, gains,
+    """The replay as a log (docs/log-format.md): the measured log's metadata (rate, gains,
     axis, gravity) with `source` and `replay_of`; columns t, q_m, q (two-mass models), tau_m,
     q_ref, and `disturbance` when one was applied."""
     meta = {k: v for k, v in log.meta.items()

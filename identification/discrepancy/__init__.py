@@ -1,4 +1,4 @@
-"""Inverse view of the discrepancy analysis: which unmodelled effect (CONTRACT section 4) the
+"""Inverse view of the discrepancy analysis: which unmodelled effect (docs/effects.md) the
 residual of the nominal model carries, ranked by what it explains and by BIC.
 
 The nominal model is the linear two-mass axis the paper's eq. (13) describes, with two terms
@@ -7,8 +7,8 @@ moved out of it because they are candidate effects:
     motor (eq. 6):  tau_m = Jm qm'' + FVm qm' + FSm sign(qm') + K (qm - q)
     link  (eq. 5):  0     = JL q'' + FV q' - K (qm - q) + P g sin(q - qs)
 
-Gravity is kept as the experiment assumes it, at rest at the start position qs (CONTRACT
-section 2: an experiment starts at rest in equilibrium), P = m l [kg m]; the `gravity` effect
+Gravity is kept as the experiment assumes it, at rest at the start position qs (docs/controller.md:
+an experiment starts at rest in equilibrium), P = m l [kg m]; the `gravity` effect
 frees its phase (MX, MY of eq. 13). The link Coulomb friction FS of eq. 13 is the
 `link_coulomb` effect. Logs without `q` use the motor-side equation only (rigid axis,
 tau_m = J qm'' + FV qm' + FS sign(qm')) and test the effects observable there.

@@ -62,7 +62,7 @@ def _effect(name: str) -> Effect:
 
 
 def design(nom: Nominal, effect: str, fixed: dict) -> Design:
-    """y, W and names of the nominal model extended by `effect` (CONTRACT section 4) with its
+    """y, W and names of the nominal model extended by `effect` (docs/effects.md) with its
     nonlinear values `fixed` (searched, or carried over from another log); the linear
     parameters come from least squares on the columns."""
     return _effect(effect).design(nom, fixed)

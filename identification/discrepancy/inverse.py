@@ -34,7 +34,7 @@ class InverseDiagnosis:
 
 def diagnose_inverse(log: Log, settings: FilterSettings,
                      effects: tuple[str, ...] | None = None) -> InverseDiagnosis:
-    """Evaluate every effect of CONTRACT section 4 against the nominal model of `log` and rank
+    """Evaluate every effect of docs/effects.md against the nominal model of `log` and rank
     them: significant ones (BIC and F-test, and a practical size) first, by delta BIC; the
     first is named when it is significant."""
     nom = nominal(log, settings)

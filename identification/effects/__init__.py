@@ -1,6 +1,6 @@
-"""The unmodelled effects (CONTRACT section 4), identification half: one registry.
+"""The unmodelled effects (docs/effects.md), identification half: one registry.
 
-`EFFECTS` maps each name, in CONTRACT order, to its `Effect` (one module per effect): the
+`EFFECTS` maps each name, in docs/effects.md order, to its `Effect` (one module per effect): the
 strength parameter's name in `extended_parameters` and its unit, and the extended regression
 `diagnose`'s inverse view tests (identification.discrepancy). The bench half
 (jointbench.bench.effects) hides the same names in a simulation. To add an effect: one module

@@ -1,4 +1,4 @@
-"""The identification half of an effect (CONTRACT section 4): its names and units, and what
+"""The identification half of an effect (docs/effects.md): its names and units, and what
 the inverse view of `diagnose` (identification.discrepancy) needs to test it. No MuJoCo here;
 the bench half (jointbench.bench.effects) writes the same names into a simulation.
 """

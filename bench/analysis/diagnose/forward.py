@@ -1,6 +1,6 @@
 """Forward view of `diagnose`: the nominal and the extended MuJoCo axes, built from the
-parameters identified on the log, replay the logged experiment in closed loop (CONTRACT
-section 2, bench.replay) and are compared with the measured q_m, q and tau_m.
+parameters identified on the log, replay the logged experiment in closed loop (docs/controller.md,
+bench.replay) and are compared with the measured q_m, q and tau_m.
 
 The named effect goes into the MJCF where MuJoCo expresses it (bench.effects.write_extended,
 each effect's module there): backlash as a dead-band tendon, spring damping as tendon damping,
@@ -62,7 +62,7 @@ def build_spec(d: Diagnosis, extended: bool) -> mujoco.MjSpec:
 
 
 def _tau0(log: Log) -> float | None:
-    # With ki = 0 there is no integrator: CONTRACT's I[-1] = tau_m[0] would hold the first
+    # With ki = 0 there is no integrator: docs/controller.md's I[-1] = tau_m[0] would hold the first
     # logged torque for ever, which is only right for a log starting at rest (EMPS starts in
     # motion: 89 N held, a constant 65 um off). A P-only drive starts with I = 0.
     return 0.0 if log.meta_float("ki") == 0 else None
@@ -92,7 +92,7 @@ def add_forward_view(d: Diagnosis, say: Callable[[str], None]) -> Diagnosis:
     if log.q_ref is None or log.meta_float("kv") is None:
         return dataclasses.replace(d, forward_note=(
             "not replayed: the log has no q_ref column or no controller gains (kp, kv, ki) "
-            "in its metadata (CONTRACT section 2)"))
+            "in its metadata (docs/controller.md)"))
     try:
         say("forward view: nominal replay")
         fn = _view(d, build_spec(d, extended=False))

@@ -36,7 +36,7 @@ def report_markdown(d: Diagnosis, figures: dict[str, str]) -> str:
         L.append(f"- {BLOCK_NAMES[b]}: {nom.relative_error_pct(nom.residual, b):.2f} %")
     if d.forward_nominal is not None:
         f = d.forward_nominal
-        L += ["", "Forward view (the experiment replayed in closed loop, CONTRACT section 2):",
+        L += ["", "Forward view (the experiment replayed in closed loop, docs/controller.md):",
               "", f"- torque error: {f.tau_rel_pct:.2f} % RMS",
               f"- motor position error: {f.q_m_rms:.4g} RMS ({f.q_m_rel_pct:.2f} % of its motion)"]
         if f.q_rms is not None:
@@ -47,7 +47,7 @@ def report_markdown(d: Diagnosis, figures: dict[str, str]) -> str:
         if key in figures:
             L += ["", f"![{key}]({figures[key]})"]
     L += ["", "## 3. The cause", "",
-          "Every effect of CONTRACT section 4 added to the nominal model, ranked. Named only "
+          "Every effect of docs/effects.md added to the nominal model, ranked. Named only "
           "when significant: delta BIC > 10, F-test p < 1e-3, and a practical size (the "
           f"effect moves its equation's prediction by >= {SIZE_MIN_PCT[0]:g} % RMS on the "
           f"motor side, {SIZE_MIN_PCT[1]:g} % on the link side).", "",

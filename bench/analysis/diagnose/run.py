@@ -1,10 +1,10 @@
 """`jointbench diagnose`: what the simulation gets wrong on a log, the named cause, the extended
-model and the gain (CONTRACT sections 3 and 4).
+model and the gain (docs/cli.md and docs/effects.md).
 
 1. Nominal model from the data (identification.discrepancy.nominal) and its MuJoCo axis.
 2. Two views of the error: inverse (predicted torque and link-equation residual on the measured
    motion) and forward (the logged experiment replayed in closed loop in MuJoCo).
-3. Every effect of CONTRACT section 4 tested; the best one named only when significant.
+3. Every effect of docs/effects.md tested; the best one named only when significant.
 4. The named effect written into the MJCF (DIR/extended.xml) with its identified parameter.
 5. Both views again with the extended model: the gain, figures and DIR/report.md.
 """
@@ -53,7 +53,7 @@ def nominal_parameters(nom: Nominal) -> dict[str, float]:
 
 
 def extended_parameters(c: Candidate | None, nom: Nominal) -> dict[str, float]:
-    """The named effect's parameter under its CONTRACT name (identification.effects), its
+    """The named effect's parameter under its docs/effects.md name (identification.effects), its
     other identified parameters, and the refitted nominal parameters of the extended model."""
     if c is None:
         return {}

@@ -1,5 +1,5 @@
 """The results of `jointbench diagnose` as data: the diagnosis of one log and the forward view
-of one model (CONTRACT sections 3 and 4), with the JSON answer of `diagnose --json`."""
+of one model (docs/cli.md and docs/effects.md), with the JSON answer of `diagnose --json`."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ BLOCK_NAMES = ("motor equation (eq. 6): torque residual, % of the measured torqu
 
 @dataclass(frozen=True)
 class ForwardView:
-    """Replay errors (CONTRACT section 2 closed loop) of one model against the log."""
+    """Replay errors (docs/controller.md closed loop) of one model against the log."""
 
     q_m_rms: float           # [rad or m]
     q_rms: float | None
