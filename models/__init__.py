@@ -73,15 +73,19 @@ def _name(model: mujoco.MjModel, obj: mujoco.mjtObj, index: int) -> str:
     return mujoco.mj_id2name(model, obj, index) or ""
 
 
+def _suffixed(model: mujoco.MjModel, objtype, count: int, suffix: str):
+    """(index, name, axis) of the objects of `objtype` named AXIS + `suffix`."""
+    for i in range(count):
+        name = _name(model, objtype, i)
+        if name.endswith(suffix):
+            yield i, name, name[: -len(suffix)]
+
+
 def _rigid_axes(model: mujoco.MjModel, source: str, flexible: set[str]) -> list[Axis]:
     """Rigid axes: an actuator `X_motor` with a joint transmission to joint `X`, no joint
     `X_motor`, no tendon `X_spring` (module docstring), in actuator order."""
     axes = []
-    for act in range(model.nu):
-        aname = _name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, act)
-        if not aname.endswith("_motor"):
-            continue
-        axis = aname[: -len("_motor")]
+    for act, aname, axis in _suffixed(model, mujoco.mjtObj.mjOBJ_ACTUATOR, model.nu, "_motor"):
         if axis in flexible or mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, aname) >= 0:
             continue  # flexible axis, or a malformed one that find_axes reports
         j = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, axis)
@@ -104,11 +108,8 @@ def find_axes(model: mujoco.MjModel, source: str = "<model>") -> list[Axis]:
     actuator order. ModelStructureError names what is missing or malformed when the model
     does not follow the axis convention."""
     axes = []
-    for tid in range(model.ntendon):
-        tname = _name(model, mujoco.mjtObj.mjOBJ_TENDON, tid)
-        if not tname.endswith("_spring"):
-            continue
-        axis = tname[: -len("_spring")]
+    for tid, tname, axis in _suffixed(model, mujoco.mjtObj.mjOBJ_TENDON, model.ntendon,
+                                      "_spring"):
         adr, num = model.tendon_adr[tid], model.tendon_num[tid]
         wraps = {}
         for w in range(adr, adr + num):
