@@ -19,7 +19,7 @@ from __future__ import annotations
 __version__ = "0.2.0"
 
 _API = ("simulate", "identify", "diagnose", "read_log", "write_log", "Log", "Fit",
-        "DiagnosisResult")
+        "DiagnosisResult", "campaign", "CampaignReport")
 __all__ = ["__version__", *_API]
 
 

@@ -4,6 +4,8 @@
     log = jb.simulate("prototype", seed=1)     # a virtual experiment's Log
     fit = jb.identify(log)                     # fit.table(), fit.to_json(), fit.plot()
     d = jb.diagnose(log); d.write("out/")
+    c = jb.campaign(runs=20, methods=["mymodule:estimate"], require="K.abs_bias_pct<1")
+    print(c.table()); c.passed                 # every method side by side, the gates
 
 Computations return frozen dataclasses; their text, JSON, figures and files come from the
 presentation layer (`bench.present`, `bench.analysis.diagnose.report`), as on the command line.
@@ -13,13 +15,24 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable
+from typing import TYPE_CHECKING, Callable, Sequence
 
 from jointbench.bench.analysis.diagnose import Diagnosis, summary_text
 from jointbench.bench.analysis.diagnose import diagnose as diagnose_log
 from jointbench.bench.analysis.diagnose import write as write_diagnosis
+from jointbench.bench.campaign.compare import entries
+from jointbench.bench.campaign.executors import make_executor
+from jointbench.bench.campaign.gates import (GateResult, check_gates, evaluate, gates_text,
+                                             parse_gates)
+from jointbench.bench.campaign.methods import (DEFAULT_TIMEOUT_S, Method, methods_of,
+                                               with_methods)
+from jointbench.bench.campaign.run import run_campaign
+from jointbench.bench.campaign.settings import RunSettings
+from jointbench.bench.campaign.spec import CampaignSpec
+from jointbench.bench.campaign.summary import summary_text as campaign_text
 from jointbench.bench.effects import HiddenEffect, parse_effect
 from jointbench.bench.present.identify import identify_json, identify_text
 from jointbench.bench.sim.experiment import run_experiment
@@ -35,7 +48,7 @@ if TYPE_CHECKING:
     import matplotlib.figure
 
 __all__ = ["Fit", "DiagnosisResult", "Log", "simulate", "identify", "diagnose", "read_log",
-           "write_log"]
+           "write_log", "campaign", "CampaignReport"]
 
 LogLike = Log | str | os.PathLike
 
@@ -151,3 +164,80 @@ def diagnose(log: LogLike, forward: bool = True,
     effects, the named causes, the extended model, its gain in the inverse and (with
     `forward`) the closed-loop forward views. Writes nothing (see DiagnosisResult.write)."""
     return DiagnosisResult(diagnose_log(_as_log(log), forward=forward, progress=progress))
+
+
+@dataclass(frozen=True)
+class CampaignReport:
+    """A finished campaign (`campaign`): `summary` (the `campaign --json` object: Monte Carlo
+    statistics per model, `comparison` of every method side by side, `timing`), `rows` the
+    table's rows, `gates` the accuracy gates checked, `table_path` the CSV (None: not kept)."""
+
+    summary: dict
+    rows: tuple[dict[str, str], ...]
+    gates: tuple[GateResult, ...]
+    table_path: str | None
+    wall_s: float
+
+    @property
+    def passed(self) -> bool:
+        """Every gate passed (True without gates)."""
+        return all(g.passed for g in self.gates)
+
+    @property
+    def comparison(self) -> list[dict]:
+        """Per sweep point, every method's counts, time and per-parameter statistics."""
+        return self.summary["comparison"]
+
+    def table(self) -> str:
+        """The text `jointbench campaign` prints: statistics, methods side by side, gates."""
+        text = campaign_text(self.summary, True)
+        return text + ("\n\n" + gates_text(list(self.gates)) if self.gates else "")
+
+    def to_json(self) -> dict:
+        """The `campaign --json` object, strict JSON (NaN as null)."""
+        return finite_json(self.summary)
+
+
+def campaign(model: str | os.PathLike = "prototype", joint: str | None = None, *,
+             runs: int = 50, seed: int = 0, duration: float = 60.0,
+             methods: Sequence[str | Callable[[Log], dict] | Method]
+             | dict[str, str | Callable[[Log], dict]] = (),
+             method_timeout: float = DEFAULT_TIMEOUT_S, require: str | Sequence[str] | None = None,
+             id_models: Sequence[str] = ("joint-motor", "motor-only"),
+             sweep: tuple[str, Sequence[float]] | None = None, workers: int | None = None,
+             scheduler: str | None = None, out: str | os.PathLike | None = None,
+             **settings) -> CampaignReport:
+    """`runs` virtual experiments on `model`, each identified by the built-in `id_models` and
+    by every plug-in of `methods` (callables of a Log returning {name: value} or {name: (value,
+    sigma)} with the paper's names, or "MODULE:FUNCTION" texts; a {label: method} dict names
+    them; bench/campaign/methods.py),
+    each call under a deadline of `method_timeout` s; then the accuracy gates `require`
+    (docs/cli.md grammar, e.g. "K.abs_bias_pct<0.5, failed==0"). `settings`: the other
+    RunSettings (amplitude, noise, motor_bits, link_bits, scatter, wn, Nd, stencil, effect,
+    debias); `sweep` (NAME, values). The table goes to `out` (resumed when it exists) or to a
+    temporary file. `workers` local processes (default all cores; 1: this process, needed for
+    a callable that is not importable, e.g. a lambda). Raises CampaignError (a ValueError) for
+    bad input, before any run."""
+    base = RunSettings(model=str(model), joint=joint, duration=duration,
+                       id_models=tuple(id_models), **settings)
+    name, values = sweep if sweep is not None else (None, ())
+    chosen = methods_of(methods)
+    spec = with_methods(CampaignSpec(base=base, runs=runs, seed=seed, sweep=name,
+                                     values=tuple(float(v) for v in values)), chosen)
+    gates = parse_gates(require)
+    check_gates(gates, entries(spec))
+    executor = make_executor(workers, scheduler)
+    try:
+        with tempfile.TemporaryDirectory(prefix="jointbench-campaign-") as tmp:
+            table = Path(out) if out is not None else Path(tmp) / "campaign.csv"
+            result = run_campaign(spec, table, executor, methods=chosen,
+                                  method_timeout=method_timeout)
+    finally:
+        executor.close()
+    summary = dict(result.summary)
+    results = evaluate(gates, summary["comparison"])
+    summary["gates"] = [r.as_dict() for r in results]
+    summary["timing"] = {"engine": executor.description, "wall_s": result.wall_s,
+                         "runs_this_invocation": result.new, "resumed_rows": result.resumed}
+    return CampaignReport(summary, tuple(result.rows), tuple(results),
+                          str(out) if out is not None else None, result.wall_s)

@@ -6,18 +6,25 @@ finished row to the table and, when all are in, returns the rows and the Monte C
 from __future__ import annotations
 
 import math
+import pickle
 import sys
 import tempfile
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
+from functools import partial
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Sequence
 
 import numpy as np
 
 from jointbench.bench.analysis.debias import debias, friction_timeconst_of
+from jointbench.bench.campaign.executors import SerialExecutor
+from jointbench.bench.campaign.host import call, close_hosts
+from jointbench.bench.campaign.methods import (DEFAULT_TIMEOUT_S, SCORED, BadResult, Method,
+                                               blind, check_estimates, method_labels)
 from jointbench.bench.campaign.scatter import scattered_factors, scattered_mjcf
-from jointbench.bench.campaign.settings import ID_MODELS, SWEEPABLE, RunSettings, debiased_models
+from jointbench.bench.campaign.settings import (ID_MODELS, SWEEPABLE, CampaignError, RunSettings,
+                                                debiased_models)
 from jointbench.bench.campaign.spec import DEBIASED, PARAMS, TRUTH, CampaignSpec, RunTask
 from jointbench.bench.campaign.summary import summarize
 from jointbench.bench.campaign.table import CampaignTable
@@ -37,12 +44,14 @@ from jointbench.identification.physical import invert_motor_only
 
 @dataclass(frozen=True)
 class RunOutcome:
-    """A finished run: its table row (strings) and the wall times it took in the worker."""
+    """A finished run: its table row (strings) and the wall times it took in the worker:
+    simulation, all identifications, and per method (built-in model, `MODEL+bc`, plug-in)."""
 
     index: int
     row: dict[str, str]
     sim_s: float = math.nan
     identify_s: float = math.nan
+    times: dict[str, float] = field(default_factory=dict)
 
 
 def _fmt(x) -> str:
@@ -102,8 +111,35 @@ def corrected_sigmas(ident, log) -> dict[str, float]:
             if n not in ls.unidentifiable}
 
 
+def _run_method(method: Method, log, timeout_s: float, row: dict[str, str],
+                times: dict[str, float]) -> None:
+    """One plug-in method on the (blind) log: its cells of the row and, when it answered, its
+    wall time."""
+    answer = call(method.ref, method.fn, log, timeout_s)
+    label = method.label
+    try:
+        if answer.error is not None:
+            raise BadResult(answer.error)
+        est, sig = check_estimates(answer.value)
+    except BadResult as err:
+        row[f"{label}.status"] = "failed"
+        row[f"{label}.reason"] = " ".join(str(err).split())[:300]
+    else:
+        row[f"{label}.status"] = "ok"
+        for p in SCORED:
+            row[f"{label}.{p}"] = _fmt(est.get(p))
+            row[f"{label}.{p}.sigma"] = _fmt(sig.get(p))
+        times[label] = answer.wall_s
+
+
 def run_task(task: RunTask) -> RunOutcome:
     """Simulate and identify one run; never raises: a failure is the row's status and reason."""
+    return run_task_with((), DEFAULT_TIMEOUT_S, task)
+
+
+def run_task_with(methods: Sequence[Method], timeout_s: float, task: RunTask) -> RunOutcome:
+    """run_task, then every plug-in method on the run's log (blind: without its truth), each
+    under a deadline of `timeout_s`; a method's failure is its own status and reason."""
     s = task.settings
     row: dict[str, str] = {"run": str(task.index), "repeat": str(task.repeat),
                            "seed": str(task.seed), "status": "ok", "reason": "",
@@ -112,6 +148,7 @@ def run_task(task: RunTask) -> RunOutcome:
         row[name] = _fmt(getattr(s, name))
     reasons: list[str] = []
     sim_s = identify_s = math.nan
+    times: dict[str, float] = {}
     try:
         t0 = time.perf_counter()
         effect = parse_effect(s.effect) if s.effect else None
@@ -138,18 +175,21 @@ def run_task(task: RunTask) -> RunOutcome:
             row[f"truth.{p}"] = _fmt(truth.get(p))
         t1 = time.perf_counter()
         for m in s.id_models:
+            tm = time.perf_counter()
             try:
                 ident = identify(log, m, _filter(s, log))
                 corr = corrected_sigmas(ident, log)
             except Exception as err:  # noqa: BLE001 - recorded in the row
                 reasons.append(f"{m}: {type(err).__name__}: {err}")
                 continue
+            times[m] = time.perf_counter() - tm
             pre = ID_MODELS[m]
             for p in PARAMS[m]:
                 row[f"{pre}.{p}"] = _fmt(ident.physical.get(p))
                 row[f"{pre}.{p}.sigma"] = _fmt(ident.physical_sigma.get(p))
                 row[f"{pre}.{p}.sigma_c"] = _fmt(corr.get(p))
             if m in debiased_models(s):
+                tm = time.perf_counter()
                 try:
                     d = debias(log, ident, replicas=s.debias, seed=task.seed,
                                friction_timeconst=friction_timeconst_of(
@@ -161,11 +201,16 @@ def run_task(task: RunTask) -> RunOutcome:
                     row[f"{pre}{DEBIASED}.{p}"] = _fmt(d.estimate.get(p))
                     row[f"{pre}{DEBIASED}.{p}.sigma_c"] = _fmt(d.sigma.get(p))
                     row[f"{pre}{DEBIASED}.{p}.sigma_r"] = _fmt(d.sigma_replicas.get(p))
+                times[m + DEBIASED] = time.perf_counter() - tm
         identify_s = time.perf_counter() - t1
+        if methods:
+            seen = blind(log)
+            for method in methods:
+                _run_method(method, seen, timeout_s, row, times)
     if reasons:
         row["status"] = "failed"
         row["reason"] = " ".join("; ".join(reasons).split())  # one line
-    return RunOutcome(task.index, row, sim_s, identify_s)
+    return RunOutcome(task.index, row, sim_s, identify_s, times)
 
 
 def lost_outcome(task: RunTask, error: str) -> RunOutcome:
@@ -223,32 +268,59 @@ class CampaignResult:
     wall_s: float
     sim_s: list[float]
     identify_s: list[float]
+    times: dict[int, dict[str, float]] = field(default_factory=dict)  # run -> method -> s
+
+
+def _check_methods(spec: CampaignSpec, methods: Sequence[Method], executor) -> None:
+    """The methods are the spec's, and each can reach the executor's workers."""
+    labels = [m.label for m in methods]
+    if labels != method_labels(spec):
+        raise ValueError(f"methods {labels} differ from the spec's {method_labels(spec)}")
+    if isinstance(executor, SerialExecutor):
+        return
+    for m in methods:
+        try:
+            pickle.dumps(m)
+        except Exception:  # noqa: BLE001 - any pickling failure says the same
+            raise CampaignError(f"method {m.label} ({m.source}) cannot be sent to worker "
+                                "processes: define it in a module (MODULE:FUNCTION) or run "
+                                "with one worker") from None
 
 
 def run_campaign(spec: CampaignSpec, table: str | Path, executor,
-                 progress: Callable[[bool], None] | None = None) -> CampaignResult:
+                 progress: Callable[[bool], None] | None = None,
+                 methods: Sequence[Method] = (),
+                 method_timeout: float = DEFAULT_TIMEOUT_S) -> CampaignResult:
     """Run the campaign's missing runs on `executor` (bench.executors), appending to `table`;
-    when all are in, sort the table and return the rows and summary."""
+    when all are in, sort the table and return the rows and summary. `methods` (those of
+    `spec`, bench.campaign.methods.with_methods) run on every log, each call under a deadline
+    of `method_timeout` s."""
+    _check_methods(spec, methods, executor)
     tab = CampaignTable(Path(table), spec)
     resumed = len(tab.rows)
     pending = [spec.task(i) for i in range(spec.total) if i not in tab.rows]
     sim_s: list[float] = []
     identify_s: list[float] = []
+    times: dict[int, dict[str, float]] = {}
+    task = partial(run_task_with, tuple(methods), float(method_timeout))
     t0 = time.perf_counter()
     try:
-        for done in executor.map_unordered(run_task, pending):
+        for done in executor.map_unordered(task, pending):
             outcome = done.value if done.error is None else lost_outcome(done.item, done.error)
             tab.append(outcome.row)
             if math.isfinite(outcome.sim_s):
                 sim_s.append(outcome.sim_s)
             if math.isfinite(outcome.identify_s):
                 identify_s.append(outcome.identify_s)
+            times[outcome.index] = outcome.times
             if progress is not None:
                 progress(outcome.row["status"] == "ok")
     finally:
         tab.close()
+        close_hosts()
     wall = time.perf_counter() - t0
     tab.finalize()
     rows = [tab.rows[i] for i in sorted(tab.rows)]
-    return CampaignResult(spec=spec, rows=rows, summary=summarize(spec, rows), resumed=resumed,
-                          new=len(pending), wall_s=wall, sim_s=sim_s, identify_s=identify_s)
+    return CampaignResult(spec=spec, rows=rows, summary=summarize(spec, rows, times=times),
+                          resumed=resumed, new=len(pending), wall_s=wall, sim_s=sim_s,
+                          identify_s=identify_s, times=times)

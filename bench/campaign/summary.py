@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from jointbench.bench.campaign.compare import compare, compare_text
 from jointbench.bench.campaign.settings import ID_MODELS, debiased_models
 from jointbench.bench.campaign.spec import DEBIASED, PARAMS, CampaignSpec
 from jointbench.identification.summary import (NOMINAL_2SIGMA, Coverage, ParameterStats,
@@ -42,9 +43,12 @@ def _model_stats(sel: list[dict[str, str]], pre: str, params: tuple[str, ...],
     return stats
 
 
-def summarize(spec: CampaignSpec, rows: list[dict[str, str]], k: float = 2.0) -> dict:
+def summarize(spec: CampaignSpec, rows: list[dict[str, str]], k: float = 2.0,
+              times: dict[int, dict[str, float]] | None = None) -> dict:
     """The campaign's Monte Carlo statistics (JSON-able): per sweep point, per identification
-    model, per parameter: bias, empirical std, mean sigma (paper and corrected) and coverage."""
+    model, per parameter: bias, empirical std, mean sigma (paper and corrected) and coverage;
+    and `comparison`, every method side by side (bench.campaign.compare; `times`: run ->
+    method -> wall time of the runs done now)."""
     failures: dict[str, int] = {}
     for r in rows:
         if r["status"] != "ok":
@@ -70,7 +74,7 @@ def summarize(spec: CampaignSpec, rows: list[dict[str, str]], k: float = 2.0) ->
             "failed": sum(r["status"] != "ok" for r in rows),
             "failures": dict(sorted(failures.items(), key=lambda kv: -kv[1])[:10]),
             "k_sigma": k, "nominal_coverage": NOMINAL_2SIGMA if k == 2.0 else None,
-            "groups": groups}
+            "groups": groups, "comparison": compare(spec, rows, times, k)}
 
 
 def _stats_of(group_model: list[dict]) -> list[ParameterStats]:
@@ -87,8 +91,9 @@ def _stats_of(group_model: list[dict]) -> list[ParameterStats]:
     return out
 
 
-def summary_text(summary: dict) -> str:
-    """The summary as fixed-width tables (printed, and the body of the Markdown file)."""
+def summary_text(summary: dict, side_by_side: bool | None = None) -> str:
+    """The summary as fixed-width tables (printed, and the body of the Markdown file); the
+    methods side by side when `side_by_side` (None: when plug-in methods ran)."""
     lines = [f"runs: {summary['runs']}, ok: {summary['ok']}, failed: {summary['failed']}"]
     for reason, count in summary["failures"].items():
         lines.append(f"  failed x{count}: {reason}")
@@ -105,6 +110,11 @@ def summary_text(summary: dict) -> str:
             lines.append(f"## {m}" + (f" ({title})" if title else "")
                          + f": {group['ok']} of {group['n_runs']} runs ok")
             lines.append(stats_table(_stats_of(stats), kinds or ("paper",)))
+    comparison = summary.get("comparison", [])
+    if side_by_side is None:
+        side_by_side = any(m["kind"] == "plug-in" for g in comparison for m in g["methods"])
+    if side_by_side and comparison:
+        lines += ["", compare_text(comparison, summary["k_sigma"])]
     return "\n".join(lines)
 
 

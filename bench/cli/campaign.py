@@ -4,7 +4,10 @@ Monte Carlo summary (bias, empirical std, mean reported sigma, +-2 sigma coverag
 The spec (bench.campaign.spec), the runs (bench.campaign.run), the resumable table
 (bench.campaign.table) and the summary (bench.campaign.summary) live in bench/campaign/.
 Engines (bench.campaign.executors): all local cores by default, `--workers N`, or an existing
-Dask cluster with `--scheduler tcp://HOST:PORT`.
+Dask cluster with `--scheduler tcp://HOST:PORT`. Plug-in estimators (`--method`,
+bench.campaign.methods) run on every log beside the built-in models; accuracy gates
+(`--require`, bench.campaign.gates) end the command with status 3 when one fails, and
+`--junit` writes them as a JUnit report (bench.campaign.junit).
 
 Light at import (argparse, the standard library and bench.campaign.settings): `run` imports
 the numerical modules when the command runs.
@@ -20,10 +23,12 @@ from pathlib import Path
 from typing import Callable
 
 from jointbench.bench.campaign.settings import SWEEPABLE, CampaignError, RunSettings
+from jointbench.bench.cli.common import EXIT_GATES_FAILED, positive
 
 # Imported by the dispatcher before it traps signals (see bench/cli/__init__.py).
 LIBRARY = ("jointbench.bench.campaign.run", "jointbench.bench.campaign.summary",
-           "jointbench.bench.campaign.table", "jointbench.bench.effects")
+           "jointbench.bench.campaign.table", "jointbench.bench.campaign.gates",
+           "jointbench.bench.campaign.junit", "jointbench.bench.effects")
 
 
 def _parse_sweep(text: str) -> tuple[str, tuple[float, ...]]:
@@ -83,9 +88,56 @@ def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
     p.add_argument("--out", default="campaign.csv",
                    help="table file; an existing one of the same campaign is resumed "
                         "(default campaign.csv)")
+    p.add_argument("--method", action="append", metavar="[LABEL=]TARGET",
+                   help="also run a plug-in estimator on every log: MODULE:FUNCTION (the "
+                        "current folder is importable) or FILE.py:FUNCTION, a function of a "
+                        "jointbench.Log returning {name: value} or {name: (value, sigma)} with "
+                        "the paper's names; repeatable")
+    p.add_argument("--method-timeout", type=positive, default=60.0, metavar="S",
+                   help="deadline of one plug-in call in s; past it the call is stopped and "
+                        "fails for that run (default 60)")
+    p.add_argument("--require", action="append", metavar="GATES",
+                   help="accuracy gates, e.g. \"K.abs_bias_pct<0.5, Jm.coverage_pct>=90, "
+                        "failed==0\" or \"mymethod:K.rmse_pct<1\"; exit status 3 when one "
+                        "fails (grammar: docs/cli.md); repeatable")
+    p.add_argument("--junit", metavar="FILE.xml", help="write the gates as a JUnit report")
     p.add_argument("--json", action="store_true", help="print the summary as one JSON object")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     return p
+
+
+def plugins(args: argparse.Namespace, spec):
+    """(spec with the methods, methods, gates) of --method, --require and --junit, all checked
+    before any run. Raises CampaignError (bad input)."""
+    from jointbench.bench.campaign.compare import entries
+    from jointbench.bench.campaign.gates import check_gates, parse_gates
+    from jointbench.bench.campaign.junit import check_junit_path
+    from jointbench.bench.campaign.methods import check_methods, parse_method, with_methods
+
+    methods = check_methods([parse_method(text) for text in args.method or []])
+    spec = with_methods(spec, methods)
+    gates = parse_gates(args.require)
+    check_gates(gates, entries(spec))
+    if args.junit:
+        if not gates:
+            raise CampaignError("--junit needs --require: the report holds the gates")
+        if Path(args.junit).resolve() == Path(args.out).resolve():
+            raise CampaignError(f"--junit {args.junit}: the same file as --out")
+        check_junit_path(Path(args.junit))
+    return spec, methods, gates
+
+
+def check_gates_after(args: argparse.Namespace, gates, summary: dict, wall_s: float) -> list:
+    """The gates on the campaign's comparison, into summary["gates"] and the JUnit report."""
+    from jointbench.bench.campaign.gates import evaluate
+    from jointbench.bench.campaign.junit import write_junit
+
+    results = evaluate(gates, summary["comparison"])
+    summary["gates"] = [r.as_dict() for r in results]
+    if args.junit:
+        write_junit(Path(args.junit), results, {"table": str(args.out), "runs": str(
+            summary["runs"]), "spec": json.dumps(summary["spec"], sort_keys=True)}, wall_s)
+    return results
 
 
 def spec_arguments(args: argparse.Namespace, parse_effect: Callable[[str], object]) -> dict:
@@ -129,10 +181,11 @@ def _timing_line(result, timing: dict, engine: str) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """`jointbench campaign`: run (or resume) the campaign, write the table and its summaries,
-    print them. Exit status 1 when no run succeeded."""
+    print them. Exit status 3 when an accuracy gate failed, else 1 when no run succeeded."""
     import numpy as np
 
     from jointbench.bench.campaign.executors import make_executor
+    from jointbench.bench.campaign.gates import gates_text
     from jointbench.bench.campaign.run import Progress, run_campaign
     from jointbench.bench.campaign.spec import CampaignSpec
     from jointbench.bench.campaign.summary import summary_paths, summary_text
@@ -141,7 +194,7 @@ def run(args: argparse.Namespace) -> int:
     from jointbench.identification.log import atomic_write_text
     from jointbench.identification.output import finite_json
 
-    spec = CampaignSpec(**spec_arguments(args, parse_effect))
+    spec, methods, gates = plugins(args, CampaignSpec(**spec_arguments(args, parse_effect)))
     out = Path(args.out)
     if out.suffix.lower() == ".xml" or (Path(str(args.model)).exists()
                                         and out.resolve() == Path(str(args.model)).resolve()):
@@ -157,7 +210,8 @@ def run(args: argparse.Namespace) -> int:
         if not args.quiet:
             print(f"campaign: {spec.total} runs ({tab_rows} already in {out}) on "
                   f"{executor.description}", file=sys.stderr)
-        result = run_campaign(spec, out, executor, progress=bar.update)
+        result = run_campaign(spec, out, executor, progress=bar.update, methods=methods,
+                              method_timeout=args.method_timeout)
     finally:
         executor.close()
     summary = dict(result.summary)
@@ -170,7 +224,10 @@ def run(args: argparse.Namespace) -> int:
         "mean_simulation_s": float(np.mean(result.sim_s)) if result.sim_s else None,
         "mean_identification_s": float(np.mean(result.identify_s)) if result.identify_s else None,
     }
-    text = summary_text(summary)
+    results = check_gates_after(args, gates, summary, result.wall_s) if gates else []
+    text = summary_text(summary, True if gates else None)
+    if results:
+        text += "\n\n" + gates_text(results)
     json_path, md_path = summary_paths(out)
     atomic_write_text(json_path, json.dumps(finite_json(summary), indent=1, allow_nan=False) + "\n")
     timing = _timing_line(result, summary["timing"], executor.description)
@@ -181,4 +238,9 @@ def run(args: argparse.Namespace) -> int:
         print(f"table: {out}; summary: {json_path}, {md_path}")
         print(timing)
         print(text)
+    failed = [r for r in results if not r.passed]
+    if failed:
+        print(f"jointbench campaign: {len(failed)} of {len(results)} accuracy gates failed: "
+              + "; ".join(f"{r.name} ({r.message})" for r in failed), file=sys.stderr)
+        return EXIT_GATES_FAILED
     return 0 if summary["ok"] > 0 else 1

@@ -18,6 +18,7 @@ from jointbench.bench.options import key_numbers
 EXIT_OK = 0
 EXIT_FAILURE = 1    # anything else (an internal error)
 EXIT_BAD_INPUT = 2  # a message on stderr naming the file, line or column
+EXIT_GATES_FAILED = 3  # `campaign --require`: an accuracy gate failed
 
 
 class UsageError(ValueError):

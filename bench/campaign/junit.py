@@ -1,0 +1,58 @@
+"""The accuracy gates (bench.campaign.gates) as a JUnit XML report, the format CI systems
+(GitHub Actions test reporters, GitLab, Jenkins) display: one test case per gate and method,
+a <failure> with the measured value for each gate that failed. Written atomically."""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+from jointbench.bench.campaign.gates import GateResult
+from jointbench.bench.campaign.settings import CampaignError
+from jointbench.identification.log import atomic_write_text
+
+SUITES = "jointbench campaign"   # the root's name: how an existing report is recognised
+
+
+def check_junit_path(path: Path) -> None:
+    """Before any run: the folder exists, and the file is absent or an earlier report of ours
+    (never overwrite another file). Raises CampaignError."""
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir():
+        raise CampaignError(f"--junit {path}: folder {parent} does not exist")
+    if path.is_dir():
+        raise CampaignError(f"--junit {path}: is a directory")
+    if path.exists() and path.stat().st_size > 0:
+        with open(path, "rb") as handle:
+            head = handle.read(4096).decode("utf-8", "replace")
+        if f'name="{SUITES}"' not in head:
+            raise CampaignError(f"--junit {path}: refusing to overwrite a file that is not a "
+                                "jointbench JUnit report; remove it or choose another name")
+
+
+def junit_xml(results: list[GateResult], properties: dict[str, str], wall_s: float) -> str:
+    """The report's text: <testsuites><testsuite> with a <testcase> per result."""
+    failures = sum(not r.passed for r in results)
+    counts = {"tests": str(len(results)), "failures": str(failures), "errors": "0",
+              "skipped": "0", "time": f"{wall_s:.3f}"}
+    root = ET.Element("testsuites", {"name": SUITES, **counts})
+    suite = ET.SubElement(root, "testsuite", {"name": "accuracy gates", **counts})
+    props = ET.SubElement(suite, "properties")
+    for key, value in properties.items():
+        ET.SubElement(props, "property", {"name": key, "value": value})
+    for r in results:
+        case = ET.SubElement(suite, "testcase", {"classname": f"jointbench.campaign.{r.method}",
+                                                 "name": r.name, "time": "0"})
+        if not r.passed:
+            failure = ET.SubElement(case, "failure", {"message": r.message,
+                                                      "type": "AccuracyGate"})
+            failure.text = f"{r.name}: {r.message}"
+        else:
+            ET.SubElement(case, "system-out").text = r.message
+    ET.indent(root)
+    return ET.tostring(root, encoding="unicode", xml_declaration=True) + "\n"
+
+
+def write_junit(path: Path, results: list[GateResult], properties: dict[str, str],
+                wall_s: float) -> None:
+    atomic_write_text(Path(path), junit_xml(results, properties, wall_s))
