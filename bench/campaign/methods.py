@@ -144,10 +144,8 @@ def parse_method(text: str) -> Method:
     if not sep:
         label, target = "", text
     target = target.strip()
-    mod, colon, attr = target.rpartition(":")
-    if mod.endswith(".py") and colon:
-        target = f"{Path(mod).resolve()}:{attr}" if Path(mod).is_file() else target
-    resolve(target)
+    attr = target.rpartition(":")[2]
+    resolve(target)   # a FILE.py stays as given (the table's spec line): workers share the cwd
     label = label.strip() or attr.split(".")[-1]
     return Method(check_label(label), target)
 
