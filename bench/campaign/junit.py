@@ -17,18 +17,18 @@ SUITES = "jointbench campaign"   # the root's name: how an existing report is re
 def check_junit_path(path: Path) -> None:
     """Before any run: the folder exists, and the file is absent or an earlier report of ours
     (never overwrite another file). Raises CampaignError."""
-    parent = path.parent if str(path.parent) else Path(".")
-    if not parent.is_dir():
-        raise CampaignError(f"--junit {path}: folder {parent} does not exist")
-    if path.is_dir():
-        raise CampaignError(f"--junit {path}: is a directory")
-    if path.exists() and path.stat().st_size > 0:
+    folder = path.parent if str(path.parent) else Path(".")
+    head = ""
+    if path.is_file() and path.stat().st_size > 0:
         with open(path, "rb") as handle:
             head = handle.read(4096).decode("utf-8", "replace")
-        if f'name="{SUITES}"' not in head:
-            raise CampaignError(f"--junit {path}: refusing to overwrite a file that is not a "
-                                "jointbench JUnit report; remove it or choose another name")
-
+    problem = (f"folder {folder} does not exist" if not folder.is_dir()
+               else "is a directory" if path.is_dir()
+               else "refusing to overwrite a file that is not a jointbench JUnit report; "
+                    "remove it or choose another name" if head and f'name="{SUITES}"' not in head
+               else None)
+    if problem:
+        raise CampaignError(f"--junit {path}: {problem}")
 
 def junit_xml(results: list[GateResult], properties: dict[str, str], wall_s: float) -> str:
     """The report's text: <testsuites><testsuite> with a <testcase> per result."""
