@@ -170,13 +170,15 @@ def diagnose(log: LogLike, forward: bool = True,
 class CampaignReport:
     """A finished campaign (`campaign`): `summary` (the `campaign --json` object: Monte Carlo
     statistics per model, `comparison` of every method side by side, `timing`), `rows` the
-    table's rows, `gates` the accuracy gates checked, `table_path` the CSV (None: not kept)."""
+    table's rows, `gates` the accuracy gates checked, `table_path` the CSV (None: not kept),
+    `times` run -> method -> wall time of the call [s]."""
 
     summary: dict
     rows: tuple[dict[str, str], ...]
     gates: tuple[GateResult, ...]
     table_path: str | None
     wall_s: float
+    times: dict[int, dict[str, float]] = dataclasses.field(default_factory=dict)
 
     @property
     def passed(self) -> bool:
@@ -240,4 +242,4 @@ def campaign(model: str | os.PathLike = "prototype", joint: str | None = None, *
     summary["timing"] = {"engine": executor.description, "wall_s": result.wall_s,
                          "runs_this_invocation": result.new, "resumed_rows": result.resumed}
     return CampaignReport(summary, tuple(result.rows), tuple(results),
-                          str(out) if out is not None else None, result.wall_s)
+                          str(out) if out is not None else None, result.wall_s, result.times)

@@ -72,6 +72,8 @@ def biased_table(tmp_path_factory):
             "--id-models", "joint-motor", "--method", BIASED, "--out", str(out)]
     code = main(args + ["--require", "K.abs_bias_pct<0.5", "--junit", str(junit)])
     summary = json.loads((folder / "b.summary.json").read_text())
+    times = (folder / "b.times.csv").read_text().splitlines()
+    assert times[0] == "run,method,wall_s" and len(times) == 1 + 6 * 2   # both methods, 6 runs
     return args, code, summary, junit
 
 
@@ -105,7 +107,7 @@ def test_gate_fails_on_the_biased_copy_and_passes_on_the_built_in(biased_table, 
     message = failures["biased: K.abs_bias_pct<0.5"].get("message")
     assert message == f"measured {gates['biased']['measured']:.6g}, required < 0.5"
     # The same table, resumed (no run repeated), gated per method.
-    assert main(args + ["--require", "joint-motor:K.abs_bias_pct<0.5"]) == 0
+    assert main(args + ["--require", "joint-motor:K.abs_bias_pct<0.5, biased:time_s<1e9"]) == 0
     assert main(args + ["--require", "biased:K.abs_bias_pct<0.5"]) == 3
     err = capsys.readouterr().err
     assert "1 of 1 accuracy gates failed: biased: K.abs_bias_pct<0.5 (measured" in err

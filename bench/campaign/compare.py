@@ -107,7 +107,7 @@ def _method(entry: Entry, sel: list[dict[str, str]], times: list[float], k: floa
 def compare(spec: CampaignSpec, rows: list[dict[str, str]],
             times: dict[int, dict[str, float]] | None = None, k: float = 2.0) -> list[dict]:
     """Per sweep point: {"sweep": {...} (with a sweep), "methods": [per method its counts,
-    failures, mean wall time per log (runs timed by this invocation) and per parameter
+    failures, mean wall time per answered log (`times`, bench.campaign.times) and per parameter
     n, bias_pct, abs_bias_pct, std_pct, rmse_pct, sigma_pct, coverage_pct]}."""
     times = times or {}
     out = []

@@ -14,8 +14,8 @@ holds for every method: a PARAM gate for every method that estimated PARAM (a bu
 should have and did not fails it), `ok`, `failed` and `time_s` for all. With a sweep, every
 sweep point is checked. A gate whose value is missing (no estimate, no timed run) fails.
 Statistics are bench.campaign.compare's: bias_pct signed (abs_bias_pct its magnitude), in % of
-the truth; coverage_pct of +-2 sigma with the method's own sigma; time_s mean wall time per log.
-"""
+the truth; coverage_pct of +-2 sigma with the method's own sigma; time_s the mean wall time per
+answered log (bench.campaign.times)."""
 
 from __future__ import annotations
 

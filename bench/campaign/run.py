@@ -28,6 +28,7 @@ from jointbench.bench.campaign.settings import (ID_MODELS, SWEEPABLE, CampaignEr
 from jointbench.bench.campaign.spec import DEBIASED, PARAMS, TRUTH, CampaignSpec, RunTask
 from jointbench.bench.campaign.summary import summarize
 from jointbench.bench.campaign.table import CampaignTable
+from jointbench.bench.campaign.times import read_times, times_path, write_times
 from jointbench.bench.effects import parse_effect
 from jointbench.bench.sim.axes import build_experiment_model
 from jointbench.bench.sim.experiment import run_experiment
@@ -269,6 +270,7 @@ class CampaignResult:
     sim_s: list[float]
     identify_s: list[float]
     times: dict[int, dict[str, float]] = field(default_factory=dict)  # run -> method -> s
+    # (every run's times: this invocation's and those of resumed rows, from TABLE.times.csv)
 
 
 def _check_methods(spec: CampaignSpec, methods: Sequence[Method], executor) -> None:
@@ -292,7 +294,8 @@ def run_campaign(spec: CampaignSpec, table: str | Path, executor,
                  methods: Sequence[Method] = (),
                  method_timeout: float = DEFAULT_TIMEOUT_S) -> CampaignResult:
     """Run the campaign's missing runs on `executor` (bench.executors), appending to `table`;
-    when all are in, sort the table and return the rows and summary. `methods` (those of
+    when all are in, sort the table, write the times beside it (bench.campaign.times) and
+    return the rows and summary. `methods` (those of
     `spec`, bench.campaign.methods.with_methods) run on every log, each call under a deadline
     of `method_timeout` s."""
     _check_methods(spec, methods, executor)
@@ -301,7 +304,8 @@ def run_campaign(spec: CampaignSpec, table: str | Path, executor,
     pending = [spec.task(i) for i in range(spec.total) if i not in tab.rows]
     sim_s: list[float] = []
     identify_s: list[float] = []
-    times: dict[int, dict[str, float]] = {}
+    times = {i: t for i, t in read_times(times_path(Path(table))).items() if i in tab.rows} \
+        if resumed else {}
     task = partial(run_task_with, tuple(methods), float(method_timeout))
     t0 = time.perf_counter()
     try:
@@ -320,6 +324,7 @@ def run_campaign(spec: CampaignSpec, table: str | Path, executor,
         close_hosts()
     wall = time.perf_counter() - t0
     tab.finalize()
+    write_times(times_path(Path(table)), times)
     rows = [tab.rows[i] for i in sorted(tab.rows)]
     return CampaignResult(spec=spec, rows=rows, summary=summarize(spec, rows, times=times),
                           resumed=resumed, new=len(pending), wall_s=wall, sim_s=sim_s,
