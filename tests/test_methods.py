@@ -156,6 +156,10 @@ def test_api_callable_runs_in_this_process_with_one_worker():
                          require="const:K.n==1")
     assert report.passed and report.rows[0]["const.K"] == "20000.0"
     assert report.to_json()["gates"][0]["measured"] == 1
+    slow = jb.campaign(runs=1, duration=5, workers=1, id_models=["joint-motor"],
+                       methods={"slow": lambda log: time.sleep(3)}, method_timeout=0.2)
+    assert slow.rows[0]["slow.reason"] == ("timeout: no answer within 0.2 s (the call could not "
+                                           "be stopped: it runs on in a background thread)")
     with pytest.raises(CampaignError, match="cannot be sent to worker processes"):
         jb.campaign(runs=1, duration=5, workers=2, methods={"c": lambda log: {"K": 1.0}})
     with pytest.raises(CampaignError, match="needs a label"):
