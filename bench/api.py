@@ -30,7 +30,7 @@ from jointbench.bench.campaign.gates import (GateResult, check_gates, evaluate, 
 from jointbench.bench.campaign.methods import (DEFAULT_TIMEOUT_S, Method, methods_of,
                                                with_methods)
 from jointbench.bench.campaign.run import run_campaign
-from jointbench.bench.campaign.settings import RunSettings
+from jointbench.bench.campaign.settings import CampaignError, RunSettings
 from jointbench.bench.campaign.spec import CampaignSpec
 from jointbench.bench.campaign.summary import summary_text as campaign_text
 from jointbench.bench.effects import HiddenEffect, parse_effect
@@ -220,6 +220,12 @@ def campaign(model: str | os.PathLike = "prototype", joint: str | None = None, *
     temporary file. `workers` local processes (default all cores; 1: this process, needed for
     a callable that is not importable, e.g. a lambda). Raises CampaignError (a ValueError) for
     bad input, before any run."""
+    allowed = {f.name for f in dataclasses.fields(RunSettings)} - {"model", "joint", "duration",
+                                                                  "id_models"}
+    unknown = sorted(set(settings) - allowed)
+    if unknown:
+        raise CampaignError(f"campaign: unknown setting(s) {', '.join(unknown)} "
+                            f"(known: {', '.join(sorted(allowed))})")
     base = RunSettings(model=str(model), joint=joint, duration=duration,
                        id_models=tuple(id_models), **settings)
     name, values = sweep if sweep is not None else (None, ())

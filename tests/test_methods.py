@@ -162,6 +162,8 @@ def test_api_callable_runs_in_this_process_with_one_worker():
                                            "be stopped: it runs on in a background thread)")
     with pytest.raises(CampaignError, match="cannot be sent to worker processes"):
         jb.campaign(runs=1, duration=5, workers=2, methods={"c": lambda log: {"K": 1.0}})
+    with pytest.raises(CampaignError, match="unknown setting.s. noize"):
+        jb.campaign(runs=1, noize=2.0)
     with pytest.raises(CampaignError, match="needs a label"):
         jb.campaign(runs=1, duration=5, workers=1, methods=[lambda log: {"K": 1.0}])
 
