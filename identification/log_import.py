@@ -266,7 +266,8 @@ def _torque(raw: RawTable, spec: ImportSpec) -> tuple[np.ndarray, str]:
 def _metadata(spec: ImportSpec, rate_hz: float, path: str, steps: list) -> dict[str, str]:
     """The log's metadata: the rate, N, the given keys (numbers and booleans checked as the
     reader checks them), motor-side gains referred to the joint side."""
-    meta = {"sample_rate_hz": f"{rate_hz:.10g}"}
+    # 7 digits: what time stamps rounded to 1e-10 s (or 10 digits of ms) over seconds tell
+    meta = {"sample_rate_hz": f"{rate_hz:.7g}"}
     if spec.gear_ratio is not None:
         meta["gear_ratio"] = f"{spec.gear_ratio:.10g}"
     for key, value in spec.meta.items():

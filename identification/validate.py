@@ -65,12 +65,12 @@ class Validation:
     def text(self, unit: str = "N m") -> str:
         """Two lines for the `identify` report."""
         s = self.settings
-        lines = [f"validation on {self.path} (inverse view, {self.model} model identified on "
-                 f"the fit's log): relative error {self.relative_error_pct:.3g} % against the "
-                 f"fit's own {self.fit_relative_error_pct:.3g} % (ratio {self.ratio:.3g}); "
-                 f"residual rms {self.residual_rms:.4g} {unit} (fit {self.fit_residual_rms:.4g} "
-                 f"{unit}); {self.rows} equations, filter of that log wn = {s.wn:.4g} rad/s, "
-                 f"Nd = {s.Nd}"]
+        lines = [f"validation on {self.path} (inverse view: the identified {self.model} model "
+                 f"predicts that log's motor torque): relative error "
+                 f"{self.relative_error_pct:.3g} % against {self.fit_relative_error_pct:.3g} % "
+                 f"on the fit's own log (ratio {self.ratio:.3g}); motor-torque residual rms "
+                 f"{self.residual_rms:.4g} {unit} against {self.fit_residual_rms:.4g} {unit}; "
+                 f"{self.rows} equations, that log's filter wn = {s.wn:.4g} rad/s, Nd = {s.Nd}"]
         if self.note:
             lines.append(f"validation filter: {self.note}")
         return "\n".join(lines)

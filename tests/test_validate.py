@@ -61,7 +61,8 @@ def test_cli_text_json_and_bad_input(prototype_log, seed2_log, tmp_path, capsys)
     doc = json.loads(capsys.readouterr().out)["validation"]
     assert doc["file"] == str(b) and doc["view"] == "inverse" and 0.8 < doc["ratio"] < 1.2
     assert main(["identify", str(a), "--validate", str(b)]) == 0
-    assert f"validation on {b} (inverse view" in capsys.readouterr().out
+    assert f"validation on {b} (inverse view: the identified joint-motor model" in \
+        capsys.readouterr().out
     noq = tmp_path / "noq.csv"
     noq.write_text("t,q_m,tau_m\n" + "".join(f"{k / 350.87},{k * 1e-3},{k % 7}\n"
                                              for k in range(3000)))
