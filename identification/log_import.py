@@ -17,7 +17,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from jointbench.identification.log_read import JITTER_TOLERANCE, unit_warnings, validate
+from jointbench.identification.log_read import (read_lines, sampling_jitter, unit_warnings,
+                                                validate)
 from jointbench.identification.log_schema import (BOOLEAN_META, NUMERIC_META, OPTIONAL_COLUMNS,
                                                   REQUIRED_COLUMNS, Log, LogError, meta_boolean,
                                                   meta_number)
@@ -134,20 +135,9 @@ def parse_raw(lines, path: str, delimiter: str | None = None) -> RawTable:
 
 
 def read_raw(path: str | os.PathLike, delimiter: str | None = None) -> RawTable:
-    """`parse_raw` on a file. Raises LogError (no such file, not text, bad cell)."""
-    name = str(path)
-    try:
-        with open(path, encoding="utf-8-sig") as handle:
-            text = handle.read()
-    except FileNotFoundError:
-        raise LogError("no such file", name) from None
-    except IsADirectoryError:
-        raise LogError("is a directory, not a file", name) from None
-    except UnicodeDecodeError as err:
-        raise LogError(f"not UTF-8 text (byte {err.start + 1}): a binary file?", name) from None
-    except OSError as err:
-        raise LogError(f"cannot read: {err.strerror}", name) from None
-    return parse_raw(enumerate(text.splitlines(), start=1), name, delimiter)
+    """`parse_raw` on a file, streamed with the log reader's checks (size limit, binary
+    content; identification.log_read.read_lines). Raises LogError."""
+    return read_lines(path, lambda lines, name: parse_raw(lines, name, delimiter))
 
 
 def _check_spec(raw: RawTable, spec: ImportSpec) -> None:
@@ -211,11 +201,8 @@ def _time(raw: RawTable, spec: ImportSpec, steps: list, checks: list) -> np.ndar
                       f"within {dev[k]:.3g} of a period (at most 0.5)")
         steps.append(f"t rebuilt as k / {spec.rate_hz:g} Hz (--rate)")
         return rebuilt
-    period = float(np.median(dt))
-    jitter = np.abs(dt - period) / period
-    bad = np.flatnonzero(~(jitter <= JITTER_TOLERANCE))
-    if bad.size:
-        k = int(bad[0]) + 1
+    period, jitter, k = sampling_jitter(dt)
+    if k is not None:
         raise LogError(f"non-uniform sampling: step {dt[k - 1] / TIME_UNITS[unit]:.6g} {unit} "
                        f"against the median {period / TIME_UNITS[unit]:.6g} {unit} (jitter "
                        f"{100 * jitter[k - 1]:.3g} %, over 1 %); resampling is refused: give "
