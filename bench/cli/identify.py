@@ -98,6 +98,7 @@ def run(args: argparse.Namespace) -> int:
     from jointbench.bench.analysis.debias import SOLREF_FRICTION, DebiasError, debias
     from jointbench.bench.analysis.refine import refine, require_replayable
     from jointbench.bench.present.identify import identify_json, identify_text
+    from jointbench.bench.present.validate import forward_text, forward_validation
     from jointbench.bench.sim.sensors import Sensors
     from jointbench.identification.checks import estimate_flags
     from jointbench.identification.defaults import settings_for
@@ -141,13 +142,15 @@ def run(args: argparse.Namespace) -> int:
         log, result, replicas=args.debias, progress=None if args.json else _debias_progress,
         friction_timeconst=args.friction_timeconst or SOLREF_FRICTION[0])
     validation = None if other is None else validate_on(result, other, args.f1)
+    forward = None if other is None else forward_validation(result, log, other)
     if args.json:
         answer = identify_json(result, truth, flags, warnings, refined, debiased)
         if validation is not None:
-            answer["validation"] = validation.to_json()
+            answer["validation"] = {**validation.to_json(), "forward": forward}
         print(json.dumps(answer, allow_nan=False, default=float))
     else:
         print(identify_text(args.file, log, result, truth, flags, refined, debiased))
         if validation is not None:
             print(validation.text(units(log.prismatic)["offset"]))  # a torque (force)
+            print(forward_text(forward, args.validate))
     return 0
