@@ -20,6 +20,14 @@ def _pyplot():
     return plt
 
 
+def _save(fig, path: Path) -> Path:
+    """Write the figure atomically and release it (pyplot keeps every open figure)."""
+    try:
+        return save_figure_atomic(fig, path)
+    finally:
+        _pyplot().close(fig)
+
+
 def _residuals(d: Diagnosis):
     nom = d.inverse.nominal
     before = nom.residual
@@ -57,7 +65,7 @@ def plot_spectrum(d: Diagnosis, path: Path) -> Path:
         ax.set_ylabel(f"PSD [({torque})^2/Hz]")
         ax.legend()
     fig.tight_layout()
-    return save_figure_atomic(fig, path)
+    return _save(fig, path)
 
 
 def plot_structure(d: Diagnosis, path: Path) -> Path:
@@ -107,7 +115,7 @@ def plot_structure(d: Diagnosis, path: Path) -> Path:
     for ax in panels:  # what does not apply is left out, not drawn empty
         fig.delaxes(ax)
     fig.tight_layout()
-    return save_figure_atomic(fig, path)
+    return _save(fig, path)
 
 
 def plot_inverse(d: Diagnosis, path: Path) -> Path:
@@ -139,7 +147,7 @@ def plot_inverse(d: Diagnosis, path: Path) -> Path:
         ax.set_xlabel("t [s]")
         ax.legend(fontsize=8)
     fig.tight_layout()
-    return save_figure_atomic(fig, path)
+    return _save(fig, path)
 
 
 def _replays(d: Diagnosis):
@@ -190,7 +198,7 @@ def plot_forward(d: Diagnosis, path: Path) -> Path | None:
     fig.suptitle("forward view: the logged experiment replayed in closed loop (grey band: "
                  "the zoom window)", fontsize=10)
     fig.tight_layout()
-    return save_figure_atomic(fig, path)
+    return _save(fig, path)
 
 
 def plot_forward_frf(d: Diagnosis, path: Path) -> Path | None:
@@ -221,4 +229,4 @@ def plot_forward_frf(d: Diagnosis, path: Path) -> Path | None:
                  "(cross spectra with q_ref)", fontsize=10)
     ax.legend()
     fig.tight_layout()
-    return save_figure_atomic(fig, path)
+    return _save(fig, path)
