@@ -171,10 +171,11 @@ def build_experiment_model(model: str | Path = "prototype", joint: str | None = 
                            tau_max: float | None = None) -> ExperimentModel:
     """Compile the experiment model of axis `joint` (default: the first axis).
 
-    `config` gives the locked angles of the other axes (default 0); `center` the link angle
-    the chirp is centred on (default: the moving axis' entry of `config`, else the rest
-    position q0 of eq. 17, shifted by the hidden `gravity` effect's offset). Raises ModelStructureError for a model that does not follow
-    the axis convention and ValueError for bad arguments.
+    `joint` is an axis name or its index counting from 1 (`models.select_axis`). `config`
+    gives the locked angles of the other axes (default 0); `center` the link angle the chirp
+    is centred on (default: the moving axis' entry of `config`, else the rest position q0 of
+    eq. 17, shifted by the hidden `gravity` effect's offset). Raises ModelStructureError for
+    a model that does not follow the axis convention and ValueError for bad arguments.
     """
     if lock not in LOCKS:
         raise ValueError(f"lock must be one of {', '.join(LOCKS)}, got {lock!r}")
