@@ -30,6 +30,7 @@ TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6}
 # counts per turn.
 POSITION_UNITS = {"rad": 1.0, "deg": math.pi / 180, "rev": 2 * math.pi, "m": 1.0, "mm": 1e-3,
                   "um": 1e-6, "counts": None}
+LENGTH_UNITS = ("m", "mm", "um")
 # Torque units: N m (N for prismatic) as is; A or V times the torque constant.
 TORQUE_UNITS = {"Nm": 1.0, "N": 1.0, "A": None, "V": None}
 DEFAULT_UNITS = {"t": "s", "q_m": "rad", "q": "rad", "tau_m": "Nm", "q_ref": "rad"}
@@ -220,6 +221,14 @@ def _position(raw: RawTable, spec: ImportSpec, col: str, prismatic: bool) -> tup
     unit = spec.units.get(col, "m" if prismatic else "rad")
     motor = col in spec.motor_side and spec.gear_ratio is not None
     cpr = spec.link_counts_per_turn if col == "q" else spec.counts_per_turn
+    length = unit in LENGTH_UNITS
+    if length and not prismatic:
+        raise LogError(f"--units {col}={unit}: a length on a revolute axis (give --prismatic "
+                       "for a linear axis)", raw.path, column=name)
+    if prismatic and not length and not motor:
+        raise LogError(f"--units {col}={unit}: an angle on a prismatic axis needs the column "
+                       "on the motor side with --gear-ratio (motor rad per m)", raw.path,
+                       column=name)
     if unit == "counts":
         if cpr is None:
             flag = "--link-counts-per-turn" if col == "q" else "--counts-per-turn"

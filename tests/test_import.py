@@ -117,6 +117,9 @@ def test_non_uniform_sampling_names_the_row():
     (["--map", "t=time,q_m=pos,tau_m=cur", "--units", "t=h"], "--units t=h: not a unit of t"),
     (["--map", "t=time,q_m=pos,tau_m=cur", "--kp", "x"], "argument --kp"),
     (["--map", "t=time;q_m=pos"], "--map: 't=time;q_m=pos' must read COL=RAW"),
+    (["--map", "t=time,q_m=pos,tau_m=cur", "--units", "q_m=mm"], "a length on a revolute axis"),
+    (["--map", "t=time,q_m=pos,tau_m=cur", "--units", "q_m=deg", "--prismatic"],
+     "an angle on a prismatic axis needs"),
 ])
 def test_bad_options_exit_2(tmp_path, capsys, args, message):
     raw = tmp_path / "raw.csv"
@@ -149,6 +152,20 @@ def test_bad_cell_and_input_protection(tmp_path, capsys):
     assert main(["import", str(raw), "--out", str(other)]) == 2
     assert "refusing to overwrite" in capsys.readouterr().err
     assert raw.read_bytes() == before
+
+
+def test_prismatic_ball_screw_in_counts():
+    """A linear axis measured by a motor encoder behind a screw: counts -> motor rad -> m with
+    N = 2 pi / lead (motor rad per m); the force from the current."""
+    lead = 0.01  # m per motor turn
+    raw = table("t,enc,i\n0,0,1\n0.001,1000,2\n0.002,2000,3\n0.003,4096,2\n")
+    log = convert(raw, ImportSpec(columns={"t": "t", "q_m": "enc", "tau_m": "i"},
+                                  units={"q_m": "counts", "tau_m": "A"},
+                                  gear_ratio=2 * np.pi / lead, counts_per_turn=4096,
+                                  torque_constant=0.2, meta={"axis": "prismatic"})).log
+    assert log.prismatic
+    assert np.allclose(log.q_m, np.array([0, 1000, 2000, 4096]) / 4096 * lead)
+    assert np.allclose(log.tau_m, np.array([1, 2, 3, 2]) * 0.2 * 2 * np.pi / lead)
 
 
 def test_motor_side_gains_and_metadata(tmp_path):
