@@ -62,7 +62,7 @@ def test_raw_drive_file_identifies_as_the_native_log(native, tmp_path, capsys):
     for model in ("joint-motor", "motor-only"):
         a, b = identify(native, model).physical, identify(log, model).physical
         assert set(a) == set(b)
-        for k in a:  # the bar: 0.1 %; measured: under 1e-6 %
+        for k in a:  # the bar: 0.1 %; measured: identical
             assert b[k] == pytest.approx(a[k], rel=1e-3), (model, k)
 
 
