@@ -195,7 +195,7 @@ def _time(raw: RawTable, spec: ImportSpec, steps: list, checks: list) -> np.ndar
         dev = np.abs(t - rebuilt) * spec.rate_hz
         k = int(np.argmax(dev))
         if dev[k] > 0.5:
-            raise LogError(f"time is {dev[k]:.3g} periods away from row {k} at {spec.rate_hz:g} "
+            raise LogError(f"time is {dev[k]:.3g} periods away from sample {k} at {spec.rate_hz:g} "
                            "Hz (a dropped or repeated sample, or not that rate)", raw.path,
                            int(raw.lines[k]), name)
         checks.append(f"fixed rate {spec.rate_hz:g} Hz: the logged time agrees with k / rate "
@@ -219,9 +219,9 @@ def _position(raw: RawTable, spec: ImportSpec, col: str, prismatic: bool) -> tup
     """A position column in rad (m), joint side; and the sentence saying how."""
     name = spec.columns[col]
     unit = spec.units.get(col, "m" if prismatic else "rad")
-    motor = col in spec.motor_side and spec.gear_ratio is not None
+    length = unit in LENGTH_UNITS  # already on the linear side: the gear ratio leaves it
+    motor = col in spec.motor_side and spec.gear_ratio is not None and not length
     cpr = spec.link_counts_per_turn if col == "q" else spec.counts_per_turn
-    length = unit in LENGTH_UNITS
     if length and not prismatic:
         raise LogError(f"--units {col}={unit}: a length on a revolute axis (give --prismatic "
                        "for a linear axis)", raw.path, column=name)
@@ -244,16 +244,26 @@ def _position(raw: RawTable, spec: ImportSpec, col: str, prismatic: bool) -> tup
     return raw.column(name) * factor, f"{col} <- {name} [{unit}] {how}".rstrip()
 
 
-def _torque(raw: RawTable, spec: ImportSpec) -> tuple[np.ndarray, str]:
+def _torque(raw: RawTable, spec: ImportSpec, prismatic: bool) -> tuple[np.ndarray, str]:
+    """tau_m in N m (N), joint side; and the sentence saying how. A force (N) is already on
+    the linear side; a motor torque or current on a prismatic axis goes through the gear
+    ratio (motor rad per m)."""
     name = spec.columns["tau_m"]
-    unit = spec.units.get("tau_m", "Nm")
+    unit = spec.units.get("tau_m", "N" if prismatic else "Nm")
+    if unit == "N" and not prismatic:
+        raise LogError("--units tau_m=N: a force on a revolute axis (give --prismatic for a "
+                       "linear axis)", raw.path, column=name)
+    geared = "tau_m" in spec.motor_side and spec.gear_ratio is not None and unit != "N"
+    if prismatic and unit == "Nm" and not geared:
+        raise LogError("--units tau_m=Nm: a motor torque on a prismatic axis needs --gear-ratio "
+                       "(motor rad per m) to become the force", raw.path, column=name)
     factor, how = 1.0, ""
     if TORQUE_UNITS[unit] is None:
         if spec.torque_constant is None:
             raise LogError(f"--units tau_m={unit} needs --torque-constant (N m per {unit})",
                            raw.path, column=name)
         factor, how = spec.torque_constant, f"x k_t = {spec.torque_constant:g} per {unit}"
-    if "tau_m" in spec.motor_side and spec.gear_ratio is not None:
+    if geared:
         factor *= spec.gear_ratio
         how += f" x N = {spec.gear_ratio:g} (motor side -> joint side)"
     return raw.column(name) * factor, f"tau_m <- {name} [{unit}] {how}".rstrip()
@@ -301,7 +311,7 @@ def convert(raw: RawTable, spec: ImportSpec) -> ImportResult:
         if col in spec.columns:
             cols[col], how = _position(raw, spec, col, prismatic)
             steps.append(how)
-    cols["tau_m"], how = _torque(raw, spec)
+    cols["tau_m"], how = _torque(raw, spec, prismatic)
     steps.append(how)
     rate = (len(t) - 1) / float(t[-1] - t[0])  # the mean period: uniform checked above
     meta = _metadata(spec, spec.rate_hz or rate, raw.path, steps)

@@ -120,6 +120,9 @@ def test_non_uniform_sampling_names_the_row():
     (["--map", "t=time,q_m=pos,tau_m=cur", "--units", "q_m=mm"], "a length on a revolute axis"),
     (["--map", "t=time,q_m=pos,tau_m=cur", "--units", "q_m=deg", "--prismatic"],
      "an angle on a prismatic axis needs"),
+    (["--map", "t=time,q_m=pos,tau_m=cur", "--units", "tau_m=N"], "a force on a revolute axis"),
+    (["--map", "t=time,q_m=pos,tau_m=cur", "--units", "tau_m=Nm", "--prismatic"],
+     "a motor torque on a prismatic axis needs --gear-ratio"),
 ])
 def test_bad_options_exit_2(tmp_path, capsys, args, message):
     raw = tmp_path / "raw.csv"
@@ -166,6 +169,12 @@ def test_prismatic_ball_screw_in_counts():
     assert log.prismatic
     assert np.allclose(log.q_m, np.array([0, 1000, 2000, 4096]) / 4096 * lead)
     assert np.allclose(log.tau_m, np.array([1, 2, 3, 2]) * 0.2 * 2 * np.pi / lead)
+    # carriage-side lengths and forces are left as they are, the gear ratio notwithstanding
+    raw = table("t,x,f\n0,0,1\n0.001,1,2\n0.002,2,3\n")
+    log = convert(raw, ImportSpec(columns={"t": "t", "q_m": "x", "tau_m": "f"},
+                                  units={"q_m": "mm"}, gear_ratio=2 * np.pi / lead,
+                                  meta={"axis": "prismatic"})).log
+    assert np.allclose(log.q_m, [0, 1e-3, 2e-3]) and np.allclose(log.tau_m, [1, 2, 3])
 
 
 def test_motor_side_gains_and_metadata(tmp_path):

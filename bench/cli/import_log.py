@@ -36,7 +36,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "(m for --prismatic), Nm)")
     p.add_argument("--gear-ratio", type=positive, metavar="N",
                    help="gear ratio: the --motor-side columns are referred to the joint side "
-                        "(angles / N, torque x N); prismatic: motor rad per m")
+                        "(angles / N, torque x N); prismatic: motor rad per m (2 pi / lead); "
+                        "lengths and forces are left as they are; --meta gear_ratio=N only "
+                        "records it")
     p.add_argument("--motor-side", default="q_m,tau_m,q_ref", metavar="COLS",
                    help="columns measured on the motor shaft, converted with --gear-ratio "
                         "(default q_m,tau_m,q_ref)")
