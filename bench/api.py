@@ -113,7 +113,8 @@ class Fit:
         r = self.result
         rows = r.block == 0
         return plot_validation(r.t[rows], r.y[rows], r.y_pred[rows], r.relative_error_pct,
-                               path, title=f"Direct validation, {r.model} model")
+                               path, title=f"Direct validation, {r.model} model",
+                               unit="N" if r.prismatic else "N m")
 
 
 def identify(log: LogLike, model: str = "auto", settings: FilterSettings | None = None, *,

@@ -14,6 +14,10 @@ What is measured (wall time with time.perf_counter, best of N repeats, in this p
        module works in the installed MuJoCo (otherwise the reason it is skipped).
 4. Identification time per 60 s log (`identify(log, "joint-motor")` and
    `identify(log, "motor-only")`), in ms (best of 5), and logs identified per second.
+5. Start-up of the command line, in fresh processes (best of 5, resp. 3): `jointbench --help`
+   against a bare `python -c pass` (target: under 0.5 s), and `jointbench simulate
+   --duration 60` against the simulation's own time, the in-process experiment of [1]
+   (target: under 1.5x).
 
 The script only prints figures and ratios to the targets. No wall-clock bound is asserted
 anywhere (here or in the tests): timings depend on the machine and its load.
@@ -24,7 +28,9 @@ from __future__ import annotations
 import datetime
 import os
 import platform
+import subprocess
 import sys
+import tempfile
 import time
 
 import mujoco
@@ -51,10 +57,22 @@ def best_of(fn, repeats: int):
     return best, result
 
 
+def _cpu_model() -> str:
+    """The CPU's model name (Linux /proc/cpuinfo), '' when unknown."""
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return ""
+
+
 def header() -> None:
     print("jointbench benchmark")
     print(f"  date        {datetime.datetime.now().astimezone().isoformat(timespec='seconds')}")
-    print(f"  processor   {platform.processor() or '?'} / {platform.machine()}")
+    print(f"  processor   {_cpu_model() or platform.processor() or '?'} / {platform.machine()}")
     print(f"  cpu_count   {os.cpu_count()}")
     print(f"  python      {platform.python_version()} ({sys.executable})")
     print(f"  mujoco      {mujoco.__version__}")
@@ -147,10 +165,39 @@ def bench_identify(log) -> dict[str, float]:
     return out
 
 
+HELP_TARGET_S = 0.5
+SIMULATE_TARGET = 1.5
+
+
+def _command_wall(argv: list[str], repeats: int) -> float:
+    """Best wall time [s] of `python argv` in a fresh process (output discarded)."""
+    def run() -> None:
+        subprocess.run([sys.executable, *argv], check=True, stdout=subprocess.DEVNULL,
+                       stderr=subprocess.DEVNULL)
+    return best_of(run, repeats)[0]
+
+
+def bench_startup(sim_wall: float) -> dict[str, float]:
+    bare = _command_wall(["-c", "pass"], 5)
+    helps = _command_wall(["-m", "jointbench.bench.cli", "--help"], 5)
+    print(f"[5] `jointbench --help`: {helps:.3f} s wall (best of 5) against {bare:.3f} s for "
+          f"`python -c pass` ({helps / bare:.1f}x; {helps - bare:.3f} s of jointbench; "
+          f"target under {HELP_TARGET_S} s)")
+    with tempfile.TemporaryDirectory() as tmp:
+        out = os.path.join(tmp, "s.csv")
+        sim = _command_wall(["-m", "jointbench.bench.cli", "simulate", "--duration", "60",
+                             "--quiet", "--out", out], 3)
+    print(f"[5] `jointbench simulate --duration 60`: {sim:.3f} s wall (best of 3) against "
+          f"{sim_wall:.3f} s for the experiment in-process [1] ({sim / sim_wall:.2f}x; target "
+          f"under {SIMULATE_TARGET}x)")
+    return {"bare": bare, "help": helps, "simulate": sim, "simulate_ratio": sim / sim_wall}
+
+
 def main() -> None:
     header()
     t_start = time.perf_counter()
     proto_rtf, proto_res = bench_prototype()
+    startup = bench_startup(DURATION / proto_rtf)
     arm6 = bench_arm6()
     exp = build_experiment_model("prototype")
     bare_rtf = bench_bare_loop(exp)
@@ -181,6 +228,11 @@ def main() -> None:
         rows.append(("mujoco.rollout (prototype)", "skipped", "-", "-"))
     for name, wall in ident.items():
         rows.append((f"identify {name}", f"{1e3 * wall:.1f} ms ({1 / wall:.1f}/s)", "-", "-"))
+    rows.append(("`jointbench --help` wall", f"{startup['help']:.3f} s",
+                 f"< {HELP_TARGET_S} s", f"{startup['help'] / HELP_TARGET_S:.2f}"))
+    rows.append(("`python -c pass` wall", f"{startup['bare']:.3f} s", "-", "-"))
+    rows.append(("`simulate --duration 60` / experiment", f"{startup['simulate_ratio']:.2f}x",
+                 f"< {SIMULATE_TARGET}x", f"{startup['simulate_ratio'] / SIMULATE_TARGET:.2f}"))
     w0 = max(len(r[0]) for r in rows + [("figure",)])
     w1 = max(len(r[1]) for r in rows + [("", "value")])
     w2 = max(len(r[2]) for r in rows + [("", "", "target")])

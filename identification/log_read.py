@@ -16,7 +16,7 @@ import math
 import os
 import stat
 from pathlib import Path
-from typing import Iterable, Iterator
+from typing import Callable, Iterable, Iterator, TypeVar
 
 import numpy as np
 
@@ -25,6 +25,7 @@ from jointbench.identification.log_schema import (BOOLEAN_META, FORMAT_KEY, FORM
                                                   REQUIRED_COLUMNS, Log, LogError, is_number,
                                                   meta_boolean, meta_number, shown)
 
+T = TypeVar("T")
 JITTER_TOLERANCE = 0.01  # docs/log-format.md: jitter under 1 % of the period
 DEFAULT_MAX_BYTES = 512 * 2**20  # a 60 s log at the paper's rate is about 2 MB
 MAX_BYTES_ENV = "JOINTBENCH_MAX_LOG_BYTES"
@@ -172,6 +173,15 @@ def parse_log(text: str, path: str | os.PathLike | None = None) -> Log:
     return _parse_lines(enumerate(text.splitlines(), start=1), path)
 
 
+def sampling_jitter(dt: np.ndarray) -> tuple[float, np.ndarray, int | None]:
+    """(median step, |step - median| / median of every step, the index in t of the first
+    sample whose step is off by more than JITTER_TOLERANCE, or None) of the steps `dt`."""
+    period = float(np.median(dt))
+    jitter = np.abs(dt - period) / period
+    bad = np.flatnonzero(~(jitter <= JITTER_TOLERANCE))
+    return period, jitter, (int(bad[0]) + 1 if bad.size else None)
+
+
 def validate(log: Log, first_data_line: int | None = None,
              row_lines: np.ndarray | None = None) -> None:
     """Check sampling: at least 3 samples, `t` strictly increasing, uniform within 1 %, and a
@@ -193,11 +203,8 @@ def validate(log: Log, first_data_line: int | None = None,
         raise LogError(f"t is not strictly increasing ({float(log.t[k - 1])!r} then "
                        f"{float(log.t[k])!r})",
                        log.path, line(k), "t")
-    period = float(np.median(dt))
-    jitter = np.abs(dt - period) / period
-    bad = np.flatnonzero(~(jitter <= JITTER_TOLERANCE))
-    if bad.size:
-        k = int(bad[0]) + 1
+    period, jitter, k = sampling_jitter(dt)
+    if k is not None:
         raise LogError(f"irregular sampling: step {dt[k - 1]:.6g} s against the median "
                        f"{period:.6g} s (jitter over 1 %)", log.path, line(k), "t")
     rate = log.meta_float("sample_rate_hz")
@@ -272,9 +279,12 @@ def _stream_lines(handle, path: str, max_bytes: int) -> Iterator[tuple[int, str]
         yield lineno, text.rstrip("\r\n")
 
 
-def read_log(path: str | os.PathLike, max_bytes: int | None = None) -> Log:
-    """Read a log file, streaming it line by line. Raises LogError (file, line, column, what)
-    on any malformed input, and for files over `max_bytes` (default `max_log_bytes()`)."""
+def read_lines(path: str | os.PathLike, parse: Callable[[Iterator[tuple[int, str]], str], T],
+               max_bytes: int | None = None) -> T:
+    """`parse(lines, name)` on the numbered text lines of the file at `path`, streamed with
+    the reader's checks: LogError for a missing file or a folder, a file over `max_bytes`
+    (default `max_log_bytes()`), binary content, over-long lines and read errors. Shared by
+    `read_log` and the import of measured files (identification/log_import.py)."""
     limit = max_log_bytes() if max_bytes is None else int(max_bytes)
     path = Path(path)
     name = str(path)
@@ -295,9 +305,15 @@ def read_log(path: str | os.PathLike, max_bytes: int | None = None) -> Log:
                 raise LogError(f"the file is {_size(info.st_size)}, over the {_size(limit)} "
                                f"limit for a log (set {MAX_BYTES_ENV}, e.g. 2G, to read it)",
                                name)
-            return _parse_lines(_stream_lines(handle, name, limit), name)
+            return parse(_stream_lines(handle, name, limit), name)
         except OSError as err:
             raise LogError(f"cannot read: {err.strerror}", name) from None
+
+
+def read_log(path: str | os.PathLike, max_bytes: int | None = None) -> Log:
+    """Read a log file, streaming it line by line. Raises LogError (file, line, column, what)
+    on any malformed input, and for files over `max_bytes` (default `max_log_bytes()`)."""
+    return read_lines(path, _parse_lines, max_bytes)
 
 
 def unit_warnings(log: Log) -> list[str]:

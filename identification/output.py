@@ -29,9 +29,14 @@ def rms(x: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.square(x))))
 
 
+# A truth this small is zero up to rounding (MuJoCo's first moment of a vertical axis comes out
+# as 1e-15 kg m, say): an error in % of it means nothing, and is not printed.
+ZERO_TRUTH = 1e-12
+
+
 def pct_error(value: float | None, ref: float | None) -> float | None:
-    """100 (value - ref) / |ref|, or None when either is missing, ref is 0 or value is not
-    finite."""
-    if value is None or ref is None or not ref or not math.isfinite(value):
+    """100 (value - ref) / |ref|, or None when either is missing, ref is 0 (|ref| <=
+    ZERO_TRUTH) or value is not finite."""
+    if value is None or ref is None or not abs(ref) > ZERO_TRUTH or not math.isfinite(value):
         return None
     return 100.0 * (value - ref) / abs(ref)

@@ -97,7 +97,7 @@ def plot_figure1(
     ax.axvline(wn, color="k", lw=0.6, ls="--")
     ax.annotate(r"$\omega_n$", (wn, 1e-3), xytext=(4, 0), textcoords="offset points")
     ax.set_xlabel(r"$\omega$ (rad/s)")
-    ax.set_ylabel("magnitude")
+    ax.set_ylabel("magnitude (|H| dimensionless; |D|, |F| in 1/s)")
     ax.set_ylim(1e-4, 2.0 * nyquist)
     ax.set_title(f"Figure 1: magnitude of filters (m = {m})")
     ax.grid(True, which="both", lw=0.3)
@@ -108,21 +108,24 @@ def plot_figure1(
 
 def plot_validation(t: np.ndarray, measured: np.ndarray, predicted: np.ndarray,
                     rel_error_pct: float, path: str | os.PathLike[str] | None = None,
-                    title: str = "Figure 2: direct validation") -> "matplotlib.figure.Figure":
+                    title: str = "Figure 2: direct validation",
+                    unit: str = "N m") -> "matplotlib.figure.Figure":
     """Figure 2: measured and predicted motor torque on the decimated samples, with the
-    residual and the relative error 100 ||y - W X^|| / ||y||."""
+    residual and the relative error 100 ||y - W X^|| / ||y||; `unit` N m, or N for a
+    prismatic axis."""
     import matplotlib.pyplot as plt
 
     fig, (ax, axr) = plt.subplots(2, 1, figsize=(9.0, 6.0), sharex=True,
                                   gridspec_kw={"height_ratios": [3, 1]})
     ax.plot(t, measured, lw=1.0, label="measured $\\tau_m$")
     ax.plot(t, predicted, lw=1.0, ls="--", label="predicted $W\\hat{X}$")
-    ax.set_ylabel("torque (N m)")
-    ax.set_title(f"{title} (relative error {rel_error_pct:.2f} %)")
+    ax.set_ylabel(f"motor torque tau_m ({unit})")
+    ax.set_title(f"{title}: measured and predicted motor torque (relative error "
+                 f"{rel_error_pct:.2f} %)")
     ax.legend()
     ax.grid(True, lw=0.3)
     axr.plot(t, measured - predicted, lw=0.8, color="C3")
-    axr.set_ylabel("error (N m)")
+    axr.set_ylabel(f"measured - predicted ({unit})")
     axr.set_xlabel("t (s)")
     axr.grid(True, lw=0.3)
     return _finish(fig, path)
@@ -131,8 +134,10 @@ def plot_validation(t: np.ndarray, measured: np.ndarray, predicted: np.ndarray,
 def plot_frf(f_hz: np.ndarray, measured: np.ndarray, models: dict[str, np.ndarray],
              coherence: np.ndarray | None = None, f1_hz: float | None = None,
              path: str | os.PathLike[str] | None = None,
-             title: str = "Frequency response q_m / tau_m") -> "matplotlib.figure.Figure":
-    """Bode magnitude and phase of the measured q_m / tau_m against model responses."""
+             title: str = "Frequency response q_m / tau_m",
+             units: tuple[str, str] = ("rad", "N m")) -> "matplotlib.figure.Figure":
+    """Bode magnitude and phase of the measured q_m / tau_m against model responses;
+    `units` (position, torque): rad and N m, or m and N for a prismatic axis."""
     import matplotlib.pyplot as plt
 
     band = f_hz > 0
@@ -145,7 +150,7 @@ def plot_frf(f_hz: np.ndarray, measured: np.ndarray, models: dict[str, np.ndarra
     if f1_hz:
         for a in (axm, axp):
             a.axvline(f1_hz, color="k", ls="--", lw=0.6)
-    axm.set_ylabel("|q_m / tau_m| (rad / N m)")
+    axm.set_ylabel(f"|q_m / tau_m| ({units[0]} / ({units[1]}))")
     axp.set_ylabel("phase (deg)")
     axp.set_xlabel("f (Hz)")
     axm.set_title(title)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 
 from jointbench.identification.identify import Identification
+from jointbench.identification.output import pct_error
 from jointbench.identification.parameters import units
 
 # The paper's published values (section 4), for side-by-side tables.
@@ -40,18 +41,22 @@ def signal_units(prismatic: bool) -> tuple[str, str]:
 
 
 def _num(x: float, width: int = 12) -> str:
-    if x is None or (isinstance(x, float) and math.isnan(x)):
-        return f"{'-':>{width}}"
-    return f"{x:>{width}.6g}"
+    return cell(x, width)
 
 
 def cell(x: float | None, width: int = 12, fmt: str = ".6g") -> str:
     """A right-aligned table cell, '-' for a missing or non-finite value; `fmt` may start with
-    '+' to sign every number."""
+    '+' to sign every number. The cell always starts with a space, so that two columns never
+    run together: a number too wide for `width` is printed in fewer digits (.6g, .4g, .3g
+    for fixed-point formats)."""
     if x is None or not math.isfinite(x):
         return f"{'-':>{width}}"
     sign, fmt = ("+", fmt[1:]) if fmt.startswith("+") else ("", fmt)
-    return f"{x:>{sign}{width}{fmt}}"
+    for form in (fmt, ".6g", ".4g", ".3g"):
+        text = f"{x:{sign}{form}}"
+        if len(text) < width:
+            break
+    return f" {text:>{width - 1}}"
 
 
 def expected_x(truth: dict[str, float]) -> dict[str, float]:
@@ -94,8 +99,7 @@ def parameter_table(result: Identification, truth: dict[str, float] | None = Non
             if tv is None or n in ls.unidentifiable:
                 row += f"{'':>22}"
             else:
-                err = 100 * (x - tv) / abs(tv) if tv else float("nan")
-                row += f"{_num(tv)}{err:>10.3f}"
+                row += f"{_num(tv)}{cell(pct_error(x, tv), 10, '.3f')}"
         if n in unit:
             row = f"{row:<{len(head) - 6}}  {unit[n]}"
         lines.append(row)
@@ -121,7 +125,8 @@ def physical_table(result: Identification, truth: dict[str, float] | None = None
         row = f"{n:<10}{_num(v)}{_num(2 * s)}{_num(t3, 13)}{_num(PAPER_TABLE3.get(n, float('nan')))}"
         if truth and n in truth:
             tv = truth[n]
-            row += f"{_num(tv)}{100 * (v - tv) / abs(tv):>10.3f}{100 * (t3 - tv) / abs(tv):>10.3f}"
+            row += (f"{_num(tv)}{cell(pct_error(v, tv), 10, '.3f')}"
+                    f"{cell(pct_error(t3, tv), 10, '.3f')}")
         lines.append(f"{row:<{len(head) - 6}}  {unit.get(n, '')}".rstrip())
     return "\n".join(lines)
 
@@ -168,6 +173,7 @@ def to_json(result: Identification, truth: dict[str, float] | None = None) -> di
     if truth:
         out["truth"] = {k: v for k, v in truth.items()
                         if k in result.physical or k in params}
-        out["error_pct"] = {k: 100 * (result.physical[k] - v) / abs(v)
-                            for k, v in truth.items() if k in result.physical and v}
+        errors = {k: pct_error(result.physical[k], v) for k, v in truth.items()
+                  if k in result.physical}
+        out["error_pct"] = {k: e for k, e in errors.items() if e is not None}
     return out

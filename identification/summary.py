@@ -18,6 +18,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from jointbench.identification.output import ZERO_TRUTH
+
 NOMINAL_2SIGMA = 0.9545  # P(|z| <= 2) for a standard normal z
 
 
@@ -85,12 +87,9 @@ def coverage(errors: np.ndarray, sigma: np.ndarray, k: float = 2.0,
     inside = int(np.sum(np.abs(e[ok]) <= k * s[ok]))
     rms_sigma = float(np.sqrt(np.mean(s[ok] ** 2)))
     std = float(np.std(e[ok], ddof=1)) if n > 1 else math.nan
-    if truth is not None:
-        t = np.asarray(truth, dtype=float)[ok]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            pct = float(np.mean(100.0 * s[ok] / np.abs(t)))
-    else:
-        pct = math.nan
+    t = np.abs(np.asarray(truth, dtype=float)[ok]) if truth is not None else np.zeros(0)
+    nonzero = t > ZERO_TRUTH
+    pct = float(np.mean(100.0 * s[ok][nonzero] / t[nonzero])) if nonzero.any() else math.nan
     return Coverage(n=n, sigma_mean=float(np.mean(s[ok])), sigma_mean_pct=pct,
                     coverage=inside / n, interval=wilson_interval(inside, n),
                     std_over_sigma=std / rms_sigma if rms_sigma > 0 else math.nan)
@@ -111,16 +110,25 @@ def parameter_stats(name: str, estimate: np.ndarray, truth: np.ndarray,
         nan = math.nan
         return ParameterStats(name, 0, nan, nan, nan, nan, nan, nan, k,
                               {kind: coverage(e, s, k) for kind, s in (sigmas or {}).items()})
-    with np.errstate(divide="ignore", invalid="ignore"):
-        rel = 100.0 * e[ok] / np.abs(t[ok])
+    # In % of the truth only where the truth is not zero (a vertical axis' MX, MY): the
+    # rest would be inf and nan, and numpy's warnings.
+    nonzero = np.abs(t[ok]) > ZERO_TRUTH
+    rel = 100.0 * e[ok][nonzero] / np.abs(t[ok][nonzero])
     std = float(np.std(e[ok], ddof=1)) if n > 1 else math.nan
-    std_pct = float(np.std(rel, ddof=1)) if n > 1 else math.nan
+    std_pct = float(np.std(rel, ddof=1)) if len(rel) > 1 else math.nan
+    mean_pct = float(np.mean(rel)) if len(rel) else math.nan
+    rmse_pct = float(np.sqrt(np.mean(rel ** 2))) if len(rel) else math.nan
     cov = {kind: coverage(e, np.asarray(s, dtype=float), k, t)
            for kind, s in (sigmas or {}).items()}
     return ParameterStats(name=name, n=n, truth_mean=float(np.mean(t[ok])),
-                          bias=float(np.mean(e[ok])), bias_pct=float(np.mean(rel)),
-                          std=std, std_pct=std_pct, rmse_pct=float(np.sqrt(np.mean(rel ** 2))),
+                          bias=float(np.mean(e[ok])), bias_pct=mean_pct,
+                          std=std, std_pct=std_pct, rmse_pct=rmse_pct,
                           k=k, coverage=cov)
+
+
+def _pct(x: float, width: int, digits: int) -> str:
+    """A fixed-point cell, '-' when not finite (no runs, one run's std, a zero truth)."""
+    return f"{x:>{width}.{digits}f}" if math.isfinite(x) else f"{'-':>{width}}"
 
 
 def stats_table(stats: list[ParameterStats], kinds: tuple[str, ...]) -> str:
@@ -132,14 +140,18 @@ def stats_table(stats: list[ParameterStats], kinds: tuple[str, ...]) -> str:
         head += f" | {kind + ' %':>10} {'std/sig':>7} {'cover':>6} {'95 % CI':>13}"
     lines = [head, "-" * len(head)]
     for s in stats:
-        line = f"{s.name:<6} {s.n:>4} {s.bias_pct:>8.3f} {s.std_pct:>7.3f}"
+        zero = s.n > 0 and math.isnan(s.bias_pct)  # truth 0: no % of it; absolute below
+        line = f"{s.name:<6} {s.n:>4} " + (f"{'truth 0':>16}" if zero else
+                                           f"{_pct(s.bias_pct, 8, 3)} {_pct(s.std_pct, 7, 3)}")
         for kind in kinds:
             c = s.coverage.get(kind)
             if c is None or c.n == 0:
                 line += f" | {'-':>10} {'-':>7} {'-':>6} {'-':>13}"
             else:
                 ci = f"{100 * c.interval[0]:.1f}-{100 * c.interval[1]:.1f}"
-                line += (f" | {c.sigma_mean_pct:>10.4f} {c.std_over_sigma:>7.2f} "
+                line += (f" | {_pct(c.sigma_mean_pct, 10, 4)} {_pct(c.std_over_sigma, 7, 2)} "
                          f"{100 * c.coverage:>5.1f}% {ci:>13}")
+        if zero:
+            line += f"  (absolute: bias {s.bias:+.4g}, std {s.std:.4g})"
         lines.append(line)
     return "\n".join(lines)

@@ -146,6 +146,22 @@ def find_axes(model: mujoco.MjModel, source: str = "<model>") -> list[Axis]:
     return axes
 
 
+def select_axis(axes: list[Axis], joint: str | None, source: str = "<model>") -> Axis:
+    """The axis named `joint`, else the `joint`-th one counting from 1 when it is a whole
+    number (`--joint 1`: names first, then the index), the first axis when None.
+    ModelStructureError otherwise, listing the axes."""
+    if joint is None:
+        return axes[0]
+    names = [a.name for a in axes]
+    if joint in names:
+        return axes[names.index(joint)]
+    text = str(joint).strip()
+    if text.isdigit() and 1 <= int(text) <= len(axes):
+        return axes[int(text) - 1]
+    listed = ", ".join(f"{i} {n}" for i, n in enumerate(names, start=1))
+    raise ModelStructureError(f"{source}: no axis '{joint}' (give a name or an index: {listed})")
+
+
 def load_model(name: str | Path) -> tuple[mujoco.MjModel, list[Axis], Path]:
     """Compile a shipped or user model and find its axes; ModelStructureError on failure."""
     path = model_path(name)

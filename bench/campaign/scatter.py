@@ -8,7 +8,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 from jointbench.identification.parameters import FRICTIONS, STIFFNESS_AND_INERTIAS
-from jointbench.models import ModelStructureError, load_model
+from jointbench.models import ModelStructureError, load_model, select_axis
 
 SCATTERED = STIFFNESS_AND_INERTIAS + FRICTIONS   # K, Jm, JL, FVm, FSm, FV, FS: the draw order
 
@@ -40,11 +40,8 @@ def scattered_mjcf(model: str, joint: str | None, factors: dict[str, float]) -> 
     timestep too). Relative asset folders and includes are made absolute, so the text compiles
     from any folder. Raises ModelStructureError when the file lacks an element it scales."""
     full, axes, path = load_model(model)
-    names = [a.name for a in axes]
-    joint = joint or names[0]
-    if joint not in names:
-        raise ModelStructureError(f"{path}: no axis '{joint}' (axes: {', '.join(names)})")
-    axis = axes[names.index(joint)]
+    axis = select_axis(axes, joint, str(path))
+    joint = axis.name
     root = ET.parse(path).getroot()
     base = path.resolve().parent
 

@@ -31,7 +31,7 @@ def main(argv: list[str] | None = None) -> int:
     command = command_module(args.command)
     # The command's library first: an interrupt inside an extension's import (numpy's, say)
     # would surface as an ImportError, not as the interruption it is.
-    for name in command.LIBRARY:
+    for name in getattr(command, "library", lambda _: command.LIBRARY)(args):
         importlib.import_module(name)
     restore_signals = trap_signals()
     try:

@@ -36,6 +36,10 @@ def add_arguments(i: argparse.ArgumentParser) -> None:
     i.add_argument("--decimate", type=int, help="decimation factor Nd")
     i.add_argument("--f1", type=positive, help="first mode in Hz (to derive wn and Nd)")
     i.add_argument("--json", action="store_true", help="print the JSON object of docs/cli.md")
+    i.add_argument("--validate", metavar="OTHER.csv",
+                   help="predict another log's torque with the identified model (inverse "
+                        "view, that log's own filter) and report the error beside the fit's "
+                        "(identification/validate.py)")
     i.add_argument("--refine", action="store_true",
                    help="continue from the least-squares estimate by closed-loop output error "
                         "(DIDIM-style): replay the log in MuJoCo under its controller on the "
@@ -94,15 +98,19 @@ def run(args: argparse.Namespace) -> int:
     from jointbench.bench.analysis.debias import SOLREF_FRICTION, DebiasError, debias
     from jointbench.bench.analysis.refine import refine, require_replayable
     from jointbench.bench.present.identify import identify_json, identify_text
+    from jointbench.bench.present.validate import forward_text, forward_validation
     from jointbench.bench.sim.sensors import Sensors
     from jointbench.identification.checks import estimate_flags
     from jointbench.identification.defaults import settings_for
     from jointbench.identification.filtering import FilterSettings
     from jointbench.identification.identify import identify
     from jointbench.identification.log import read_log, unit_warnings
+    from jointbench.identification.parameters import units
     from jointbench.identification.physical import InversionError
+    from jointbench.identification.validate import validate_on
 
     log = read_log(args.file)
+    other = None if args.validate is None else read_log(args.validate)
     warnings = unit_warnings(log)
     for text in warnings:
         print(f"jointbench identify: warning: {text}", file=sys.stderr)
@@ -133,9 +141,16 @@ def run(args: argparse.Namespace) -> int:
     debiased = None if args.debias is None else debias(
         log, result, replicas=args.debias, progress=None if args.json else _debias_progress,
         friction_timeconst=args.friction_timeconst or SOLREF_FRICTION[0])
+    validation = None if other is None else validate_on(result, other, args.f1)
+    forward = None if other is None else forward_validation(result, log, other)
     if args.json:
-        print(json.dumps(identify_json(result, truth, flags, warnings, refined, debiased),
-                         allow_nan=False, default=float))
+        answer = identify_json(result, truth, flags, warnings, refined, debiased)
+        if validation is not None:
+            answer["validation"] = {**validation.to_json(), "forward": forward}
+        print(json.dumps(answer, allow_nan=False, default=float))
     else:
         print(identify_text(args.file, log, result, truth, flags, refined, debiased))
+        if validation is not None:
+            print(validation.text(units(log.prismatic)["offset"]))  # a torque (force)
+            print(forward_text(forward, args.validate))
     return 0

@@ -24,6 +24,8 @@ COMMANDS: dict[str, Command] = {
                             "figures"),
     "simulate": Command("simulate", "run one virtual experiment and write its log"),
     "identify": Command("identify", "identify the axis parameters from a log"),
+    "import": Command("import_log", "convert a measured file (own columns, units, motor side, "
+                                    "current) into a jointbench log"),
     "design-filter": Command("design_filter", "the bandpass design of eqs. (26)-(29)"),
     "diagnose": Command("diagnose", "what the simulation gets wrong on a log, the named cause, "
                                     "the extended model and the gain"),

@@ -11,9 +11,17 @@ from pathlib import Path
 
 from jointbench.bench.cli.common import (UsageError, check_output_file, finite, parse_config,
                                          positive)
+from jointbench.bench.sim.defaults import amplitude_help
 
-# The library `run` imports, loaded by the dispatcher before it traps the signals.
-LIBRARY = ("jointbench.bench.present.experiment", "jointbench.bench.present.replay")
+# The library `run` imports, loaded by the dispatcher before it traps the signals: a virtual
+# experiment needs no scipy (start-up, README "Speed"); the replay identifies and does.
+LIBRARY = ("jointbench.bench.present.experiment",)
+REPLAY_LIBRARY = LIBRARY + ("jointbench.bench.present.replay",)
+
+
+def library(args: argparse.Namespace) -> tuple[str, ...]:
+    """The modules `run(args)` imports (the dispatcher loads them first)."""
+    return REPLAY_LIBRARY if args.replay else LIBRARY
 
 
 def _rate(value: str) -> float | str:
@@ -30,7 +38,7 @@ def add_arguments(s: argparse.ArgumentParser) -> None:
     """The options of `simulate` and of its replay mode."""
     s.add_argument("--model", default=None,
                    help="prototype, arm6 or an MJCF file following the axis convention")
-    s.add_argument("--joint", help="axis to move (default: the first)")
+    s.add_argument("--joint", help="axis to move, by name or index from 1 (default: the first)")
     s.add_argument("--duration", type=positive, default=60.0, help="seconds (default 60)")
     s.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
     s.add_argument("--out", help="log file to write (default MODEL_JOINT_seedN.csv)")
@@ -38,8 +46,10 @@ def add_arguments(s: argparse.ArgumentParser) -> None:
                                     "backlash=0.002 (docs/effects.md)")
     s.add_argument("--lock", choices=("rigid", "brake"), default="rigid",
                    help="how the other axes are held (default rigid)")
-    s.add_argument("--config", help="locked angles of the other axes, e.g. axis2=-0.5,axis3=1.0")
-    s.add_argument("--amplitude", type=positive, help="chirp amplitude in rad (default 0.05)")
+    s.add_argument("--config", help="locked angles of the other axes, e.g. axis2=-0.5,axis3=1.0; "
+                                    "an entry for the moving axis centres its chirp (default: "
+                                    "its rest position)")
+    s.add_argument("--amplitude", type=positive, help=amplitude_help())
     s.add_argument("--substeps", type=int, default=1, help="physics steps per control tick (default 1)")
     s.add_argument("--rate", type=_rate, default=None, metavar="HZ|auto",
                    help="sample (control and log) rate in Hz (default 350.87, the paper's); "

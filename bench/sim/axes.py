@@ -21,7 +21,8 @@ import mujoco
 import numpy as np
 
 from jointbench.bench.effects import HiddenEffect, apply_to_spec
-from jointbench.models import Axis, ModelStructureError, find_axes, load_model, torque_limit
+from jointbench.models import (Axis, ModelStructureError, find_axes, load_model, select_axis,
+                               torque_limit)
 from jointbench.models.truth import AxisTruth, axis_truth
 from jointbench.identification.defaults import PAPER_RATE
 from jointbench.identification.effects import EFFECTS
@@ -170,22 +171,20 @@ def build_experiment_model(model: str | Path = "prototype", joint: str | None = 
                            tau_max: float | None = None) -> ExperimentModel:
     """Compile the experiment model of axis `joint` (default: the first axis).
 
-    `config` gives the locked angles of the other axes (default 0); `center` the link angle
-    the chirp is centred on (default: the rest position q0 of eq. 17, shifted by the hidden
-    `gravity` effect's offset). Raises ModelStructureError for a model that does not follow
-    the axis convention and ValueError for bad arguments.
+    `joint` is an axis name or its index counting from 1 (`models.select_axis`). `config`
+    gives the locked angles of the other axes (default 0); `center` the link angle the chirp
+    is centred on (default: the moving axis' entry of `config`, else the rest position q0 of
+    eq. 17, shifted by the hidden `gravity` effect's offset). Raises ModelStructureError for
+    a model that does not follow the axis convention and ValueError for bad arguments.
     """
     if lock not in LOCKS:
         raise ValueError(f"lock must be one of {', '.join(LOCKS)}, got {lock!r}")
     if substeps < 1:
         raise ValueError(f"substeps must be >= 1, got {substeps}")
     full, axes, path = load_model(model)
-    names = [a.name for a in axes]
-    joint = joint or names[0]
-    if joint not in names:
-        raise ModelStructureError(f"{path}: no axis '{joint}' (axes: {', '.join(names)})")
+    moving = select_axis(axes, joint, str(path))
+    joint = moving.name
     config = dict(config or {})
-    moving = axes[names.index(joint)]
     qpos_full = full_qpos(full, axes, config)
     truth = axis_truth(full, moving, qpos_full)
     if moving.rigid and not (truth.Jm > 0 and truth.JL > 0):
@@ -193,6 +192,8 @@ def build_experiment_model(model: str | Path = "prototype", joint: str | None = 
             f"{path}: rigid axis '{joint}': give the rotor inertia as the armature of joint "
             f"'{joint}' and the moving body a mass (Jm = {truth.Jm:g}, JL = {truth.JL:g}); "
             "the default gain rule needs both")
+    if center is None and joint in config:  # the moving axis' own entry centres the chirp
+        center = config[joint]
     if center is None:
         center = truth.q0 + (effect.strength if effect and effect.name == "gravity" else 0.0)
     config[joint] = center

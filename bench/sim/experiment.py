@@ -22,6 +22,8 @@ import numpy as np
 
 from jointbench.bench.sim.axes import ExperimentModel, build_experiment_model
 from jointbench.bench.sim.controller import Gains, gains_rule
+from jointbench.bench.sim.defaults import (ACCELERATION_SHARE, AMPLITUDE_REDUCTION, AMPLITUDE_RAD,
+                                           MAX_REDUCTIONS)
 from jointbench.bench.sim.loop import (INSTABILITY_WARNINGS, LoopChecks, LoopTrace,
                                        first_warning, run_loop)
 from jointbench.bench.effects import HiddenEffect, LoopEffects, loop_effects_from_model
@@ -105,10 +107,10 @@ def run_experiment(model: str | Path = "prototype", joint: str | None = None, *,
                                     effect, progress)
         # The default reference shrinks until nothing saturates: near the antiresonance
         # sqrt(K / JL) the motor needs far more torque than the acceleration cap foresees.
-        if not auto or trace.saturated == 0 or reductions >= 6:
+        if not auto or trace.saturated == 0 or reductions >= MAX_REDUCTIONS:
             break
         reductions += 1
-        chirp = replace(chirp, amplitude=0.7 * chirp.amplitude,
+        chirp = replace(chirp, amplitude=AMPLITUDE_REDUCTION * chirp.amplitude,
                         max_acceleration=0.6 * chirp.max_acceleration)
     meta = {"sample_rate_hz": format_meta_number(sample_rate_hz),
             "gravity": format_meta_number(truth.g)}
@@ -247,9 +249,9 @@ def default_chirp(exp: ExperimentModel, duration: float = 60.0,
     friction, gravity and the resonance). Larger motion shrinks the share of the stick
     phases at velocity reversals, where the Coulomb model sign(qm') is wrong."""
     t = exp.truth
-    return Chirp(duration=duration, amplitude=amplitude or 0.1,
+    return Chirp(duration=duration, amplitude=amplitude or AMPLITUDE_RAD,
                  center=float(exp.qpos_init[exp.axis.motor_qpos]),
-                 max_acceleration=0.4 * exp.tau_max / (t.Jm + t.JL))
+                 max_acceleration=ACCELERATION_SHARE * exp.tau_max / (t.Jm + t.JL))
 
 
 def stderr_progress(label: str) -> Callable[[float], None]:

@@ -5,7 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import signal
+
+from jointbench.bench.sim.defaults import AMPLITUDE_RAD
 
 
 @dataclass(frozen=True)
@@ -21,7 +22,7 @@ class Chirp:
     duration: float = 60.0
     f0: float = 0.05
     f1: float = 30.0
-    amplitude: float = 0.02
+    amplitude: float = AMPLITUDE_RAD
     center: float = 0.0
     method: str = "logarithmic"
     taper: float = 2.0
@@ -38,6 +39,16 @@ class Chirp:
             raise ValueError(f"chirp method must be 'linear' or 'logarithmic', got {self.method!r}")
         if not 0 <= 2 * self.taper <= self.duration:
             raise ValueError(f"chirp taper {self.taper} s does not fit twice in {self.duration} s")
+
+    def phase(self, t: np.ndarray) -> np.ndarray:
+        """Phase of the swept cosine [rad]: 2 pi times the integral of `frequency` (the
+        expressions of scipy.signal.chirp, so the reference is the same to the last bit)."""
+        f0, f1, t1 = float(self.f0), float(self.f1), float(self.duration)
+        if self.method == "linear":
+            beta = (f1 - f0) / t1
+            return 2 * np.pi * (f0 * t + 0.5 * beta * t * t)
+        beta = t1 / np.log(f1 / f0)
+        return 2 * np.pi * beta * f0 * (pow(f1 / f0, t / t1) - 1.0)
 
     def frequency(self, t: np.ndarray) -> np.ndarray:
         """Instantaneous frequency [Hz]."""
@@ -59,6 +70,5 @@ class Chirp:
     def __call__(self, t: np.ndarray) -> np.ndarray:
         """q_ref(t) [rad]; sine phase so that q_ref(0) = center."""
         t = np.asarray(t, dtype=float)
-        wave = signal.chirp(t, f0=self.f0, t1=self.duration, f1=self.f1, method=self.method,
-                            phi=-90.0)
+        wave = np.cos(self.phase(t) + np.deg2rad(-90.0))
         return self.center + self.envelope(t) * wave

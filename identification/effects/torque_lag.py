@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy import signal
 
 from jointbench.identification.effects.base import Design, Effect, Rows, searched_value
-from jointbench.identification.filtering import zoh_align
+
+# scipy.signal (lfilter here, the filtering module for zoh_align) is imported by the functions
+# that run only in diagnose: the effect registry is loaded by every virtual experiment, whose
+# start-up should not pay scipy.signal's 0.8 s.
 
 
 def lagged(tau: np.ndarray, T: float, ts: float) -> np.ndarray:
@@ -17,6 +19,8 @@ def lagged(tau: np.ndarray, T: float, ts: float) -> np.ndarray:
     tau = np.asarray(tau, float)
     if T <= 0:
         return tau
+    from scipy import signal
+
     a = np.exp(-ts / T)
     x = signal.lfilter([0.0, 1 - a], [1.0, -a], tau, zi=[a * tau[0]])[0]
     x[0] = tau[0]
@@ -25,6 +29,8 @@ def lagged(tau: np.ndarray, T: float, ts: float) -> np.ndarray:
 
 def design(rows: Rows, fixed: dict) -> Design:
     # No extra column: the lagged torque replaces the measured one.
+    from jointbench.identification.filtering import zoh_align
+
     sig = rows.sig
     return rows.columns(tau=sig.lp(zoh_align(lagged(sig.tau_raw, fixed["lag_s"], sig.ts))))
 

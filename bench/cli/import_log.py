@@ -1,0 +1,137 @@
+"""`jointbench import RAW.csv --out LOG.csv`: a measured file (own column names, units, motor
+side, current) converted into a jointbench log (docs/log-format.md; identification/log_import.py
+does the conversion). Prints what it did and the checks it ran; exit 2 for what it cannot
+convert, naming the file, line and column."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from jointbench.bench.cli.common import UsageError, check_output_file, finite, positive
+
+# The library `run` imports, loaded by the dispatcher before it traps the signals.
+LIBRARY = ("jointbench.identification.log_import", "jointbench.identification.log")
+
+# Metadata options: option destination -> metadata key (docs/log-format.md section 1.3).
+META_OPTIONS = {"kp": "kp", "kv": "kv", "ki": "ki", "tau_max": "tau_max",
+                "velocity_feedforward": "velocity_feedforward", "gravity": "gravity",
+                "joint": "joint"}
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """The options of `import`."""
+    p.add_argument("file", help="raw CSV file: a header row, then one row of numbers per "
+                                "sample (',' ';' tab or '|'; '#' lines skipped)")
+    p.add_argument("--out", required=True, help="log file to write (never the input)")
+    p.add_argument("--map", metavar="COL=RAW,...",
+                   help="log column = raw column, e.g. t=time_ms,q_m=motor_counts,"
+                        "tau_m=current_A,q=link_deg,q_ref=ref_counts (default: the raw "
+                        "columns named t, q_m, q, tau_m, q_ref)")
+    p.add_argument("--units", metavar="COL=UNIT,...",
+                   help="units of the raw columns: t in s|ms|us; q_m, q, q_ref in "
+                        "rad|deg|rev|counts|m|mm|um; tau_m in Nm|N|A|V (default s, rad "
+                        "(m for --prismatic), Nm)")
+    p.add_argument("--gear-ratio", type=positive, metavar="N",
+                   help="gear ratio: the --motor-side columns are referred to the joint side "
+                        "(angles / N, torque x N); prismatic: motor rad per m (2 pi / lead); "
+                        "lengths and forces are left as they are; --meta gear_ratio=N only "
+                        "records it")
+    p.add_argument("--motor-side", default="q_m,tau_m,q_ref", metavar="COLS",
+                   help="columns measured on the motor shaft, converted with --gear-ratio "
+                        "(default q_m,tau_m,q_ref)")
+    p.add_argument("--counts-per-turn", type=positive, metavar="CPR",
+                   help="motor encoder counts per turn of the motor shaft (--units ...=counts)")
+    p.add_argument("--link-counts-per-turn", type=positive, metavar="CPR",
+                   help="link encoder counts per turn (--units q=counts)")
+    p.add_argument("--torque-constant", type=positive, metavar="KT",
+                   help="torque constant in N m/A (N/A prismatic; or per V) for --units "
+                        "tau_m=A or V")
+    p.add_argument("--rate", type=positive, metavar="HZ",
+                   help="the drive's fixed sample rate: t rebuilt as k / rate (for rounded "
+                        "time stamps), checked within half a period of the logged time")
+    p.add_argument("--delimiter", help="column separator (default: found from the header)")
+    meta = p.add_argument_group("metadata (docs/log-format.md section 1.3)")
+    meta.add_argument("--kp", type=finite, help="position gain [1/s]")
+    meta.add_argument("--kv", type=finite, help="velocity gain [N m s/rad]")
+    meta.add_argument("--ki", type=finite, help="integral gain [N m/rad]")
+    meta.add_argument("--tau-max", type=positive, help="torque limit [N m]")
+    meta.add_argument("--velocity-feedforward", choices=("true", "false"),
+                      help="the velocity feed-forward term of the controller (default true)")
+    meta.add_argument("--gains-side", choices=("joint", "motor"), default="joint",
+                      help="motor: kv, ki, tau_max are motor-side, multiplied by N^2, N^2, N "
+                           "(default joint)")
+    meta.add_argument("--gravity", type=finite, help="gravity acceleration [m/s^2] (default "
+                                                     "9.81; 0 for a horizontal axis)")
+    meta.add_argument("--joint", help="axis name (default axis1)")
+    meta.add_argument("--prismatic", action="store_true",
+                      help="a linear axis: positions in m, forces in N (metadata axis: prismatic)")
+    meta.add_argument("--meta", action="append", default=[], metavar="KEY=VALUE",
+                      help="any other metadata key, e.g. torque_noise_std=0.5 (repeatable)")
+    p.add_argument("--json", action="store_true", help="print a JSON summary")
+
+
+def _pairs(text: str | None, flag: str, form: str) -> dict[str, str]:
+    """`KEY=VALUE,...` as a dict of strings; UsageError naming the flag."""
+    out: dict[str, str] = {}
+    for item in (text.split(",") if text else []):
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip() or not value.strip() or "=" in value:
+            raise UsageError(f"{flag}: '{item}' must read {form}")
+        out[key.strip()] = value.strip()
+    return out
+
+
+def spec_from_args(args: argparse.Namespace, header: tuple[str, ...]):
+    """The ImportSpec of the options; the default mapping takes the raw columns that already
+    carry a log column's name."""
+    from jointbench.identification.log_import import LOG_COLUMNS, ImportSpec
+
+    columns = _pairs(args.map, "--map", "COL=RAW (e.g. t=time_ms,q_m=motor_counts)")
+    if not args.map:
+        columns = {c: c for c in LOG_COLUMNS if c in header}
+    units = _pairs(args.units, "--units", "COL=UNIT (e.g. t=ms,q_m=counts,tau_m=A)")
+    meta: dict[str, str] = {}
+    if args.prismatic:
+        meta["axis"] = "prismatic"
+    for dest, key in META_OPTIONS.items():
+        if getattr(args, dest) is not None:
+            meta[key] = str(getattr(args, dest))
+    for item in args.meta:
+        meta.update(_pairs(item, "--meta", "KEY=VALUE (e.g. torque_noise_std=0.5)"))
+    return ImportSpec(columns=columns, units=units, gear_ratio=args.gear_ratio,
+                      motor_side=tuple(c.strip() for c in args.motor_side.split(",") if c.strip()),
+                      counts_per_turn=args.counts_per_turn,
+                      link_counts_per_turn=args.link_counts_per_turn,
+                      torque_constant=args.torque_constant, rate_hz=args.rate, meta=meta,
+                      gains_side=args.gains_side)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Read, convert, check, write atomically; print what was done."""
+    from jointbench.identification.log import write_log
+    from jointbench.identification.log_import import convert, read_raw
+
+    src, out = Path(args.file), Path(args.out)
+    if src.exists() and out.exists() and out.resolve() == src.resolve():
+        raise UsageError(f"--out {out}: is the input file; choose another name")
+    check_output_file(out)
+    raw = read_raw(src, args.delimiter)
+    result = convert(raw, spec_from_args(args, raw.header))
+    write_log(result.log, out)
+    for text in result.warnings:
+        print(f"jointbench import: warning: {text}", file=sys.stderr)
+    log = result.log
+    if args.json:
+        print(json.dumps({"out": str(out), "samples": len(log), "rate_hz": log.sample_rate_hz,
+                          "duration_s": float(log.t[-1]), "columns": list(log.columns()),
+                          "meta": log.meta, "steps": list(result.steps),
+                          "checks": list(result.checks), "warnings": list(result.warnings)}))
+        return 0
+    print("\n".join(["conversion:", *(f"  {s}" for s in result.steps), "checks:",
+                     *(f"  {c}" for c in result.checks),
+                     f"wrote {out}: {len(log)} samples over {log.t[-1]:.4g} s at "
+                     f"{log.sample_rate_hz:.6g} Hz, columns {', '.join(log.columns())}"]))
+    return 0
