@@ -10,7 +10,8 @@ import sys
 from pathlib import Path
 
 from jointbench.bench.cli.common import (UsageError, check_output_file, finite, parse_config,
-                                         positive)
+                                         positive, seed)
+from jointbench.bench.cli.resources import check_memory
 
 # The library `run` imports, loaded by the dispatcher before it traps the signals.
 LIBRARY = ("jointbench.bench.present.experiment", "jointbench.bench.present.replay")
@@ -32,7 +33,7 @@ def add_arguments(s: argparse.ArgumentParser) -> None:
                    help="prototype, arm6 or an MJCF file following the axis convention")
     s.add_argument("--joint", help="axis to move (default: the first)")
     s.add_argument("--duration", type=positive, default=60.0, help="seconds (default 60)")
-    s.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
+    s.add_argument("--seed", type=seed, default=0, help="noise seed (default 0)")
     s.add_argument("--out", help="log file to write (default MODEL_JOINT_seedN.csv)")
     s.add_argument("--effect", help="hide an effect: NAME=STRENGTH[:OPTION=VALUE...], e.g. "
                                     "backlash=0.002 (docs/effects.md)")
@@ -90,6 +91,7 @@ def run(args: argparse.Namespace) -> int:
     from jointbench.bench.sim.sensors import Sensors
     from jointbench.identification.defaults import design_rate_hz
     from jointbench.identification.log import write_log
+    from jointbench.identification.output import finite_json
 
     args.model = args.model or "prototype"
     effect = parse_effect(args.effect) if args.effect else None
@@ -102,6 +104,7 @@ def run(args: argparse.Namespace) -> int:
         rate = round(design_rate_hz(exp.truth.f1_hz), 2)
     else:
         rate = SAMPLE_RATE_HZ if args.rate is None else float(args.rate)
+    check_memory(args.duration * rate, f"--duration {args.duration:g} s at {rate:g} Hz")
     result = run_experiment(args.model, args.joint, duration=args.duration, seed=args.seed,
                             amplitude=args.amplitude, config=parse_config(args.config),
                             lock=args.lock, effect=effect,
@@ -112,7 +115,7 @@ def run(args: argparse.Namespace) -> int:
     for text in warnings:
         print(f"jointbench simulate: warning: {text}", file=sys.stderr)
     if args.json:
-        print(json.dumps(experiment_json(result, out, warnings)))
+        print(json.dumps(finite_json(experiment_json(result, out, warnings)), allow_nan=False))
     else:
         print(experiment_text(result, out))
     return 0
@@ -131,11 +134,15 @@ def _check_replay_options(args: argparse.Namespace, src: Path, out: Path | None)
             raise UsageError(f"--out {out}: refusing to write a log over an .xml file")
         if out.exists() and (out.is_dir() or (src.exists() and out.resolve() == src.resolve())):
             raise UsageError(f"--out {out}: is a directory or the replayed log itself")
+        check_output_file(out)
     if args.save_model and args.model:
         raise UsageError("--save-model writes the nominal axis identified from the log: "
                          "leave out --model")
     if args.save_model and Path(args.save_model).suffix.lower() != ".xml":
         raise UsageError(f"--save-model {args.save_model}: give an .xml file name")
+    for flag, path in (("--save-model", args.save_model), ("--plot", args.plot)):
+        if path:
+            check_output_file(Path(path), flag)
 
 
 def run_replay(args: argparse.Namespace) -> int:
@@ -144,11 +151,13 @@ def run_replay(args: argparse.Namespace) -> int:
     src = Path(args.replay)
     out = Path(args.out) if args.out else None
     _check_replay_options(args, src, out)
+    from jointbench.bench.output import record
     from jointbench.bench.present.replay import (format_report, plot_replay, replay_log_file,
                                                  report_json)
     from jointbench.bench.sim.nominal import write_xml
     from jointbench.bench.sim.replay import simulated_log
     from jointbench.identification.log import write_log
+    from jointbench.identification.output import finite_json
     from jointbench.identification.plots import save_figure_atomic
 
     rep = replay_log_file(src, model=args.model, joint=args.joint,
@@ -156,6 +165,7 @@ def run_replay(args: argparse.Namespace) -> int:
                           substeps=args.substeps, tau0=args.tau0, skip=args.skip)
     if args.save_model:
         write_xml(rep.spec, args.save_model)
+        record(args.save_model)
     if out is not None:
         write_log(simulated_log(rep.log, rep.result,
                                 f"jointbench replay of {src.name} on {rep.model}"), out)
@@ -163,10 +173,11 @@ def run_replay(args: argparse.Namespace) -> int:
         import matplotlib
         matplotlib.use("Agg")
         save_figure_atomic(plot_replay(rep.log, rep.result, f"replay of {src.name}"), args.plot)
+        record(args.plot)
     if args.json:
         obj = report_json(rep)
         obj["out"] = None if out is None else str(out)
-        print(json.dumps(obj, allow_nan=False, default=float))
+        print(json.dumps(finite_json(obj), allow_nan=False, default=float))
     else:
         print(format_report(rep))
         if out is not None:
