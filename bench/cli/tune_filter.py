@@ -13,6 +13,7 @@ import math
 import sys
 from typing import Callable
 
+from jointbench.bench.cli.common import seed
 from jointbench.identification.parameters import FRICTIONS, STIFFNESS_AND_INERTIAS
 
 DEFAULT_ND = (4, 8, 13, 20, 26, 30, 34, 38, 42, 46, 52)
@@ -40,7 +41,7 @@ def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
     p.add_argument("--joint", help="axis to move (default: the first)")
     p.add_argument("--seeds", type=int, default=6,
                    help="search experiments; as many fresh ones validate (default 6)")
-    p.add_argument("--seed", type=int, default=0, help="campaign seed (default 0)")
+    p.add_argument("--seed", type=seed, default=0, help="campaign seed (default 0)")
     p.add_argument("--duration", type=float, default=60.0, help="experiment length in s")
     p.add_argument("--wn", default="60:1000:9",
                    help="wn grid [rad/s]: LO:HI:N geometric, or V1,V2,... (default 60:1000:9)")
@@ -54,6 +55,25 @@ def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print the result as one JSON object")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     return p
+
+
+def _check_grid(duration: float, wn_grid: tuple, Nd_grid: tuple, workers: int | None) -> None:
+    """Before any experiment, every grid value a run can use (the campaign's checks,
+    bench.campaign.spec.check_settings, naming the option and the value) and the memory."""
+    import os
+
+    from jointbench.bench.campaign.settings import RunSettings
+    from jointbench.bench.campaign.spec import check_settings
+    from jointbench.bench.cli.resources import check_memory
+    from jointbench.identification.defaults import PAPER_RATE
+
+    check_settings(RunSettings(duration=duration))
+    for w in wn_grid:
+        check_settings(RunSettings(duration=duration, wn=w), f"--wn grid value {w:g}")
+    for n in Nd_grid:
+        check_settings(RunSettings(duration=duration, Nd=n), f"--nd grid value {n}")
+    check_memory(duration * PAPER_RATE, f"--duration {duration:g} s",
+                 copies=workers or os.cpu_count() or 1)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -74,6 +94,7 @@ def run(args: argparse.Namespace) -> int:
     Nd_grid = _grid(args.nd, int, linear_nd)
     if any(not (math.isfinite(w) and w > 0) for w in wn_grid) or any(n < 1 for n in Nd_grid):
         raise ValueError("grid values must be positive (wn) and >= 1 (Nd)")
+    _check_grid(args.duration, wn_grid, Nd_grid, args.workers)
     params = tuple(p.strip() for p in args.params.split(",") if p.strip())
     if not params or any(p not in OBJECTIVE_PARAMS for p in params):
         raise ValueError(f"--params: choose among {', '.join(OBJECTIVE_PARAMS)}")
