@@ -73,8 +73,11 @@ def run(args: argparse.Namespace) -> int:
     from jointbench.bench.analysis.diagnose.report import write
     from jointbench.identification.log import LogError, read_log
     from jointbench.identification.output import finite_json
+    from jointbench.identification.saturation import clipping_warnings
 
     log = read_log(args.file)
+    for text in clipping_warnings(log, excluded=False):  # LogError over a third
+        print(f"jointbench diagnose: warning: {text}", file=sys.stderr)
     say = _progress(args)
     out = _output_folder(args)
     other = read_log(args.validate) if args.validate else None

@@ -125,10 +125,11 @@ def run(args: argparse.Namespace) -> int:
     from jointbench.identification.identify import identify
     from jointbench.identification.log import read_log, unit_warnings
     from jointbench.identification.output import finite_json
+    from jointbench.identification.saturation import clipping_warnings
     from jointbench.identification.physical import InversionError
 
     log = read_log(args.file)
-    warnings = unit_warnings(log)
+    warnings = unit_warnings(log) + clipping_warnings(log)
     for text in warnings:
         print(f"jointbench identify: warning: {text}", file=sys.stderr)
     _check_options(args)
