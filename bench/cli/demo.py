@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from jointbench.bench.cli.common import positive, seed
+from jointbench.bench.cli.common import UsageError, positive, seed
 from jointbench.bench.cli.resources import check_memory
 
 # The library `run` imports, loaded by the dispatcher before it traps the signals.
@@ -31,6 +31,11 @@ def run(args: argparse.Namespace) -> int:
     from jointbench.bench.output import OutputFolder
     from jointbench.bench.sim.experiment import SAMPLE_RATE_HZ
 
+    from jointbench.bench.campaign.spec import MIN_DURATION_S
+
+    if args.duration < MIN_DURATION_S:
+        raise UsageError(f"--duration {args.duration:g}: must be at least {MIN_DURATION_S:g} s "
+                         "(the chirp fades in and out over 2 s each)")
     folder = OutputFolder(Path(args.out), FILES)
     check_memory(args.duration * SAMPLE_RATE_HZ, f"--duration {args.duration:g} s")
     with folder.writing() as out:

@@ -79,8 +79,36 @@ def _require_mode(f1_hz: float, axis: str) -> None:
                          "give --rate HZ")
 
 
+MAX_SUBSTEPS = 1000  # physics steps per tick: beyond, a 60 s run takes hours
+
+
+def _check_numbers(args: argparse.Namespace) -> None:
+    """UsageError naming the option for a value no experiment or replay can use."""
+    from dataclasses import fields
+
+    from jointbench.bench.sim.reference import Chirp
+    from jointbench.identification.log_read import MAX_RATE_HZ
+
+    if not 1 <= args.substeps <= MAX_SUBSTEPS:
+        raise UsageError(f"--substeps {args.substeps}: must lie in [1, {MAX_SUBSTEPS}]")
+    if args.skip < 0:
+        raise UsageError(f"--skip {args.skip}: must be >= 0")
+    if args.replay:
+        return
+    chirp = {f.name: f.default for f in fields(Chirp)}
+    if args.duration < 2 * chirp["taper"]:
+        raise UsageError(f"--duration {args.duration:g}: must be at least "
+                         f"{2 * chirp['taper']:g} s (the chirp fades in and out over "
+                         f"{chirp['taper']:g} s each)")
+    if isinstance(args.rate, float) and not 2 * chirp["f1"] < args.rate <= MAX_RATE_HZ:
+        raise UsageError(f"--rate {args.rate:g}: must lie in ({2 * chirp['f1']:g}, "
+                         f"{MAX_RATE_HZ:g}] Hz (over twice the chirp's top frequency "
+                         f"{chirp['f1']:g} Hz)")
+
+
 def run(args: argparse.Namespace) -> int:
     """Run the virtual experiment, write its log, print the summary (text or JSON)."""
+    _check_numbers(args)
     if args.replay:
         return run_replay(args)
     from jointbench.bench.effects import parse_effect
