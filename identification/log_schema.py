@@ -24,7 +24,7 @@ NUMERIC_META = {"sample_rate_hz": True, "gravity": False, "kp": False, "kv": Fal
 BOOLEAN_META = ("velocity_feedforward",)
 # The unit word a numeric key may carry after its number (docs/log-format.md), spaces, `*`
 # and `.` between unit symbols ignored: SI on the joint side (a prismatic axis: N, m).
-META_UNITS = {"sample_rate_hz": ("Hz",), "gravity": ("m/s^2", "m/s2", "m s^-2"),
+META_UNITS = {"sample_rate_hz": ("Hz",), "gravity": ("m/s^2", "m/s2", "m s^-2", "m/s²"),
               "kp": ("1/s", "s^-1"), "kv": ("N m s/rad", "N s/m"),
               "ki": ("N m/rad", "N/m"), "tau_max": ("N m", "N"), "gear_ratio": ()}
 # The metadata rate is used as it is when it agrees with `t` to this relative precision

@@ -202,3 +202,22 @@ def test_fuzz_diagnose(sim, case):
         assert isinstance(_strict(out), dict)
     else:
         assert err.startswith("jointbench diagnose: error: ")
+
+
+@settings(max_examples=150, deadline=None)
+@given(cell=st.one_of(st.text(st.characters(blacklist_categories=("Cc", "Cs", "Zl", "Zp"),
+                                            blacklist_characters=",\x1c\x1d\x1e\x85"),
+                              max_size=12), st.sampled_from(
+    ["1_000", "\u0661", "\uff11", "1e300", "-1e13", "+3.5", " 2 ", "0x10", "nan", "1e-320"])))
+def test_fuzz_loader_cells_are_strict_numbers(cell):
+    """A cell the loader accepts is an ASCII number without digit separators, finite and at
+    most 1e12 in magnitude; anything else is an error naming line 4, column 'tau_m'."""
+    from jointbench.identification.log import LogError, parse_log
+    text = f"t,q_m,tau_m\n0,0,1\n0.01,0,1\n0.02,0,{cell}\n0.03,0,1\n"
+    try:
+        log = parse_log(text, "f.csv")
+    except LogError as err:
+        assert str(err).startswith("f.csv")
+        return
+    assert cell.isascii() and "_" not in cell
+    assert np.isfinite(log.tau_m[2]) and abs(log.tau_m[2]) <= 1e12
