@@ -46,6 +46,7 @@ OPTION = {"duration": "--duration", "amplitude": "--amplitude", "noise": "--nois
 # The default chirp fades in and out over `taper` s each: a run must hold both.
 MIN_DURATION_S = 2 * next(f.default for f in fields(Chirp) if f.name == "taper")
 MAX_BITS = 52          # an encoder finer than 2 pi / 2**52 rad is below double precision
+MAX_RUNS = 10**6       # runs of one campaign (sweep points included)
 MIN_ROWS = 16          # decimated rows the identification needs at least (6 edge + 10)
 
 
@@ -132,6 +133,9 @@ class CampaignSpec:
                                     f"(sweepable: {', '.join(SWEEPABLE)})")
             if not self.values:
                 raise CampaignError(f"--sweep {self.sweep}: no values")
+        if self.total > MAX_RUNS:
+            raise CampaignError(f"--runs {self.runs}: {self.total:,} runs, over the "
+                                f"{MAX_RUNS:,} a campaign holds (its tasks are listed up front)")
         check_settings(self.base)
         for point, value in enumerate(self.values):
             check_settings(self.settings_at(point), f"--sweep {self.sweep}={value:g}")

@@ -76,6 +76,29 @@ def _check_grid(duration: float, wn_grid: tuple, Nd_grid: tuple, workers: int | 
                  copies=workers or os.cpu_count() or 1)
 
 
+def _first_failure(args: argparse.Namespace, wn: float, Nd: int) -> str:
+    """The root cause behind a grid where nothing identified: the first search experiment
+    and the first pair, run here, and the error they raise."""
+    from jointbench.bench.campaign.tuning import _seeds
+    from jointbench.bench.sim.experiment import run_experiment
+    from jointbench.identification.filtering import FilterSettings
+    from jointbench.identification.identify import identify
+
+    seed = _seeds(args.seed, 0, 1)[0]
+    try:
+        log = run_experiment(args.model, args.joint, duration=args.duration, seed=seed).log
+    except Exception as err:  # noqa: BLE001 - reported as the cause
+        return f"the first experiment fails: {err}"
+    try:
+        identify(log, args.id_model, FilterSettings(wn=float(wn), m=4, Nd=int(Nd), ts=log.ts))
+    except Exception as err:  # noqa: BLE001 - reported as the cause
+        return f"the first experiment with wn = {wn:g}, Nd = {Nd}: {err}"
+    return "the first experiment identifies with the first pair; a later one fails"
+
+
+MAX_SEEDS = 10_000  # the tasks are built up front
+
+
 def run(args: argparse.Namespace) -> int:
     """`jointbench tune-filter`: the grid search and its validation, printed as tables or JSON.
     Raises ValueError for bad options (exit status 2)."""
@@ -84,8 +107,8 @@ def run(args: argparse.Namespace) -> int:
     from jointbench.bench.campaign.tuning import geometric_wn, linear_nd, result_text, tune_filter
     from jointbench.identification.output import finite_json
 
-    if args.seeds < 1:
-        raise ValueError(f"--seeds must be >= 1, got {args.seeds}")
+    if not 1 <= args.seeds <= MAX_SEEDS:
+        raise ValueError(f"--seeds {args.seeds}: must lie in [1, {MAX_SEEDS}]")
     if args.seed < 0:
         raise ValueError(f"--seed must be >= 0, got {args.seed}")
     if not (math.isfinite(args.duration) and args.duration > 0):
@@ -105,6 +128,10 @@ def run(args: argparse.Namespace) -> int:
         r = tune_filter(args.model, args.joint, wn_grid, Nd_grid, args.seeds, executor,
                         duration=args.duration, seed=args.seed, id_model=args.id_model,
                         params=params, progress=bar.update)
+    except ValueError as err:
+        if "no (wn, Nd) pair" not in str(err):
+            raise
+        raise ValueError(f"{err}; {_first_failure(args, wn_grid[0], Nd_grid[0])}") from None
     finally:
         executor.close()
     if args.json:
