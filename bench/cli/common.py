@@ -119,7 +119,7 @@ def seed(value: str) -> int:
     """Argument type: a seed, an integer in [0, 2**32) (numpy's SeedSequence range is wider,
     but a log's `seed` metadata and a campaign's derived seeds stay in it)."""
     try:
-        x = int(value.replace("_", "x"))
+        x = int(value.replace("_", "x"))  # int() reads 1_000: refused here
     except ValueError:
         raise argparse.ArgumentTypeError(f"'{value}' is not an integer") from None
     if not 0 <= x < 2**32:
@@ -134,7 +134,8 @@ def one_line(err: BaseException) -> str:
 
 def is_simulation_error(err: Exception) -> bool:
     """A diverging or unstable virtual experiment or replay (bench.sim.experiment's
-    SimulationError, bench.sim.replay's ReplayError, loaded only by the commands that simulate): bad input (gains, timestep, model), status 2."""
+    SimulationError, bench.sim.replay's ReplayError, loaded only by the commands that
+    simulate): bad input (gains, timestep, model), status 2."""
     experiment = sys.modules.get("jointbench.bench.sim.experiment")
     replay = sys.modules.get("jointbench.bench.sim.replay")
     return (experiment is not None and isinstance(err, experiment.SimulationError)) or \

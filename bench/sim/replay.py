@@ -80,17 +80,24 @@ class _ReplayChecks(LoopChecks):
     TRACK_FACTOR times the log's worst tracking error (at least the reference's span), is a
     diverged replay (negative gains, a wrong model, a huge initial integrator state)."""
 
-    def __init__(self, log: Log, T: float):
+    def __init__(self, log: Log, T: float, tau_max: float):
         self.log, self.T = log, T
         self.position_limit = 1e6 * max(1.0, float(np.max(np.abs(log.q_m))))
         worst = float(np.max(np.abs(log.q_ref - log.q_m)))
         self.track_limit = max(TRACK_FACTOR * worst, float(np.ptp(log.q_ref)), 1e-9)
+        self.torque_limit, self.clipped = tau_max, 0
+
+    def saturated(self, k: int, u: float) -> None:
+        self.clipped += 1
 
     def _fail(self, k: int, what: str) -> None:
+        held = (f"; {self.clipped} of {k} samples so far at the torque limit tau_max = "
+                f"{self.torque_limit:g}, the log has {_clipped(self.log, self.torque_limit)} "
+                "in all" if self.clipped else "")
         raise ReplayError(f"replay of {self.log.path or 'the log'} diverged at t = "
                           f"{k * self.T:.4f} s ({what}): the model is unstable under the "
                           "logged gains (check their signs and sizes) or does not describe "
-                          "the axis")
+                          f"the axis{held}")
 
     def diverged(self, k: int, q_m: float, q: float) -> None:
         if not abs(q_m) < self.position_limit:
@@ -166,7 +173,7 @@ def replay(model: mujoco.MjModel, axis: Axis, log: Log, disturbance: np.ndarray 
     d.qvel[:] = 0.0
     mujoco.mj_forward(m, d)
 
-    checks = _ReplayChecks(log, T)
+    checks = _ReplayChecks(log, T, float(gains.tau_max))
     trace = run_loop(m, d, axis, gains, T, float(log.tau_m[0]) if tau0 is None else float(tau0),
                      log.q_ref, substeps=substeps, sensors=sensors, seed=seed, loop=loop,
                      disturbance=disturbance, disturbance_at=disturbance_at, checks=checks)
