@@ -45,7 +45,7 @@ def memory_limit_mb(environ: dict[str, str] | None = None) -> float:
 def check_memory(samples: float, what: str, copies: int = 1) -> float:
     """UsageError when `copies` (workers) of a command holding `samples` log samples would need
     more than the limit; returns the estimate in MB. `what` says where the samples come from
-    (e.g. "--duration 1e+06 s at 350.87 Hz")."""
+    (e.g. "--duration 1e+06 s at 1000 Hz")."""
     need = copies * (BASE_MB + samples * BYTES_PER_SAMPLE / 2**20)
     limit = memory_limit_mb()
     if not need <= limit:
