@@ -202,6 +202,9 @@ def spec_difference(stored: str, spec: CampaignSpec) -> str:
         old = None
     if isinstance(old, dict):
         new = json.loads(spec.to_json())
+        if "model_sha256" not in old:
+            return ("was written by an older jointbench, without the model file's content hash "
+                    "a resume checks: choose another --out to start the campaign afresh")
         if old.get("model_sha256") != new["model_sha256"] and \
                 {k: v for k, v in old.items() if k != "model_sha256"} == \
                 {k: v for k, v in new.items() if k != "model_sha256"}:
