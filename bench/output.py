@@ -220,11 +220,14 @@ class OutputFolder:
         manifest = read_manifest(p)
         moved: list[str] = []
         with _signals_held():
-            for name in [*manifest, MANIFEST]:
+            # ours (manifest, markers) and the empty files of the names we write go aside
+            for name in sorted(set(manifest) | set(self._present()) | {MANIFEST}):
                 if Path(name).is_absolute() or ".." in Path(name).parts:
                     continue  # a manifest names files below its folder only
                 src = p / name
-                if src.is_file() and (name == MANIFEST or is_ours(src, manifest, name)):
+                if src.is_file() and not src.is_symlink() and (
+                        name == MANIFEST or src.stat().st_size == 0
+                        or is_ours(src, manifest, name)):
                     (backup / name).parent.mkdir(parents=True, exist_ok=True)
                     os.replace(src, backup / name)
                     moved.append(name)
@@ -233,26 +236,29 @@ class OutputFolder:
             yield p
         except BaseException:
             with _signals_held():
-                for name in _entries(p) - before:
+                new = _entries(p) - before
+                for name in new:
                     (p / name).unlink(missing_ok=True)
                 for name in moved:
+                    (p / name).parent.mkdir(parents=True, exist_ok=True)
                     os.replace(backup / name, p / name)
                 shutil.rmtree(backup, ignore_errors=True)
-                _prune_empty(p, remove_root=created)
+                _prune(p, new | set(moved), remove_root=created)
             raise
         with _signals_held():
-            new = sorted(_entries(p) - before - {MANIFEST})
-            _write_manifest(p, {n: sha256(p / n) for n in new})
+            new = _entries(p) - before - {MANIFEST}
+            _write_manifest(p, {n: sha256(p / n) for n in sorted(new)})
             shutil.rmtree(backup, ignore_errors=True)
-            _prune_empty(p, remove_root=False)
+            _prune(p, set(moved), remove_root=False)
 
 
-def _prune_empty(folder: Path, remove_root: bool) -> None:
-    """Remove the empty sub-folders below `folder` (and `folder` itself when asked)."""
-    for root, dirs, files in os.walk(folder, topdown=False):
-        if Path(root) == folder and not remove_root:
-            continue
+def _prune(folder: Path, names: set[str], remove_root: bool) -> None:
+    """Remove the sub-folders of `names` (files below `folder`) that are left empty, deepest
+    first, and `folder` itself when asked and empty; never another folder."""
+    dirs = {folder / parent for n in names for parent in Path(n).parents if str(parent) != "."}
+    for d in sorted(dirs, key=lambda d: len(d.parts), reverse=True) + \
+            ([folder] if remove_root else []):
         try:
-            os.rmdir(root)
+            os.rmdir(d)
         except OSError:
-            pass
+            pass  # not empty, or gone

@@ -233,3 +233,32 @@ def test_mujoco_warnings_never_reach_the_working_directory(tmp_path, monkeypatch
     assert first_warning(data)[0] == "mjWARN_BADCTRL"
     assert "CTRL" in MUJOCO_WARNING_TEXTS[-1]
     assert os.listdir(tmp_path) == []
+
+
+def test_output_folder_touches_only_its_own_files(tmp_path):
+    """A user's empty folder and files stay; an empty file of a name we write is replaced;
+    an interrupted write puts our previous files back; a later run removes the ones it does
+    not write again."""
+    out = tmp_path / "out"
+    (out / "mine").mkdir(parents=True)
+    (out / "notes.txt").write_text("user")
+    (out / "a.txt").write_text("")
+    folder = OutputFolder(out, ["a.txt", "b.txt", "sub/*"])
+    with folder.writing() as p:
+        (p / "a.txt").write_text("A1")
+        (p / "sub").mkdir()
+        (p / "sub" / "c.txt").write_text("C1")
+    from jointbench.bench.output import read_manifest
+    assert is_ours(out / "a.txt") and is_ours(out / "sub" / "c.txt", read_manifest(out),
+                                              "sub/c.txt")
+    snapshot = _digest(out)
+    with pytest.raises(KeyboardInterrupt):
+        with OutputFolder(out, ["a.txt", "b.txt", "sub/*"]).writing() as p:
+            (p / "a.txt").write_text("A2")
+            (p / "b.txt").write_text("B2")
+            raise KeyboardInterrupt
+    assert _digest(out) == snapshot
+    with OutputFolder(out, ["a.txt", "b.txt", "sub/*"]).writing() as p:
+        (p / "b.txt").write_text("B3")
+    assert sorted(os.listdir(out)) == [MANIFEST, "b.txt", "mine", "notes.txt"]
+    assert (out / "mine").is_dir() and (out / "notes.txt").read_text() == "user"
