@@ -16,6 +16,7 @@ from pathlib import Path
 
 import pytest
 
+import jointbench.bench.campaign.run  # noqa: F401 - bound to run_experiment before any patch
 from jointbench.bench.cli import main
 from jointbench.bench.cli.common import Terminated
 from jointbench.bench.output import MANIFEST, OutputError, OutputFolder, is_ours
