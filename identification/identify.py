@@ -14,6 +14,7 @@ from jointbench.identification.defaults import settings_for
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.log import Log, LogError
 from jointbench.identification.physical import InversionError, PhysicalResult, invert_motor_only, table3
+from jointbench.identification.saturation import exclude_clipped  # clipped torque rows out
 
 MODEL_CHOICES = ("joint-motor", "motor-only", "motor-only-printed", "rigid", "auto")
 
@@ -127,16 +128,16 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
     _check_length(log, settings, nd)
     check_signals(log, model, settings)
     if model == "joint-motor":
-        reg = regressors.joint_motor(log, settings)
+        reg = exclude_clipped(regressors.joint_motor(log, settings), log)
         ls = block_weighted(reg.W, reg.y, reg.names, reg.block, time=reg.index)
     elif model == "motor-only":
-        reg = regressors.motor_only(log, settings, corrected=True)
+        reg = exclude_clipped(regressors.motor_only(log, settings, corrected=True), log)
         ls = least_squares(reg.W, reg.y, reg.names)
     elif model == "motor-only-printed":
-        reg = regressors.motor_only(log, settings, corrected=False)
+        reg = exclude_clipped(regressors.motor_only(log, settings, corrected=False), log)
         ls = least_squares(reg.W, reg.y, reg.names)
     else:
-        reg = regressors.rigid(log, settings)
+        reg = exclude_clipped(regressors.rigid(log, settings), log)
         ls = least_squares(reg.W, reg.y, reg.names)
     ls = check_excitation(log, reg, ls)
     physical: dict[str, float] = {}

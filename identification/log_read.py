@@ -27,6 +27,15 @@ from jointbench.identification.log_schema import (BOOLEAN_META, FORMAT_KEY, FORM
 
 T = TypeVar("T")
 JITTER_TOLERANCE = 0.01  # docs/log-format.md: jitter under 1 % of the period
+RATE_TOLERANCE = 0.01    # a metadata rate off the rate of `t` by more is refused ...
+RATE_WARNING = 5e-4      # ... by more than this (0.05 %) gets a warning: `t` is used
+# A drive log is sampled between these rates; outside them `t` is in the wrong unit (ms, us,
+# ns since an epoch) and every rate-dependent estimate would be off by powers of 1000.
+MIN_RATE_HZ, MAX_RATE_HZ = 10.0, 1e6
+# Largest magnitude of a position or torque sample: beyond it a value is a corrupted cell
+# (1e300 overflows the filters' fourth derivatives), not a measurement.
+MAX_ABS_VALUE = 1e12
+ANALYSED_COLUMNS = ("q_m", "q", "tau_m", "q_ref")
 DEFAULT_MAX_BYTES = 512 * 2**20  # a 60 s log at the paper's rate is about 2 MB
 MAX_BYTES_ENV = "JOINTBENCH_MAX_LOG_BYTES"
 MAX_LINE_BYTES = 2**16  # one metadata line or data row
@@ -135,6 +144,8 @@ def _parse_lines(lines: Iterable[tuple[int, str]], path) -> Log:
         cells = line.split(",")
         if len(cells) != ncols:
             raise LogError(f"expected {ncols} cells, found {len(cells)}", path, lineno)
+        if "_" in line or not line.isascii():  # float() reads 1_000 and non-ASCII digits
+            raise _bad_cell(cells, header, path, lineno)
         try:
             values.extend([float(cell) for cell in cells])
         except ValueError:
@@ -154,6 +165,13 @@ def _parse_lines(lines: Iterable[tuple[int, str]], path) -> Log:
         row, col = divmod(int(np.argmin(finite.ravel())), ncols)
         raise LogError(f"non-finite value '{float(data[row, col])!r}'", path, int(row_lines[row]),
                        header[col])
+    for col, name in enumerate(header):
+        if name in ANALYSED_COLUMNS:
+            big = np.flatnonzero(np.abs(data[:, col]) > MAX_ABS_VALUE)
+            if big.size:
+                raise LogError(f"value {data[big[0], col]:.6g} is out of range (over "
+                               f"{MAX_ABS_VALUE:g} in magnitude): a corrupted cell, not a "
+                               "measurement", path, int(row_lines[big[0]]), name)
     cols = {name: data[:, i].copy() for i, name in enumerate(header)}
     log = Log(t=cols.pop("t"), q_m=cols.pop("q_m"), tau_m=cols.pop("tau_m"),
               q=cols.pop("q", None), q_ref=cols.pop("q_ref", None), extra=cols, meta=meta,
@@ -207,11 +225,29 @@ def validate(log: Log, first_data_line: int | None = None,
     if k is not None:
         raise LogError(f"irregular sampling: step {dt[k - 1]:.6g} s against the median "
                        f"{period:.6g} s (jitter over 1 %)", log.path, line(k), "t")
+    from_t = float(log.rate_from_t)
+    if not MIN_RATE_HZ <= from_t <= MAX_RATE_HZ:
+        raise LogError(f"t advances {period:.6g} per sample ({from_t:.4g} Hz): not a drive "
+                       f"log's rate ({MIN_RATE_HZ:g} Hz to {MAX_RATE_HZ:g} Hz); t must be in "
+                       "seconds" + (" (from milliseconds: divide by 1000)"
+                                    if from_t < MIN_RATE_HZ else ""), log.path, line(1), "t")
     rate = log.meta_float("sample_rate_hz")
-    if rate is not None and abs(rate * period - 1.0) > JITTER_TOLERANCE:
+    if rate is not None and abs(rate / from_t - 1.0) > RATE_TOLERANCE:
         raise LogError(f"metadata sample_rate_hz {rate:g} contradicts t "
-                       f"({1.0 / period:.6g} Hz from the median step)", log.path,
+                       f"({from_t:.6g} Hz from the time stamps, over 1 % apart)", log.path,
                        log.meta_lines.get("sample_rate_hz"))
+
+
+def rate_warnings(log: Log) -> list[str]:
+    """A warning when the metadata rate and the rate of `t` differ by over 0.05 % (under
+    1 %, or the reader refuses the log): the analyses use the rate of `t`."""
+    rate, from_t = log.meta_float("sample_rate_hz"), log.rate_from_t
+    if rate is None or from_t is None or abs(rate / from_t - 1.0) <= RATE_WARNING:
+        return []
+    where = f"{log.path or '<log>'}" + (f":{log.meta_lines['sample_rate_hz']}"
+                                        if "sample_rate_hz" in log.meta_lines else "")
+    return [f"{where}: metadata sample_rate_hz {rate:g} differs from the rate of t "
+            f"({from_t:.6g} Hz) by {100 * (rate / from_t - 1):+.3g} %; the rate of t is used"]
 
 
 def parse_size(text: str) -> int:
@@ -317,10 +353,11 @@ def read_log(path: str | os.PathLike, max_bytes: int | None = None) -> Log:
 
 
 def unit_warnings(log: Log) -> list[str]:
-    """Warnings (not errors) about units: revolute positions that look like degrees, i.e. that
-    span more than a turn or lie more than two turns from zero (docs/log-format.md: radians)."""
+    """Warnings (not errors) about units: a metadata rate that differs from the rate of `t`
+    (`rate_warnings`), revolute positions that look like degrees, i.e. that span more than a
+    turn or lie more than two turns from zero (docs/log-format.md: radians)."""
     if log.prismatic:
-        return []
+        return rate_warnings(log)
     odd = []
     for name in ("q_m", "q", "q_ref"):
         x = getattr(log, name)
@@ -331,7 +368,7 @@ def unit_warnings(log: Log) -> list[str]:
             odd.append(f"'{name}' spans {span:.4g} ({span / (2 * math.pi):.3g} turns in rad) "
                        f"and reaches {peak:.4g}")
     if not odd:
-        return []
-    return [f"{log.path or '<log>'}: {'; '.join(odd)}: the positions look like degrees; "
+        return rate_warnings(log)
+    return rate_warnings(log) + [f"{log.path or '<log>'}: {'; '.join(odd)}: the positions look like degrees; "
             "docs/log-format.md wants radians (multiply by pi/180), or `axis: prismatic` "
             "metadata for a linear axis"]

@@ -22,6 +22,14 @@ OPTIONAL_COLUMNS = ("q", "q_ref")
 NUMERIC_META = {"sample_rate_hz": True, "gravity": False, "kp": False, "kv": False,
                 "ki": False, "tau_max": True, "gear_ratio": True}
 BOOLEAN_META = ("velocity_feedforward",)
+# The unit word a numeric key may carry after its number (docs/log-format.md), spaces, `*`
+# and `.` between unit symbols ignored: SI on the joint side (a prismatic axis: N, m).
+META_UNITS = {"sample_rate_hz": ("Hz",), "gravity": ("m/s^2", "m/s2", "m s^-2", "m/s²"),
+              "kp": ("1/s", "s^-1"), "kv": ("N m s/rad", "N s/m"),
+              "ki": ("N m/rad", "N/m"), "tau_max": ("N m", "N"), "gear_ratio": ()}
+# The metadata rate is used as it is when it agrees with `t` to this relative precision
+# (the precision of the written time stamps); otherwise the rate comes from `t`.
+RATE_AGREEMENT = 1e-6
 
 
 class LogError(ValueError):
@@ -69,10 +77,26 @@ class Log:
         return len(self.t)
 
     @property
+    def rate_from_t(self) -> float | None:
+        """(n - 1) / (t[-1] - t[0]) [Hz], the mean rate of the time stamps; None under 2
+        samples."""
+        n = len(self.t)
+        if n < 2 or not self.t[-1] > self.t[0]:
+            return None
+        return (n - 1) / float(self.t[-1] - self.t[0])
+
+    @property
     def sample_rate_hz(self) -> float:
-        """The metadata's rate when given, else the one inferred from `t`."""
+        """The rate of `t` (`rate_from_t`); the metadata's value when it agrees with it to
+        RATE_AGREEMENT (the same rate, written exactly) or when `t` has under 2 samples.
+        The reader refuses a metadata rate off by over 1 % and warns over 0.05 %."""
         value = self.meta_float("sample_rate_hz")
-        return value if value is not None else 1.0 / float(np.median(np.diff(self.t)))
+        from_t = self.rate_from_t
+        if from_t is None:
+            return value if value is not None else float("nan")
+        if value is not None and abs(value / from_t - 1.0) <= RATE_AGREEMENT:
+            return value
+        return from_t
 
     @property
     def ts(self) -> float:
@@ -102,12 +126,10 @@ class Log:
     def truth(self) -> dict[str, float]:
         """Ground truth carried by a virtual log: metadata keys `truth_<name>` as floats."""
         out = {}
-        for key in self.meta:
-            if key.startswith("truth_"):
-                try:
-                    out[key[len("truth_"):]] = float(self.meta[key])
-                except ValueError:
-                    continue  # descriptive truth (an effect name) is not a number
+        for key, value in self.meta.items():
+            # descriptive truth (an effect name) is not a number; nan or inf is no truth
+            if key.startswith("truth_") and is_number(value) and math.isfinite(float(value)):
+                out[key[len("truth_"):]] = float(value)
         return out
 
     def columns(self) -> dict[str, np.ndarray]:
@@ -128,13 +150,24 @@ def shown(text: str, limit: int = 40) -> str:
     return shown if len(shown) <= limit else shown[:limit] + "..."
 
 
+def _unit_key(text: str) -> str:
+    return "".join(c for c in text if c not in " *.\u00b7")
+
+
 def meta_number(key: str, value: str, path, line: int | None) -> float:
-    """The first word of a metadata value as a number (a unit may follow: `9.81 m/s^2`)."""
+    """The first word of a metadata value as a number; the key's SI unit may follow
+    (`9.81 m/s^2`, META_UNITS), nothing else (`3 kN m` is refused, not read as 3)."""
     words = value.split()
     number = float(words[0]) if words and is_number(words[0]) else None
     if number is None:
         raise LogError(f"metadata '{shown(key)}' must be a number, got '{shown(value)}'",
                        path, line)
+    unit = _unit_key(" ".join(words[1:]))
+    if unit and unit not in [_unit_key(u) for u in META_UNITS.get(key, (unit,))]:
+        allowed = META_UNITS.get(key, ())
+        raise LogError(f"metadata '{shown(key)}' must be a plain number"
+                       + (f" (optionally followed by its SI unit {allowed[0]})" if allowed
+                          else "") + f", got '{shown(value)}'", path, line)
     if not math.isfinite(number):
         raise LogError(f"metadata '{shown(key)}' must be finite, got '{shown(value)}'", path,
                        line)
@@ -153,6 +186,10 @@ def meta_boolean(key: str, value: str, path, line: int | None) -> bool:
 
 
 def is_number(text: str) -> bool:
+    """A number as the log format writes it: ASCII, no digit separator (float() also reads
+    `1_000` and non-ASCII digits)."""
+    if not text.isascii() or "_" in text:
+        return False
     try:
         float(text)
     except ValueError:

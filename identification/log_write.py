@@ -8,8 +8,10 @@ temporary.
 
 from __future__ import annotations
 
+import errno
 import io
 import os
+import stat
 import tempfile
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Callable
@@ -44,16 +46,28 @@ def format_log(log: Log, precision: int = 12) -> str:
     return out.getvalue()
 
 
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
 def atomic_write(path: str | os.PathLike, write: Callable[[IO], object], binary: bool = False,
                  sync: bool = True) -> Path:
     """Create `path` by `write(handle)` on a temporary file in the same folder, then rename it
     over `path` (os.replace, atomic on one filesystem); on any exception the temporary is
-    removed and the exception goes on. Text handles are UTF-8 with "\\n" line ends; `sync`
+    removed and the exception goes on. A `path` that exists and is not a regular file (a
+    device node, a FIFO, a folder) is refused (OSError). The file gets mode 0666 less the
+    umask, as open() would create it. Text handles are UTF-8 with "\\n" line ends; `sync`
     flushes the data to disk before the rename. Raises OSError when the folder does not exist
     or is not writable."""
     path = Path(path)
+    if os.path.lexists(path) and not stat.S_ISREG(os.lstat(path).st_mode):
+        raise IsADirectoryError(errno.EISDIR, "not a regular file: refusing to replace it",
+                                str(path))
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
     try:
+        os.fchmod(fd, 0o666 & ~_umask())  # mkstemp creates 0600; a file gets what umask allows
         with (os.fdopen(fd, "wb") if binary else
               os.fdopen(fd, "w", encoding="utf-8", newline="\n")) as handle:
             write(handle)

@@ -115,7 +115,8 @@ def find_axes(model: mujoco.MjModel, source: str = "<model>") -> list[Axis]:
         for w in range(adr, adr + num):
             if int(model.wrap_type[w]) != int(mujoco.mjtWrap.mjWRAP_JOINT):
                 raise ModelStructureError(f"{source}: tendon '{tname}' must be a fixed tendon")
-            wraps[_name(model, mujoco.mjtObj.mjOBJ_JOINT, model.wrap_objid[w])] = model.wrap_prm[w]
+            joint = _name(model, mujoco.mjtObj.mjOBJ_JOINT, model.wrap_objid[w])
+            wraps[joint] = float(model.wrap_prm[w])  # a plain float in the message
         expected = {f"{axis}_motor": 1.0, axis: -1.0}
         if wraps != expected:
             raise ModelStructureError(

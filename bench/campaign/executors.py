@@ -15,8 +15,13 @@ process died, a Dask worker vanished): the function's own exceptions are the cal
 
 from __future__ import annotations
 
+import ctypes
 import multiprocessing
 import os
+import signal
+import sys
+import threading
+import time
 from collections import deque
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
@@ -70,13 +75,40 @@ class SerialExecutor:
         self.close()
 
 
+PR_SET_PDEATHSIG = 1  # linux/prctl.h
+
+
+def _watch_parent(parent: int) -> None:
+    while os.getppid() == parent:
+        time.sleep(1.0)
+    os._exit(1)
+
+
+def die_with_parent(parent: int) -> None:
+    """Worker initializer: the worker ends when the campaign process `parent` dies, SIGKILL
+    included (a pool's own shutdown never runs then). On Linux the kernel sends SIGKILL
+    (prctl PR_SET_PDEATHSIG); elsewhere, and as a back-up, a daemon thread polls the parent
+    id every second. A parent already gone exits at once."""
+    if sys.platform.startswith("linux"):
+        try:
+            ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL),
+                                                    0, 0, 0)
+        except (OSError, AttributeError):
+            pass
+    if os.getppid() != parent:
+        os._exit(1)
+    threading.Thread(target=_watch_parent, args=(parent,), daemon=True,
+                     name="jointbench-parent-watch").start()
+
+
 class LocalExecutor:
     """A process pool on the local cores (default: all of them, os.cpu_count()).
 
     At most `2 workers` tasks are in flight, so a campaign of a million runs holds a million
-    items, not a million futures. When a worker process dies (BrokenProcessPool) every task in
-    flight fails with it and none can be blamed: the pool is rebuilt and those tasks run again
-    one at a time; one that kills its worker alone comes back with `error` set.
+    items, not a million futures. Workers die with this process (`die_with_parent`). When a
+    worker process dies (BrokenProcessPool) every task in flight fails with it and none can
+    be blamed: the pool is rebuilt and those tasks run again one at a time; one that kills
+    its worker alone comes back with `error` set.
     """
 
     def __init__(self, workers: int | None = None, start_method: str = "spawn"):
@@ -89,7 +121,9 @@ class LocalExecutor:
 
     def _submit(self, fn: Callable[[T], R], item: T) -> Future:
         if self._pool is None:
-            self._pool = ProcessPoolExecutor(self.workers, mp_context=self._context)
+            self._pool = ProcessPoolExecutor(self.workers, mp_context=self._context,
+                                             initializer=die_with_parent,
+                                             initargs=(os.getpid(),))
         return self._pool.submit(fn, item)
 
     def _drop_pool(self) -> None:

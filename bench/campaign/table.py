@@ -5,8 +5,8 @@ per identification model, each parameter's estimate, the paper's sigma and the c
 
 Rows are appended as the runs finish, each with one write, flush and fsync: a campaign killed
 part way is resumed by running the same command again; the rows present are kept, a trailing
-partial line is dropped and only the missing runs are done. When all runs are in, the table is
-rewritten sorted by run (atomically): the same spec gives the same file, byte for byte,
+partial line is dropped and only the missing and the failed runs are done (a failed row is
+replaced by its new outcome). When all runs are in, the table is rewritten sorted by run (atomically): the same spec gives the same file, byte for byte,
 whatever the engine.
 """
 
@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Sequence
 
 from jointbench.bench.campaign.settings import CampaignError
-from jointbench.bench.campaign.spec import CampaignSpec, spec_from_json
+from jointbench.bench.campaign.spec import CampaignSpec, spec_difference, spec_from_json
 from jointbench.identification.log import atomic_write_text
 
 TABLE_MAGIC = "# jointbench-campaign: 1"
@@ -73,8 +73,7 @@ class CampaignTable:
         for lineno, (have, want) in enumerate(zip(lines, expected), start=1):
             if have != want:
                 what = {1: "is not a jointbench campaign table (first line)",
-                        2: "was written by a different campaign (its '# spec:' line differs); "
-                           "run the same command as before to resume it, or choose another --out",
+                        2: spec_difference(have, self.spec),
                         3: "has a different header"}[lineno]
                 raise CampaignError(f"{self.path}:{lineno}: {what}")
         if len(lines) < len(expected):
@@ -93,7 +92,9 @@ class CampaignTable:
             if not 0 <= index < self.spec.total:
                 raise CampaignError(f"{self.path}:{lineno}: run {index} outside this campaign "
                                     f"(0-{self.spec.total - 1})")
-            self.rows.setdefault(index, dict(zip(self.columns, values)))
+            row = dict(zip(self.columns, values))
+            if row["status"] != "failed":  # a failed run is run again on resume
+                self.rows.setdefault(index, row)
 
     def append(self, row: dict[str, str]) -> None:
         """One row, one write, then flush and fsync: a kill leaves at most a partial last line."""

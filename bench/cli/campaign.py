@@ -168,6 +168,24 @@ def spec_arguments(args: argparse.Namespace, parse_effect: Callable[[str], objec
     return dict(base=base, runs=args.runs, seed=args.seed, sweep=sweep, values=values)
 
 
+def _check_outputs(spec, out: Path, workers: int | None) -> None:
+    """Before any run: the table and its summaries can be written (bench.output: the table
+    is a campaign table or absent, the summaries ours or absent), and the runs fit in memory
+    (bench.cli.resources; one run per local worker)."""
+    import os
+
+    from jointbench.bench.campaign.summary import summary_paths
+    from jointbench.bench.cli.resources import check_memory
+    from jointbench.bench.output import check_file
+    from jointbench.identification.defaults import PAPER_RATE
+
+    for path in (out, *summary_paths(out)):
+        check_file(path)
+    longest = max(spec.settings_at(p).duration for p in range(max(1, len(spec.values))))
+    check_memory(longest * PAPER_RATE, f"--duration {longest:g} s",
+                 copies=workers or os.cpu_count() or 1)
+
+
 def _timing_line(result, timing: dict, engine: str) -> str:
     """One line: runs done, wall time, engine, throughput and per-run costs when measured."""
     return (f"{result.new} runs in {result.wall_s:.1f} s on {engine}"
@@ -191,7 +209,7 @@ def run(args: argparse.Namespace) -> int:
     from jointbench.bench.campaign.summary import summary_paths, summary_text
     from jointbench.bench.campaign.table import CampaignTable
     from jointbench.bench.effects import parse_effect
-    from jointbench.identification.log import atomic_write_text
+    from jointbench.bench.output import write_text
     from jointbench.identification.output import finite_json
 
     spec, methods, gates = plugins(args, CampaignSpec(**spec_arguments(args, parse_effect)))
@@ -199,6 +217,7 @@ def run(args: argparse.Namespace) -> int:
     if out.suffix.lower() == ".xml" or (Path(str(args.model)).exists()
                                         and out.resolve() == Path(str(args.model)).resolve()):
         raise CampaignError(f"--out {out}: refusing to overwrite the model file")
+    _check_outputs(spec, out, args.workers)
     executor = make_executor(args.workers, args.scheduler)
     try:
         tab_rows = 0
@@ -229,9 +248,9 @@ def run(args: argparse.Namespace) -> int:
     if results:
         text += "\n\n" + gates_text(results)
     json_path, md_path = summary_paths(out)
-    atomic_write_text(json_path, json.dumps(finite_json(summary), indent=1, allow_nan=False) + "\n")
+    write_text(json_path, json.dumps(finite_json(summary), indent=1, allow_nan=False) + "\n")
     timing = _timing_line(result, summary["timing"], executor.description)
-    atomic_write_text(md_path, f"# Campaign {out.name}\n\n{timing}\n\n```\n{text}\n```\n")
+    write_text(md_path, f"# Campaign {out.name}\n\n{timing}\n\n```\n{text}\n```\n")
     if args.json:
         print(json.dumps(finite_json(summary), allow_nan=False))
     else:

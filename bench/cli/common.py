@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Callable
 
 from jointbench.bench.options import key_numbers
+from jointbench.bench.output import check_file
 
 # Exit status (docs/cli.md).
 EXIT_OK = 0
@@ -55,25 +56,10 @@ def trap_signals() -> Callable[[], None]:
 
 
 def check_output_file(out: Path, flag: str = "--out") -> None:
-    """Refuse an output path whose folder is missing, that is a folder, or that is an existing
-    non-empty file not written by jointbench (a measured log, say): outputs replace only
-    jointbench's own files, and always atomically (identification.log.atomic_write_text)."""
-    parent = out.parent if str(out.parent) else Path(".")
-    if not parent.is_dir():
-        raise UsageError(f"{flag} {out}: folder {parent} does not exist")
-    if out.is_dir():
-        raise UsageError(f"{flag} {out}: is a directory")
-    if out.exists() and out.stat().st_size > 0:
-        try:
-            with open(out, "rb") as handle:
-                head = handle.read(8192).decode("utf-8", "replace")
-        except OSError as err:
-            raise UsageError(f"{flag} {out}: cannot read the existing file: {err.strerror}") \
-                from None
-        if "\n# source: jointbench " not in head:
-            raise UsageError(f"{flag} {out}: refusing to overwrite an existing file that "
-                             "jointbench did not write (no '# source: jointbench ...' metadata); "
-                             "remove it or choose another name")
+    """Refuse, before any computation, an output path whose folder is missing or read-only,
+    that is not a regular file (a device node, a FIFO, a folder), or that is an existing
+    non-empty file jointbench did not write (bench.output: the one output layer)."""
+    check_file(out, flag)
 
 
 def parse_key_values(text: str | None, flag: str, form: str, what: str = "value"
@@ -83,10 +69,22 @@ def parse_key_values(text: str | None, flag: str, form: str, what: str = "value"
     value is for one that is not a number."""
     if not text:
         return {}
-    return key_numbers(text.split(","),
-                       lambda item: UsageError(f"{flag}: '{item}' must read {form}"),
-                       lambda key, value: UsageError(f"{flag}: {what} '{value}' of {key} is "
-                                                     "not a number"))
+
+    def bad_number(key: str, value: str) -> UsageError:
+        return UsageError(f"{flag}: {what} '{value.strip()}' of {key.strip()} is not a finite "
+                          "number")
+
+    items = text.split(",")
+    for item in items:  # float() takes 1_000, nan and inf: none is a value here
+        key, _, value = item.partition("=")
+        if "_" in value:
+            raise bad_number(key, value)
+    out = key_numbers(items, lambda item: UsageError(f"{flag}: '{item}' must read {form}"),
+                      bad_number)
+    for key, value in out.items():
+        if not math.isfinite(value):
+            raise bad_number(key, str(value))
+    return out
 
 
 def parse_config(text: str | None) -> dict[str, float]:
@@ -95,9 +93,16 @@ def parse_config(text: str | None) -> dict[str, float]:
                             "angle")
 
 
+def number(value: str) -> float:
+    """A float as the command line writes it: no digit separators (float() reads 1_000)."""
+    if "_" in value:
+        raise ValueError(f"'{value}' is not a number")
+    return float(value)
+
+
 def finite(value: str) -> float:
     """Argument type: a finite float."""
-    x = float(value)
+    x = number(value)
     if not math.isfinite(x):
         raise argparse.ArgumentTypeError(f"{value} is not a finite number")
     return x
@@ -111,13 +116,28 @@ def positive(value: str) -> float:
     return x
 
 
+def seed(value: str) -> int:
+    """Argument type: a seed, an integer in [0, 2**32) (numpy's SeedSequence range is wider,
+    but a log's `seed` metadata and a campaign's derived seeds stay in it)."""
+    try:
+        x = int(value.replace("_", "x"))  # int() reads 1_000: refused here
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{value}' is not an integer") from None
+    if not 0 <= x < 2**32:
+        raise argparse.ArgumentTypeError(f"{value} must lie in [0, 2**32)")
+    return x
+
+
 def one_line(err: BaseException) -> str:
     """The error's message on one line (MuJoCo's parser messages span several)."""
     return "; ".join(line.strip() for line in str(err).splitlines() if line.strip())
 
 
 def is_simulation_error(err: Exception) -> bool:
-    """A diverging or unstable virtual experiment (bench.sim.experiment.SimulationError, loaded
-    only by the commands that simulate): bad input (gains, timestep, model), status 2."""
+    """A diverging or unstable virtual experiment or replay (bench.sim.experiment's
+    SimulationError, bench.sim.replay's ReplayError, loaded only by the commands that
+    simulate): bad input (gains, timestep, model), status 2."""
     experiment = sys.modules.get("jointbench.bench.sim.experiment")
-    return experiment is not None and isinstance(err, experiment.SimulationError)
+    replay = sys.modules.get("jointbench.bench.sim.replay")
+    return (experiment is not None and isinstance(err, experiment.SimulationError)) or \
+        (replay is not None and isinstance(err, replay.ReplayError))

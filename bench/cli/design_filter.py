@@ -5,8 +5,9 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 
-from jointbench.bench.cli.common import finite, positive
+from jointbench.bench.cli.common import UsageError, finite, positive
 
 # The library `run` imports, loaded by the dispatcher before it traps the signals.
 LIBRARY = ("jointbench.identification.design",)
@@ -23,14 +24,29 @@ def add_arguments(f: argparse.ArgumentParser) -> None:
     f.add_argument("--json", action="store_true", help="print the JSON object of docs/cli.md")
 
 
+def _out_of_range(args: argparse.Namespace, what: str) -> UsageError:
+    return UsageError(f"--f1 {args.f1:g} Hz, --ratio {args.ratio:g}: the design is out of "
+                      f"floating-point range ({what}); give a first mode a joint can have "
+                      "(e.g. 0.1 to 1000 Hz)")
+
+
 def run(args: argparse.Namespace) -> int:
     """Design the bandpass; print wc, wn, xc, Fs and Ts (text or the JSON object of docs/cli.md)."""
     from jointbench.identification.design import design_bandpass
 
-    d = design_bandpass(args.f1, nd=args.nd, m=args.m, ac=args.ac, rc=args.rc, ratio=args.ratio)
+    try:
+        d = design_bandpass(args.f1, nd=args.nd, m=args.m, ac=args.ac, rc=args.rc,
+                            ratio=args.ratio)
+    except (ZeroDivisionError, OverflowError) as err:
+        raise _out_of_range(args, str(err)) from None
+    out = {"wc_rad_s": d.wc_rad_s, "wn_rad_s": d.wn_rad_s, "fs_hz": d.fs_hz, "ts_s": d.ts_s,
+           "xc": d.xc}
+    for key, value in out.items():
+        # a design whose numbers overflow or underflow double precision is no design
+        if not (math.isfinite(value) and sys.float_info.min <= abs(value) <= 1e300):
+            raise _out_of_range(args, f"{key} = {value:g}")
     if args.json:
-        print(json.dumps({"wc_rad_s": d.wc_rad_s, "wn_rad_s": d.wn_rad_s, "fs_hz": d.fs_hz,
-                          "ts_s": d.ts_s, "xc": d.xc}))
+        print(json.dumps(out, allow_nan=False))
     else:
         print(f"f1 = {args.f1:g} Hz, nd = {args.nd}, m = {args.m}, Ac = {args.ac:.4g}, "
               f"rc = {args.rc:g}, wc = {args.ratio:g} w1")

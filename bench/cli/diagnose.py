@@ -45,9 +45,13 @@ def _progress(args: argparse.Namespace) -> Callable[[str], None]:
 
 
 def _output_folder(args: argparse.Namespace) -> Path | None:
+    """--out, checked before any computation (bench.output: a folder, writable, no file in
+    it that jointbench would replace and did not write)."""
+    from jointbench.bench.analysis.diagnose.report import output_folder
+
     out = Path(args.out) if args.out else None
-    if out is not None and out.exists() and not out.is_dir():
-        raise UsageError(f"--out {out}: exists and is not a folder")
+    if out is not None:
+        output_folder(out)
     return out
 
 
@@ -66,9 +70,14 @@ def run(args: argparse.Namespace) -> int:
     """Diagnose the log (and cross-validate); print the summary or the JSON object; with
     --out the report files."""
     from jointbench.bench.analysis.diagnose import cross_validate, diagnose, summary_text
-    from jointbench.identification.log import LogError, atomic_write_text, read_log
+    from jointbench.bench.analysis.diagnose.report import write
+    from jointbench.identification.log import LogError, read_log
+    from jointbench.identification.output import finite_json
+    from jointbench.identification.saturation import clipping_warnings
 
     log = read_log(args.file)
+    for text in clipping_warnings(log, excluded=False):  # LogError over a third
+        print(f"jointbench diagnose: warning: {text}", file=sys.stderr)
     say = _progress(args)
     out = _output_folder(args)
     other = read_log(args.validate) if args.validate else None
@@ -83,21 +92,22 @@ def run(args: argparse.Namespace) -> int:
                            f"{', '.join(['t', 'q_m', 'tau_m', *other.extra])})", other.path,
                            column=args.disturbance_column)
         dist = args.disturbance_gain * other.extra[args.disturbance_column]
-    d = diagnose(log, out_dir=out, forward=not args.no_forward, progress=say)
+    d = diagnose(log, forward=not args.no_forward, progress=say)
     xval = None
     if other is not None:
         say(f"cross-validation on {args.validate}")
         xval = cross_validate(d, other, dist, args.disturbance_at)
+    if out is not None:
+        extra = {} if xval is None else {"cross_validation.json": json.dumps(
+            finite_json({"file": str(args.validate), **xval}), indent=2, allow_nan=False) + "\n"}
+        d = write(d, out, say, extra)
     if args.json:
         doc = d.to_json()
         if xval is not None:
             doc["cross_validation"] = {"file": str(args.validate), **xval}
-        print(json.dumps(doc))
+        print(json.dumps(finite_json(doc), allow_nan=False))
     else:
         print(summary_text(d))
         if xval is not None:
             print(_cross_validation_text(args, xval))
-    if xval is not None and out is not None:
-        atomic_write_text(out / "cross_validation.json",
-                          json.dumps({"file": str(args.validate), **xval}, indent=2) + "\n")
     return 0

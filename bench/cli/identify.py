@@ -67,13 +67,37 @@ def _check_options(args: argparse.Namespace) -> None:
         raise UsageError(f"--debias needs at least 2 replicas, got {args.debias}")
 
 
-def _filter_options(args: argparse.Namespace) -> tuple[float | None, dict] | None:
+MAX_ORDER = 20  # a Butterworth of higher order is numerically meaningless here
+
+
+def _check_filter_options(args: argparse.Namespace, wn: float | None, log) -> None:
+    """UsageError naming the option: a band the log cannot hold (below one cycle over the
+    log, at or over the Nyquist frequency), a decimation, order or skip out of range."""
+    if wn is not None:
+        flag = "--wn" if args.wn is not None else "--fc"
+        value = args.wn if args.wn is not None else args.fc
+        duration = float(log.t[-1] - log.t[0])
+        lo, hi = 2 * math.pi / duration, math.pi * log.sample_rate_hz
+        if not lo <= wn < hi:
+            raise UsageError(f"{flag} {value:g}: the Butterworth frequency must lie in "
+                             f"[{lo:.3g}, {hi:.4g}) rad/s: at least one cycle over the "
+                             f"{duration:.3g} s log, below the Nyquist frequency")
+    if args.decimate is not None and args.decimate < 1:
+        raise UsageError(f"--decimate {args.decimate}: must be >= 1")
+    if not 1 <= args.order <= MAX_ORDER:
+        raise UsageError(f"--order {args.order}: must lie in [1, {MAX_ORDER}]")
+    if args.skip < 0:
+        raise UsageError(f"--skip {args.skip}: must be >= 0")
+
+
+def _filter_options(args: argparse.Namespace, log) -> tuple[float | None, dict] | None:
     """(wn in rad/s or None, the chain options) of the filter options, or None when they are
     all at their defaults (identify then chooses: identification.defaults.settings_for)."""
     if args.wn is not None and args.fc is not None:
         raise UsageError("give the Butterworth frequency once: --wn (rad/s) or --fc (Hz)")
     wn = args.wn if args.wn is not None else (
         2 * math.pi * args.fc if args.fc is not None else None)
+    _check_filter_options(args, wn, log)
     chain = {"zoh": not args.no_zoh, "filter_torque": not args.no_torque_filter,
              "skip": args.skip, "stencil": args.stencil}
     if wn is None and args.decimate is None and args.order == 4 and \
@@ -106,12 +130,14 @@ def run(args: argparse.Namespace) -> int:
     from jointbench.identification.identify import identify
     from jointbench.identification.log import read_log, unit_warnings
     from jointbench.identification.parameters import units
+    from jointbench.identification.output import finite_json
+    from jointbench.identification.saturation import clipping_warnings
     from jointbench.identification.physical import InversionError
     from jointbench.identification.validate import validate_on
 
     log = read_log(args.file)
     other = None if args.validate is None else read_log(args.validate)
-    warnings = unit_warnings(log)
+    warnings = unit_warnings(log) + clipping_warnings(log)
     for text in warnings:
         print(f"jointbench identify: warning: {text}", file=sys.stderr)
     _check_options(args)
@@ -122,7 +148,7 @@ def run(args: argparse.Namespace) -> int:
                           "sensors: the metadata needs motor_encoder_resolution_rad, "
                           "link_encoder_resolution_rad and torque_noise_std")
     settings = None
-    options = _filter_options(args)
+    options = _filter_options(args, log)
     if options is not None:
         wn, chain = options
         base, _ = settings_for(log, args.f1)
@@ -147,7 +173,7 @@ def run(args: argparse.Namespace) -> int:
         answer = identify_json(result, truth, flags, warnings, refined, debiased)
         if validation is not None:
             answer["validation"] = {**validation.to_json(), "forward": forward}
-        print(json.dumps(answer, allow_nan=False, default=float))
+        print(json.dumps(finite_json(answer), allow_nan=False, default=float))
     else:
         print(identify_text(args.file, log, result, truth, flags, refined, debiased))
         if validation is not None:

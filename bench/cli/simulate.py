@@ -10,7 +10,8 @@ import sys
 from pathlib import Path
 
 from jointbench.bench.cli.common import (UsageError, check_output_file, finite, parse_config,
-                                         positive)
+                                         positive, seed)
+from jointbench.bench.cli.resources import check_memory
 from jointbench.bench.sim.defaults import amplitude_help
 
 # The library `run` imports, loaded by the dispatcher before it traps the signals: a virtual
@@ -40,7 +41,7 @@ def add_arguments(s: argparse.ArgumentParser) -> None:
                    help="prototype, arm6 or an MJCF file following the axis convention")
     s.add_argument("--joint", help="axis to move, by name or index from 1 (default: the first)")
     s.add_argument("--duration", type=positive, default=60.0, help="seconds (default 60)")
-    s.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
+    s.add_argument("--seed", type=seed, default=0, help="noise seed (default 0)")
     s.add_argument("--out", help="log file to write (default MODEL_JOINT_seedN.csv)")
     s.add_argument("--effect", help="hide an effect: NAME=STRENGTH[:OPTION=VALUE...], e.g. "
                                     "backlash=0.002 (docs/effects.md)")
@@ -88,8 +89,35 @@ def _require_mode(f1_hz: float, axis: str) -> None:
                          "give --rate HZ")
 
 
+MAX_SUBSTEPS = 1000  # physics steps per tick: beyond, a 60 s run takes hours
+
+
+def _check_numbers(args: argparse.Namespace) -> None:
+    """UsageError naming the option for a value no experiment or replay can use."""
+    from dataclasses import fields
+
+    from jointbench.bench.sim.reference import Chirp
+    from jointbench.identification.log_read import MAX_RATE_HZ, MIN_RATE_HZ
+
+    if not 1 <= args.substeps <= MAX_SUBSTEPS:
+        raise UsageError(f"--substeps {args.substeps}: must lie in [1, {MAX_SUBSTEPS}]")
+    if args.skip < 0:
+        raise UsageError(f"--skip {args.skip}: must be >= 0")
+    if args.replay:
+        return
+    chirp = {f.name: f.default for f in fields(Chirp)}
+    if args.duration < 2 * chirp["taper"]:
+        raise UsageError(f"--duration {args.duration:g}: must be at least "
+                         f"{2 * chirp['taper']:g} s (the chirp fades in and out over "
+                         f"{chirp['taper']:g} s each)")
+    if isinstance(args.rate, float) and not MIN_RATE_HZ <= args.rate <= MAX_RATE_HZ:
+        raise UsageError(f"--rate {args.rate:g}: must lie in [{MIN_RATE_HZ:g}, "
+                         f"{MAX_RATE_HZ:g}] Hz, the rates a log may have (docs/log-format.md)")
+
+
 def run(args: argparse.Namespace) -> int:
     """Run the virtual experiment, write its log, print the summary (text or JSON)."""
+    _check_numbers(args)
     if args.replay:
         return run_replay(args)
     from jointbench.bench.effects import parse_effect
@@ -100,6 +128,7 @@ def run(args: argparse.Namespace) -> int:
     from jointbench.bench.sim.sensors import Sensors
     from jointbench.identification.defaults import design_rate_hz
     from jointbench.identification.log import write_log
+    from jointbench.identification.output import finite_json
 
     args.model = args.model or "prototype"
     effect = parse_effect(args.effect) if args.effect else None
@@ -112,6 +141,7 @@ def run(args: argparse.Namespace) -> int:
         rate = round(design_rate_hz(exp.truth.f1_hz), 2)
     else:
         rate = SAMPLE_RATE_HZ if args.rate is None else float(args.rate)
+    check_memory(args.duration * rate, f"--duration {args.duration:g} s at {rate:g} Hz")
     result = run_experiment(args.model, args.joint, duration=args.duration, seed=args.seed,
                             amplitude=args.amplitude, config=parse_config(args.config),
                             lock=args.lock, effect=effect,
@@ -122,7 +152,7 @@ def run(args: argparse.Namespace) -> int:
     for text in warnings:
         print(f"jointbench simulate: warning: {text}", file=sys.stderr)
     if args.json:
-        print(json.dumps(experiment_json(result, out, warnings)))
+        print(json.dumps(finite_json(experiment_json(result, out, warnings)), allow_nan=False))
     else:
         print(experiment_text(result, out))
     return 0
@@ -141,11 +171,15 @@ def _check_replay_options(args: argparse.Namespace, src: Path, out: Path | None)
             raise UsageError(f"--out {out}: refusing to write a log over an .xml file")
         if out.exists() and (out.is_dir() or (src.exists() and out.resolve() == src.resolve())):
             raise UsageError(f"--out {out}: is a directory or the replayed log itself")
+        check_output_file(out)
     if args.save_model and args.model:
         raise UsageError("--save-model writes the nominal axis identified from the log: "
                          "leave out --model")
     if args.save_model and Path(args.save_model).suffix.lower() != ".xml":
         raise UsageError(f"--save-model {args.save_model}: give an .xml file name")
+    for flag, path in (("--save-model", args.save_model), ("--plot", args.plot)):
+        if path:
+            check_output_file(Path(path), flag)
 
 
 def run_replay(args: argparse.Namespace) -> int:
@@ -154,11 +188,13 @@ def run_replay(args: argparse.Namespace) -> int:
     src = Path(args.replay)
     out = Path(args.out) if args.out else None
     _check_replay_options(args, src, out)
+    from jointbench.bench.output import record
     from jointbench.bench.present.replay import (format_report, plot_replay, replay_log_file,
                                                  report_json)
     from jointbench.bench.sim.nominal import write_xml
     from jointbench.bench.sim.replay import simulated_log
     from jointbench.identification.log import write_log
+    from jointbench.identification.output import finite_json
     from jointbench.identification.plots import save_figure_atomic
 
     rep = replay_log_file(src, model=args.model, joint=args.joint,
@@ -166,6 +202,7 @@ def run_replay(args: argparse.Namespace) -> int:
                           substeps=args.substeps, tau0=args.tau0, skip=args.skip)
     if args.save_model:
         write_xml(rep.spec, args.save_model)
+        record(args.save_model)
     if out is not None:
         write_log(simulated_log(rep.log, rep.result,
                                 f"jointbench replay of {src.name} on {rep.model}"), out)
@@ -173,10 +210,11 @@ def run_replay(args: argparse.Namespace) -> int:
         import matplotlib
         matplotlib.use("Agg")
         save_figure_atomic(plot_replay(rep.log, rep.result, f"replay of {src.name}"), args.plot)
+        record(args.plot)
     if args.json:
         obj = report_json(rep)
         obj["out"] = None if out is None else str(out)
-        print(json.dumps(obj, allow_nan=False, default=float))
+        print(json.dumps(finite_json(obj), allow_nan=False, default=float))
     else:
         print(format_report(rep))
         if out is not None:

@@ -13,6 +13,7 @@ import math
 import sys
 from typing import Callable
 
+from jointbench.bench.cli.common import seed
 from jointbench.identification.parameters import FRICTIONS, STIFFNESS_AND_INERTIAS
 
 DEFAULT_ND = (4, 8, 13, 20, 26, 30, 34, 38, 42, 46, 52)
@@ -40,7 +41,7 @@ def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
     p.add_argument("--joint", help="axis to move (default: the first)")
     p.add_argument("--seeds", type=int, default=6,
                    help="search experiments; as many fresh ones validate (default 6)")
-    p.add_argument("--seed", type=int, default=0, help="campaign seed (default 0)")
+    p.add_argument("--seed", type=seed, default=0, help="campaign seed (default 0)")
     p.add_argument("--duration", type=float, default=60.0, help="experiment length in s")
     p.add_argument("--wn", default="60:1000:9",
                    help="wn grid [rad/s]: LO:HI:N geometric, or V1,V2,... (default 60:1000:9)")
@@ -56,6 +57,48 @@ def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
     return p
 
 
+def _check_grid(duration: float, wn_grid: tuple, Nd_grid: tuple, workers: int | None) -> None:
+    """Before any experiment, every grid value a run can use (the campaign's checks,
+    bench.campaign.spec.check_settings, naming the option and the value) and the memory."""
+    import os
+
+    from jointbench.bench.campaign.settings import RunSettings
+    from jointbench.bench.campaign.spec import check_settings
+    from jointbench.bench.cli.resources import check_memory
+    from jointbench.identification.defaults import PAPER_RATE
+
+    check_settings(RunSettings(duration=duration))
+    for w in wn_grid:
+        check_settings(RunSettings(duration=duration, wn=w), f"--wn grid value {w:g}")
+    for n in Nd_grid:
+        check_settings(RunSettings(duration=duration, Nd=n), f"--nd grid value {n}")
+    check_memory(duration * PAPER_RATE, f"--duration {duration:g} s",
+                 copies=workers or os.cpu_count() or 1)
+
+
+def _first_failure(args: argparse.Namespace, wn: float, Nd: int) -> str:
+    """The root cause behind a grid where nothing identified: the first search experiment
+    and the first pair, run here, and the error they raise."""
+    from jointbench.bench.campaign.tuning import _seeds
+    from jointbench.bench.sim.experiment import run_experiment
+    from jointbench.identification.filtering import FilterSettings
+    from jointbench.identification.identify import identify
+
+    seed = _seeds(args.seed, 0, 1)[0]
+    try:
+        log = run_experiment(args.model, args.joint, duration=args.duration, seed=seed).log
+    except Exception as err:  # noqa: BLE001 - reported as the cause
+        return f"the first experiment fails: {err}"
+    try:
+        identify(log, args.id_model, FilterSettings(wn=float(wn), m=4, Nd=int(Nd), ts=log.ts))
+    except Exception as err:  # noqa: BLE001 - reported as the cause
+        return f"the first experiment with wn = {wn:g}, Nd = {Nd}: {err}"
+    return "the first experiment identifies with the first pair; a later one fails"
+
+
+MAX_SEEDS = 10_000  # the tasks are built up front
+
+
 def run(args: argparse.Namespace) -> int:
     """`jointbench tune-filter`: the grid search and its validation, printed as tables or JSON.
     Raises ValueError for bad options (exit status 2)."""
@@ -64,8 +107,8 @@ def run(args: argparse.Namespace) -> int:
     from jointbench.bench.campaign.tuning import geometric_wn, linear_nd, result_text, tune_filter
     from jointbench.identification.output import finite_json
 
-    if args.seeds < 1:
-        raise ValueError(f"--seeds must be >= 1, got {args.seeds}")
+    if not 1 <= args.seeds <= MAX_SEEDS:
+        raise ValueError(f"--seeds {args.seeds}: must lie in [1, {MAX_SEEDS}]")
     if args.seed < 0:
         raise ValueError(f"--seed must be >= 0, got {args.seed}")
     if not (math.isfinite(args.duration) and args.duration > 0):
@@ -74,6 +117,7 @@ def run(args: argparse.Namespace) -> int:
     Nd_grid = _grid(args.nd, int, linear_nd)
     if any(not (math.isfinite(w) and w > 0) for w in wn_grid) or any(n < 1 for n in Nd_grid):
         raise ValueError("grid values must be positive (wn) and >= 1 (Nd)")
+    _check_grid(args.duration, wn_grid, Nd_grid, args.workers)
     params = tuple(p.strip() for p in args.params.split(",") if p.strip())
     if not params or any(p not in OBJECTIVE_PARAMS for p in params):
         raise ValueError(f"--params: choose among {', '.join(OBJECTIVE_PARAMS)}")
@@ -84,6 +128,10 @@ def run(args: argparse.Namespace) -> int:
         r = tune_filter(args.model, args.joint, wn_grid, Nd_grid, args.seeds, executor,
                         duration=args.duration, seed=args.seed, id_model=args.id_model,
                         params=params, progress=bar.update)
+    except ValueError as err:
+        if "no (wn, Nd) pair" not in str(err):
+            raise
+        raise ValueError(f"{err}; {_first_failure(args, wn_grid[0], Nd_grid[0])}") from None
     finally:
         executor.close()
     if args.json:

@@ -29,6 +29,21 @@ from jointbench.models import Axis
 INSTABILITY_WARNINGS = (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL,
                         mujoco.mjtWarning.mjWARN_BADQACC)
 
+# MuJoCo's default warning handler prints the text and appends it to MUJOCO_LOG.TXT in the
+# working directory. Every run reads the warnings from MjData.warning (`first_warning`) and
+# names them in its error, so the texts are only kept here (the last few, for messages) and
+# nothing is written. `bench.sim.experiment` collects them per run on top of this handler.
+MUJOCO_WARNING_TEXTS: list[str] = []
+
+
+def _keep_warning(text: str) -> None:
+    MUJOCO_WARNING_TEXTS.append(text)
+    del MUJOCO_WARNING_TEXTS[:-10]
+
+
+if mujoco.get_mju_user_warning() is None:
+    mujoco.set_mju_user_warning(_keep_warning)
+
 
 @dataclass(frozen=True)
 class LoopTrace:

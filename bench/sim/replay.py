@@ -20,6 +20,7 @@ a model, where the inverse view (identification residuals) only sees the torque.
 from __future__ import annotations
 
 import copy
+import math
 from dataclasses import dataclass
 
 import mujoco
@@ -64,19 +65,64 @@ def _with_timestep(model: mujoco.MjModel, dt: float) -> mujoco.MjModel:
     return m
 
 
-class _ReplayChecks(LoopChecks):
-    """The replay's one check in the loop: q_m beyond a million times the logged motion
-    (at least 1e6) is a diverged replay."""
+TRACK_FACTOR = 10.0       # the replay may track this many times worse than the log did ...
+SATURATION_SHARE = 0.2    # ... and saturate this share of the samples beyond the log's own
 
-    def __init__(self, log: Log, T: float):
+
+def _clipped(log: Log, tau_max: float) -> int:
+    """Samples of the log at its torque limit (within 1e-6 relative)."""
+    return int(np.count_nonzero(np.abs(log.tau_m) >= tau_max * (1 - 1e-6)))
+
+
+class _ReplayChecks(LoopChecks):
+    """The replay's checks, each tick (as `simulate`'s): q_m beyond a million times the
+    logged motion (at least 1e6), or the motor farther from the reference than
+    TRACK_FACTOR times the log's worst tracking error (at least the reference's span), is a
+    diverged replay (negative gains, a wrong model, a huge initial integrator state)."""
+
+    def __init__(self, log: Log, T: float, tau_max: float):
         self.log, self.T = log, T
         self.position_limit = 1e6 * max(1.0, float(np.max(np.abs(log.q_m))))
+        worst = float(np.max(np.abs(log.q_ref - log.q_m)))
+        self.track_limit = max(TRACK_FACTOR * worst, float(np.ptp(log.q_ref)), 1e-9)
+        self.torque_limit, self.clipped = tau_max, 0
+
+    def saturated(self, k: int, u: float) -> None:
+        self.clipped += 1
+
+    def _fail(self, k: int, what: str) -> None:
+        held = (f"; {self.clipped} of {k} samples so far at the torque limit tau_max = "
+                f"{self.torque_limit:g}, the log has {_clipped(self.log, self.torque_limit)} "
+                "in all" if self.clipped else "")
+        raise ReplayError(f"replay of {self.log.path or 'the log'} diverged at t = "
+                          f"{k * self.T:.4f} s ({what}): the model is unstable under the "
+                          "logged gains (check their signs and sizes) or does not describe "
+                          f"the axis{held}")
 
     def diverged(self, k: int, q_m: float, q: float) -> None:
         if not abs(q_m) < self.position_limit:
-            raise ReplayError(f"replay of {self.log.path or 'the log'} diverged at t = "
-                              f"{k * self.T:.4f} s (q_m = {q_m:.3g}): the model is unstable "
-                              "under the logged gains")
+            self._fail(k, f"q_m = {q_m:.3g}")
+
+    def lost_track(self, k: int, error: float) -> None:
+        self._fail(k, f"the motor is {abs(error):.3g} from the reference, over "
+                      f"{self.track_limit:.3g} = {TRACK_FACTOR:g} times the log's worst "
+                      "tracking error or the reference's span")
+
+
+def _check_saturation(log: Log, tau_max: float, saturated: int) -> None:
+    """ReplayError when the replay sits at the torque limit on SATURATION_SHARE of the
+    samples more than the log does: its signals would say nothing about the model."""
+    n, logged = len(log), _clipped(log, tau_max)
+    if saturated > logged + SATURATION_SHARE * n:
+        raise ReplayError(f"replay of {log.path or 'the log'}: {saturated} of {n} samples "
+                          f"saturated at tau_max = {tau_max:g} (the log: {logged}): the model "
+                          "or the gains do not hold the axis; the replay says nothing")
+
+
+def _check_tau0(tau0: float | None, tau_max: float) -> None:
+    if tau0 is not None and not (math.isfinite(tau0) and abs(tau0) <= tau_max):
+        raise ValueError(f"tau0 (--tau0) = {tau0:g}: the integrator's initial state must lie "
+                         f"within the torque limit tau_max = {tau_max:g}")
 
 
 def replay(model: mujoco.MjModel, axis: Axis, log: Log, disturbance: np.ndarray | None = None,
@@ -104,6 +150,7 @@ def replay(model: mujoco.MjModel, axis: Axis, log: Log, disturbance: np.ndarray 
         raise LogError("cannot replay: the log has no column 'q_ref' (the reference the "
                        "controller tracked)", log.path, column="q_ref")
     gains = Gains.from_log(log)
+    _check_tau0(tau0, float(gains.tau_max))
     if substeps < 1:
         raise ValueError(f"substeps must be >= 1, got {substeps}")
     if disturbance_at not in DISTURBANCE_AT:
@@ -126,7 +173,7 @@ def replay(model: mujoco.MjModel, axis: Axis, log: Log, disturbance: np.ndarray 
     d.qvel[:] = 0.0
     mujoco.mj_forward(m, d)
 
-    checks = _ReplayChecks(log, T)
+    checks = _ReplayChecks(log, T, float(gains.tau_max))
     trace = run_loop(m, d, axis, gains, T, float(log.tau_m[0]) if tau0 is None else float(tau0),
                      log.q_ref, substeps=substeps, sensors=sensors, seed=seed, loop=loop,
                      disturbance=disturbance, disturbance_at=disturbance_at, checks=checks)
@@ -134,6 +181,7 @@ def replay(model: mujoco.MjModel, axis: Axis, log: Log, disturbance: np.ndarray 
     if warning is not None:
         raise ReplayError(f"replay of {log.path or 'the log'}: MuJoCo warning {warning[0]} "
                           f"({warning[1]} times)")
+    _check_saturation(log, float(gains.tau_max), trace.saturated)
     return ReplayResult(t=np.asarray(log.t, dtype=float).copy(), q_m=trace.q_m,
                         q=None if axis.rigid else trace.q, tau_m=trace.tau_m,
                         saturated=trace.saturated, disturbance=disturbance,

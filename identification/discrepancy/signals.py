@@ -51,14 +51,14 @@ class Signals:
 def signals(log: Log, settings: FilterSettings) -> Signals:
     """Filter and differentiate the log once (eq. 22 after the Butterworth of eq. 25)."""
     s = settings
+    n = len(log.t)
+    if n < s.min_samples(2):  # before filtering: the filter itself needs a few samples
+        raise LogError(f"{n} samples are too few for the diagnosis filter (Nd = {s.Nd}): at "
+                       f"least {s.min_samples(2)} are needed", log.path)
     qm, qmd, qmdd = derivatives(lowpass(log.q_m, s.wn, s.ts, s.m), s.ts, 2, s.stencil)
     q = qd = qdd = None
     if log.q is not None:
         q, qd, qdd = derivatives(lowpass(log.q, s.wn, s.ts, s.m), s.ts, 2, s.stencil)
-    n = len(log.t)
-    if n < s.min_samples(2):
-        raise LogError(f"{n} samples are too few for the diagnosis filter (Nd = {s.Nd}): at "
-                       f"least {s.min_samples(2)} are needed", log.path)
     sl = slice(max(2, s.skip), n - 2)
     m = len(range(*sl.indices(n)))
     nd = (m + s.Nd - 1) // s.Nd if s.Nd > 1 else m

@@ -1,5 +1,6 @@
 """What `diagnose` prints and writes: the summary text, the JSON answer, and with --out DIR the
-figures, nominal.xml, extended.xml, report.md and diagnosis.json. Every file is written
+figures, nominal.xml, extended.xml, report.md and diagnosis.json. The folder is written all
+or nothing, never over a file that is not ours (bench.output.OutputFolder), every file
 atomically (temporary file, then rename)."""
 
 from __future__ import annotations
@@ -16,9 +17,11 @@ from jointbench.bench.analysis.diagnose.figures import (plot_forward, plot_forwa
                                                         plot_structure)
 from jointbench.bench.analysis.diagnose.forward import write_models
 from jointbench.bench.analysis.diagnose.types import BLOCK_NAMES, Diagnosis
+from jointbench.bench.output import OutputFolder
 from jointbench.identification.discrepancy import SIZE_MIN_PCT
 from jointbench.identification.effects import EFFECTS
 from jointbench.identification.log import atomic_write_text
+from jointbench.identification.output import finite_json
 
 
 def report_markdown(d: Diagnosis, figures: dict[str, str]) -> str:
@@ -91,27 +94,45 @@ def report_markdown(d: Diagnosis, figures: dict[str, str]) -> str:
     return "\n".join(L) + "\n"
 
 
-def write(d: Diagnosis, out: Path, say: Callable[[str], None]) -> Diagnosis:
-    out.mkdir(parents=True, exist_ok=True)
+FIGURES = ("structure", "spectrum", "inverse", "forward", "forward_frf")
+# Every file `diagnose --out DIR` may write (bench.output.OutputFolder refuses to replace one
+# that is not ours, and removes ours that a new run does not write again).
+FILES = tuple(f"{k}.png" for k in FIGURES) + ("nominal.xml", "extended.xml", "report.md",
+                                                "diagnosis.json", "cross_validation.json")
+
+
+def output_folder(out: Path) -> OutputFolder:
+    """The checked output folder of `diagnose --out` (OutputError before any computation)."""
+    return OutputFolder(out, FILES)
+
+
+def write(d: Diagnosis, out: Path, say: Callable[[str], None],
+          extra: dict[str, str] | None = None) -> Diagnosis:
+    """Write the figures, models, report.md, diagnosis.json and the `extra` files (name ->
+    text) into `out`, all or nothing (bench.output.OutputFolder)."""
     say(f"figures and report in {out}")
-    figures: dict[str, str] = {}
-    for key, fn in (("structure", plot_structure), ("spectrum", plot_spectrum),
-                    ("inverse", plot_inverse), ("forward", plot_forward),
-                    ("forward_frf", plot_forward_frf)):
-        p = fn(d, out / f"{key}.png")
-        if p is not None:
-            figures[key] = Path(p).name
-    files = [str(out / f) for f in figures.values()]
-    files += [str(p) for p in write_models(d, out)]
-    atomic_write_text(out / "report.md", report_markdown(d, figures))
-    files.append(str(out / "report.md"))
-    d = dataclasses.replace(d, files=tuple(files + [str(out / "diagnosis.json")]))
-    atomic_write_text(out / "diagnosis.json", dumps(d) + "\n")
+    with output_folder(out).writing() as folder:
+        figures: dict[str, str] = {}
+        for key, fn in zip(FIGURES, (plot_structure, plot_spectrum, plot_inverse, plot_forward,
+                                     plot_forward_frf)):
+            p = fn(d, folder / f"{key}.png")
+            if p is not None:
+                figures[key] = Path(p).name
+        files = [str(out / f) for f in figures.values()]
+        files += [str(out / Path(p).name) for p in write_models(d, folder)]
+        atomic_write_text(folder / "report.md", report_markdown(d, figures))
+        files.append(str(out / "report.md"))
+        for name, text in (extra or {}).items():
+            atomic_write_text(folder / name, text)
+            files.append(str(out / name))
+        d = dataclasses.replace(d, files=tuple(files + [str(out / "diagnosis.json")]))
+        atomic_write_text(folder / "diagnosis.json", dumps(d) + "\n")
     return d
 
 
 def dumps(d: Diagnosis) -> str:
-    return json.dumps(d.to_json(), indent=2)
+    """The JSON answer, strict (NaN and infinities as null)."""
+    return json.dumps(finite_json(d.to_json()), indent=2, allow_nan=False)
 
 
 def summary_text(d: Diagnosis) -> str:
