@@ -1,0 +1,179 @@
+"""The first mode f1 of an axis measured from its log (issue 17), for the band of section 3.2.
+
+With the link position `q` the link response q / tau_m = K / (s^2 (Jm JL s^2 + K (Jm + JL)))
+(eqs. 5-6, undamped) is used: |H| f^2 is flat with a single peak at the mode
+f1 = sqrt(K (1/Jm + 1/JL)) / 2 pi. Without `q` the motor response
+q_m / tau_m = (JL s^2 + K) / (s^2 (Jm JL s^2 + K (Jm + JL))) is used: |H| f^2 dips at the
+antiresonance sqrt(K / JL) / 2 pi and peaks at f1 above it.
+
+Both are the closed-loop indirect estimate S(q_ref, out) / S(q_ref, tau_m) when `q_ref` is
+logged (unbiased by the feedback), else the H1 estimate; only bins where the excitation is
+coherent with both the output and the torque are used. The peak is refined by a least-squares
+fit of the two-mass FRF shape (a second-order resonance, times the antiresonance for the motor
+response) to log |H f^2|, which gives the undamped f1 between the bins.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import signal
+
+from jointbench.identification.log import Log
+
+COHERENCE_MIN = 0.5     # bins kept: coherence of the excitation with output and with torque
+SEGMENT_S = 8.0         # Welch segment length [s] (resolution 1 / 8 s = 0.125 Hz or finer)
+FMIN_HZ = 0.5           # below, friction dominates the response of a chirp experiment
+MIN_PEAK_RATIO = 2.0    # a resonance: |H| f^2 at the peak over its level across the band
+GAP_HZ = 1.0            # a gap this wide in the coherent bins ends the excited band
+MIN_BINS = 8            # coherent bins needed around the mode for the fit
+
+
+@dataclass(frozen=True)
+class FirstMode:
+    """The first mode of an axis: `f1_hz` with its standard uncertainty `sigma_hz` [Hz],
+    `method` (which response, how estimated), `found` (False: no resonance stands out, f1_hz
+    is NaN) and `note` (how the value and its uncertainty were obtained, or why not found)."""
+
+    f1_hz: float
+    sigma_hz: float
+    method: str
+    found: bool
+    note: str
+
+
+def given_first_mode(f1_hz: float) -> FirstMode:
+    """A first mode given by the user (`--f1`), without uncertainty."""
+    return FirstMode(float(f1_hz), math.nan, "given", True, "f1 given by the user")
+
+
+@dataclass(frozen=True)
+class _Response:
+    f: np.ndarray       # Hz
+    G: np.ndarray       # -H (2 pi f)^2 exp(j w T / 2): flattened, ZOH half sample removed
+    sd: np.ndarray      # standard deviation of log |G| (natural log) and of its phase [rad]
+    ok: np.ndarray      # bins where the excitation is coherent with output and torque
+
+
+def _response(x: np.ndarray, y: np.ndarray, tau: np.ndarray, fs: float, nperseg: int,
+              noverlap: int | None, indirect: bool) -> _Response:
+    """The flattened response out / tau_m and the bins where it is measured."""
+    kw = dict(fs=fs, nperseg=nperseg, noverlap=noverlap)
+    f, s_xy = signal.csd(x, y, **kw)
+    _, s_xt = signal.csd(x, tau, **kw)
+    _, c_xy = signal.coherence(x, y, **kw)
+    c_xt = signal.coherence(x, tau, **kw)[1] if indirect else np.ones_like(f)
+    step = nperseg - (noverlap if noverlap is not None else nperseg // 2)
+    n_avg = max(1, (len(x) - nperseg) // step + 1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        # the torque is held over each period (ZOH): it acts half a sample late on average
+        G = -(s_xy / s_xt) * (2 * np.pi * f) ** 2 * np.exp(1j * np.pi * f / fs)
+        # relative variance of an FRF estimate: (1 - g^2) / (2 n g^2) per coherence
+        # (Bendat & Piersol), for both spectra of the indirect ratio
+        sd = np.sqrt(sum((1 - c) / (2 * n_avg * c) for c in (c_xy, c_xt)))
+    ok = (c_xy >= COHERENCE_MIN) & (c_xt >= COHERENCE_MIN) & np.isfinite(G) & (f >= FMIN_HZ) \
+        & (G != 0)
+    return _Response(f, G, np.where(ok, sd, np.inf), ok)
+
+
+def _nan(why: str) -> tuple[float, float, str]:
+    return math.nan, math.nan, why
+
+
+def _fit(resp: _Response, motor: bool) -> tuple[float, float, str]:
+    """(f1, its fit standard deviation, '') or (nan, nan, why).
+
+    The peak of |G| (above the antiresonance dip for the motor response) locates the mode
+    coarsely; f1 is where the phase of G crosses -90 deg (link) or +90 deg (motor, the
+    antiresonance zero having added 180 deg): a resonance's phase passes 90 deg at its
+    undamped frequency whatever its damping (the arm's, from Coulomb friction, reaches
+    zeta ~ 0.2, which puts the magnitude peak 4 % low). A weighted straight line through the
+    phases within 40 deg of the target gives the crossing between bins."""
+    f, good = resp.f, np.flatnonzero(resp.ok)
+    gaps = np.flatnonzero(np.diff(f[good]) > GAP_HZ)
+    good = good[:gaps[0] + 1] if len(gaps) else good   # the excited band: no stray bins above
+    if len(good) < MIN_BINS:
+        return _nan("too few coherent frequency bins (too little excitation)")
+    mag = np.log10(np.abs(resp.G))
+    level = float(np.median(mag[good]))
+    search = good
+    if motor:
+        dip = good[np.argmin(mag[good])]
+        search = good[good > dip]
+        if len(search) == 0:
+            return _nan("no peak above the antiresonance dip")
+    k = search[np.argmax(mag[search])]
+    if k == good[-1] or k == good[0]:
+        return _nan(f"the largest |H| f^2 lies at the edge of the excited band ({f[k]:.3g} Hz): "
+                    "no resonance inside it")
+    ratio = 10 ** (mag[k] - (mag[dip] if motor else level))
+    need = MIN_PEAK_RATIO ** 2 if motor else MIN_PEAK_RATIO
+    if ratio < need:
+        return _nan(f"no resonance stands out: the peak of |H| f^2 at {f[k]:.3g} Hz is "
+                    f"{ratio:.2g} times its {'dip' if motor else 'median level'} (needs {need:g})")
+    target = np.pi / 2 if motor else -np.pi / 2
+    # friction adds the rigid body's phase lead atan(c / (w J)), ~1/f: measured on the flat
+    # part well below the mode (or the antiresonance), carried to the peak and removed
+    low = good[(f[good] >= 0.4 * f[dip if motor else k]) & (f[good] <= 0.6 * f[dip if motor else k])]
+    if len(low) and not motor:   # below the dip the antiresonance's own phase dominates
+        lead = np.angle(np.sum(resp.G[low] / np.abs(resp.G[low])))
+        target += float(lead * np.mean(f[low]) / f[k])
+    win = search[(f[search] >= 0.7 * f[k]) & (f[search] <= 1.4 * f[k])]
+    phase = np.unwrap(np.angle(resp.G[win]))
+    phase += 2 * np.pi * np.round((target - phase[np.argmin(abs(win - k))]) / (2 * np.pi))
+    near = np.abs(phase - target) < np.radians(40)
+    if near.sum() < 3 or not (phase.max() > target > phase.min()):
+        return _nan(f"the phase does not cross {np.degrees(target):+.0f} deg near the peak at "
+                    f"{f[k]:.3g} Hz: no resonance")
+    w = 1.0 / resp.sd[win][near]
+    A = np.column_stack([np.ones(near.sum()), f[win][near] - f[k]])
+    coef, *_ = np.linalg.lstsq(A * w[:, None], phase[near] * w, rcond=None)
+    if not coef[1] < 0:
+        return _nan(f"the phase rises through the peak at {f[k]:.3g} Hz: no resonance")
+    f1 = float(f[k] + (target - coef[0]) / coef[1])
+    res = (phase[near] - A @ coef) * w
+    cov = np.linalg.inv((A * w[:, None]).T @ (A * w[:, None])) * max(
+        float(res @ res) / max(1, near.sum() - 2), 1.0)
+    g = np.array([-1.0, -(target - coef[0]) / coef[1]]) / coef[1]   # d f1 / d coef
+    return f1, float(np.sqrt(g @ cov @ g)), ""
+
+
+def measure_first_mode(log: Log) -> FirstMode:
+    """The first mode of the axis of `log` from its measured frequency response (module
+    docstring). The uncertainty `sigma_hz` combines the fit's standard deviation, half the
+    difference between the estimates on two interleaved sets of non-overlapping Welch
+    segments (each set covers the whole record, so both see the chirp cross the mode) and
+    the bin width / sqrt(12). `found` is False, with the reason in `note`, when no resonance
+    stands out of the coherent band (a rigid axis, too little excitation)."""
+    fs = log.sample_rate_hz
+    motor = log.q is None
+    indirect = log.q_ref is not None
+    out = log.q_m if motor else log.q
+    x = log.q_ref if indirect else log.tau_m
+    method = ("motor q_m/tau_m" if motor else "link q/tau_m") + \
+        (", indirect via q_ref" if indirect else ", H1 (no q_ref)")
+    n = len(log)
+    nperseg = int(min(2 ** math.ceil(math.log2(SEGMENT_S * fs)), 2 ** math.floor(math.log2(n / 2))))
+    if nperseg < 64:
+        return FirstMode(math.nan, math.nan, method, False, f"{n} samples are too few")
+    df = fs / nperseg
+    f1, sd_fit, why = _fit(_response(x, out, log.tau_m, fs, nperseg, None, indirect), motor)
+    if why:
+        return FirstMode(math.nan, math.nan, method, False, why)
+    half = nperseg // 2
+    parts = [_fit(_response(v[sl], o[sl], t[sl], fs, nperseg // 2, 0, indirect), motor)[0]
+             for sl in (slice(0, n - half), slice(half, n))
+             for v, o, t in [(x, out, log.tau_m)]]
+    spread = abs(parts[0] - parts[1]) / 2 if all(np.isfinite(parts)) else math.nan
+    terms = [sd_fit, df / math.sqrt(12)] + ([spread] if np.isfinite(spread) else [])
+    sigma = float(math.sqrt(sum(v ** 2 for v in terms if np.isfinite(v))))
+    note = (f"phase crossing at the peak of |H| f^2 (ZOH half sample removed), Welch segments "
+            f"of {nperseg} samples (bins {df:.3g} Hz), coherence >= {COHERENCE_MIN:g}; "
+            f"sigma {sigma:.3g} Hz from the fit ({sd_fit:.2g} Hz), the bin width "
+            f"({df / math.sqrt(12):.2g} Hz) and "
+            + (f"half the spread of two interleaved segment sets ({spread:.2g} Hz: "
+               f"{parts[0]:.4g}, {parts[1]:.4g} Hz)" if np.isfinite(spread) else
+               "no spread (a segment set found no resonance)"))
+    return FirstMode(f1, sigma, method, True, note)
