@@ -8,10 +8,14 @@ own first mode (eqs. 28-29). Every command that needs a filter asks `settings_fo
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass, replace
+
 import numpy as np
 
 from jointbench.identification.design import design_bandpass
 from jointbench.identification.filtering import FilterSettings
+from jointbench.identification.first_mode import FirstMode, given_first_mode, measure_first_mode
 from jointbench.identification.log import Log
 
 PAPER_RATE = 350.87    # Hz, the prototype's acquisition rate (section 4)
@@ -33,12 +37,35 @@ def default_settings(rate_hz: float, f1_hz: float | None = None, m: int = 4) -> 
     ts = 1.0 / rate_hz
     paper_rate = abs(rate_hz / PAPER_RATE - 1.0) < 0.01
     if paper_rate and (f1_hz is None or abs(f1_hz / PAPER_F1 - 1.0) <= 0.2):
-        return FilterSettings(wn=PAPER_WN, m=m, Nd=PAPER_ND, ts=ts)
-    if f1_hz is None:
+        s = FilterSettings(wn=PAPER_WN, m=m, Nd=PAPER_ND, ts=ts)
+    elif f1_hz is None:
         raise ValueError("at a sample rate other than 350.87 Hz the filter is derived from the "
                          "first mode: give f1 (Hz) or explicit wn and Nd")
-    return FilterSettings(wn=wn_from_f1(rate_hz, f1_hz, m), m=m, Nd=nd_from_f1(rate_hz, f1_hz),
-                          ts=ts)
+    else:
+        s = FilterSettings(wn=wn_from_f1(rate_hz, f1_hz, m), m=m, Nd=nd_from_f1(rate_hz, f1_hz),
+                           ts=ts)
+    return replace(s, stencil=stencil_for(s)[0])
+
+
+STENCIL_DISTORTION_MAX = 0.01   # 1 - sinc(w T)^4 at the decimated cutoff, eq. (22) kept below
+
+
+def stencil_for(s: FilterSettings, nd: int = 4) -> tuple[int, str]:
+    """The central-difference stencil for the band of `s`, and why: eq. (22) (3 points) while
+    its distortion 1 - (sin(wT) / wT)^nd (eq. 24, the D share of eq. 26) at the decimated
+    cutoff stays under 1 %, else the 5-point stencil (distortion (wT)^4 / 30 per derivative).
+    nd = 4, the highest derivative any model takes (motor-only). Why 1 %: the distortion grows
+    as w^2, so at the mode (the cutoff is about 1.385 f1) it is about half of it, 0.5 %; the
+    sinc distortion at f1 biases K and Jm by about 0.4 times itself (0.47 % -> 0.2 %, see
+    design_rate_hz), so 1 % at the cutoff keeps that bias near 0.2 %, inside the 0.5 % the
+    joint-motor model is asked for. The prototype at 350.87 Hz (cutoff 5.4 Hz) has 0.62 %."""
+    x = 2 * np.pi * s.decimated_cutoff_hz * s.ts
+    dist = 1 - float(np.sinc(x / np.pi)) ** nd
+    if dist <= STENCIL_DISTORTION_MAX:
+        return 3, (f"eq. (22): 3 points, distortion (sin wT / wT)^{nd} at the decimated cutoff "
+                   f"{100 * dist:.2g} % <= {100 * STENCIL_DISTORTION_MAX:g} %")
+    return 5, (f"5 points: eq. (22)'s distortion (sin wT / wT)^{nd} at the decimated cutoff "
+               f"would be {100 * dist:.2g} % > {100 * STENCIL_DISTORTION_MAX:g} %")
 
 
 def wn_from_f1(rate_hz: float, f1_hz: float, m: int = 4) -> float:
@@ -48,9 +75,10 @@ def wn_from_f1(rate_hz: float, f1_hz: float, m: int = 4) -> float:
 
 
 def nd_from_f1(rate_hz: float, f1_hz: float) -> int:
-    """Decimation factor placing the decimated cutoff 0.8 Fs / (2 Nd) at 5.4 / 3.9 f1, the
-    paper's ratio of cutoff to first mode (section 4), so that the band holds the mode."""
-    return max(1, int(round(0.8 * rate_hz / (2 * f1_hz * 5.4 / 3.9))))
+    """Decimation factor placing the decimated cutoff 0.8 Fs / (2 Nd) at or just above
+    5.4 / 3.9 f1, the paper's ratio of cutoff to first mode (section 4), so that the band holds the mode."""
+    # floor: the cutoff never falls below the paper's ratio (rounding could put it at 1.1 f1)
+    return max(1, int(math.floor(0.8 * rate_hz / (2 * f1_hz * 5.4 / 3.9) + 1e-9)))
 
 
 def design_rate_hz(f1_hz: float, m: int = 4, margin: float = RATE_MARGIN) -> float:
@@ -80,15 +108,45 @@ def generic_settings(rate_hz: float, m: int = 4) -> FilterSettings:
                           ts=1.0 / rate_hz)
 
 
+@dataclass(frozen=True)
+class FilterChoice:
+    """The chooser's answer: the settings, the first mode they come from (None: the caller
+    gave neither f1 nor a log to measure), why this stencil, notes and warnings."""
+
+    settings: FilterSettings
+    first_mode: FirstMode | None
+    stencil_reason: str
+    notes: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = ()
+
+
+def choose_filter(log: Log, f1_hz: float | None = None) -> FilterChoice:
+    """The default filter for `log`: with `f1_hz` from it (as `default_settings`); without,
+    from the first mode measured on the log (`measure_first_mode`), at every rate, 350.87 Hz
+    included (the paper's filter stays for a measured f1 within 20 % of 3.9 Hz at that rate).
+    When no resonance is found: `generic_settings` and a warning saying so."""
+    rate = log.sample_rate_hz
+    mode = given_first_mode(f1_hz) if f1_hz is not None else measure_first_mode(log)
+    if mode.found:
+        s = default_settings(rate, mode.f1_hz)
+        return FilterChoice(s, mode, stencil_for(s)[1])
+    s = generic_settings(rate)
+    text = (f"no resonance found ({mode.note}): generic band wn = {s.wn:.4g} rad/s "
+            f"({s.wn / (2 * np.pi):.4g} Hz, a tenth of the rate), Nd = {s.Nd}, decimated cutoff "
+            f"{s.decimated_cutoff_hz:.3g} Hz; give --f1 if the axis has a mode")
+    return FilterChoice(s, mode, "generic band: eq. (22), 3 points", (), (text,))
+
+
 def settings_for(log: Log, f1_hz: float | None = None) -> tuple[FilterSettings, str | None]:
-    """The default filter for `log`: `default_settings` (the paper's at 350.87 Hz, else from
-    f1), and when neither applies (another rate, no f1) `generic_settings`; the second item
-    is a note saying so, or None."""
-    try:
-        return default_settings(log.sample_rate_hz, f1_hz), None
-    except ValueError:
-        if f1_hz is not None:
-            raise
-    s = generic_settings(log.sample_rate_hz)
-    return s, (f"no first mode given at {log.sample_rate_hz:g} Hz: generic filter wn = "
-               f"{s.wn:.4g} rad/s ({s.wn / (2 * np.pi):.4g} Hz, a tenth of the rate), Nd = {s.Nd}")
+    """`choose_filter`'s settings and its notes and warnings as one text (None if none)."""
+    c = choose_filter(log, f1_hz)
+    return c.settings, "; ".join(c.notes + c.warnings) or None
+
+
+PAPER_SOURCE = "model prototype_axis.xml"   # the bench's `source` metadata for the prototype
+
+
+def is_paper_prototype(log: Log) -> bool:
+    """A log of the paper's prototype axis, from the metadata the bench writes (`source`:
+    "jointbench virtual experiment, model prototype_axis.xml"), never from numbers."""
+    return log.meta.get("source", "").strip().endswith(PAPER_SOURCE)

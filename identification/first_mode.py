@@ -96,7 +96,8 @@ def _fit(resp: _Response, motor: bool) -> tuple[float, float, str]:
     good = good[:gaps[0] + 1] if len(gaps) else good   # the excited band: no stray bins above
     if len(good) < MIN_BINS:
         return _nan("too few coherent frequency bins (too little excitation)")
-    mag = np.log10(np.abs(resp.G))
+    with np.errstate(divide="ignore"):
+        mag = np.log10(np.abs(resp.G))
     level = float(np.median(mag[good]))
     search = good
     if motor:

@@ -10,7 +10,9 @@ import numpy as np
 from jointbench.identification import regressors
 from jointbench.identification.checks import check_excitation, check_signals
 from jointbench.identification.estimate import LSResult, NotIdentifiable, block_weighted, least_squares
-from jointbench.identification.defaults import settings_for
+from jointbench.identification.band_checks import band_warnings
+from jointbench.identification.defaults import choose_filter, is_paper_prototype
+from jointbench.identification.first_mode import FirstMode, given_first_mode
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.log import Log, LogError
 from jointbench.identification.physical import InversionError, PhysicalResult, invert_motor_only, table3
@@ -38,6 +40,10 @@ class Identification:
     prismatic: bool = False  # the log's `axis: prismatic` (m, N, kg in place of rad, N m, kg m^2)
     # standard deviations from the autocorrelation-consistent covariance (LSResult.cov_corrected)
     physical_sigma_corrected: dict[str, float] = field(default_factory=dict)
+    first_mode: FirstMode | None = None   # measured on the log or given (--f1); None: unknown
+    warnings: tuple[str, ...] = ()        # honest checks of the band against the mode
+    stencil_reason: str = ""              # why this central difference
+    paper_axis: bool = False              # the paper's prototype (log metadata): paper columns
 
     @property
     def relative_error_pct(self) -> float:
@@ -97,21 +103,38 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
     `motor-only-printed`, the paper's eq. 18 as printed). `auto` takes joint-motor when `q`
     is logged, else motor-only, and falls back to rigid when the data does not identify a
     stiffness in the band (`stiffness_rejection`; with q, for example a rigid axis whose q
-    follows q_m). Without settings the filter is
-    `settings_for(log, f1_hz)`. Raises LogError for unusable logs and NotIdentifiable when
+    follows q_m). Without settings the filter is `choose_filter(log, f1_hz)` (the first mode
+    measured on the log when f1 is not given); the result carries the first mode, the
+    stencil's reason and the warnings of `band_checks.band_warnings`. Raises LogError for unusable logs and NotIdentifiable when
     nothing is excited.
     """
     if model not in MODEL_CHOICES:
         raise ValueError(f"unknown model {model!r} (choices: {', '.join(MODEL_CHOICES)})")
+    warnings: list[str] = []
     notes: list[str] = []
     if settings is None:
-        settings, note = settings_for(log, f1_hz)
-        if note:
-            notes.append(note)
+        choice = choose_filter(log, f1_hz)
+        settings, mode, why = choice.settings, choice.first_mode, choice.stencil_reason
+        warnings += choice.warnings
+        notes += choice.notes
+    else:
+        mode = given_first_mode(f1_hz) if f1_hz is not None else None
+        why = f"given: {settings.stencil} points"
+    result = _identify(log, model, settings, notes)
+    if mode is not None and mode.found and result.model != "rigid":
+        nd = 4 if result.model.startswith("motor-only") else 2
+        warnings += band_warnings(log.sample_rate_hz, settings, mode.f1_hz, nd)
+    return replace(result, first_mode=mode, warnings=tuple(warnings), stencil_reason=why,
+                   paper_axis=is_paper_prototype(log))
+
+
+def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str]
+              ) -> Identification:
+    """`identify` with the settings chosen."""
     if model == "auto":
         flexible = "joint-motor" if log.q is not None else "motor-only"
         try:
-            result = identify(log, flexible, settings)
+            result = _identify(log, flexible, settings, [])
         except (InversionError, NotIdentifiable) as err:
             notes.append(f"auto: {flexible} model rejected ({err}); rigid model used")
             model = "rigid"
