@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 
 from jointbench.identification.identify import Identification
-from jointbench.identification.output import pct_error
+from jointbench.identification.output import finite_json, pct_error
 from jointbench.identification.parameters import units
 
 # The paper's published values (section 4), for side-by-side tables.
@@ -70,6 +70,24 @@ def expected_x(truth: dict[str, float]) -> dict[str, float]:
             "X9": FV * FSm / K}
 
 
+def design_lines(result: Identification) -> list[str]:
+    """The first mode (measured or given, with how and its uncertainty), the design it gave
+    (wn, Nd, decimated cutoff against f1, stencil and why) and the warnings; [] when the
+    caller chose the filter without a first mode."""
+    mode, s = result.first_mode, result.settings
+    if mode is None:
+        return []
+    if mode.found:
+        sd = f" +- {mode.sigma_hz:.2g}" if math.isfinite(mode.sigma_hz) else ""
+        head = f"first mode f1 = {mode.f1_hz:.4g}{sd} Hz ({mode.method})"
+        ratio = f" = {s.decimated_cutoff_hz / mode.f1_hz:.2f} f1"
+    else:
+        head, ratio = f"first mode: not found ({mode.note})", ""
+    return [head, f"design: wn = {s.wn:.4g} rad/s (order {s.m}), Nd = {s.Nd}, decimated cutoff "
+            f"{s.decimated_cutoff_hz:.3g} Hz{ratio}; {result.stencil_reason}"] + \
+        [f"warning: {w}" for w in result.warnings]
+
+
 def parameter_table(result: Identification, truth: dict[str, float] | None = None,
                     paper: dict[str, tuple[float, float, float]] | None = None,
                     title: str = "") -> str:
@@ -78,6 +96,7 @@ def parameter_table(result: Identification, truth: dict[str, float] | None = Non
     ls = result.ls
     truth = model_truth(result.model, truth)
     unit = units(result.prismatic)
+    paper = paper if result.paper_axis else None   # the paper's values: its prototype only
     order = [n for n in TABLE1_ORDER if n in ls.names] if result.model == "joint-motor" \
         else list(ls.names)
     head = f"{'Parameter':<10}{'X':>12}{'2 sigma':>12}{'% sigma_r':>11}"
@@ -86,7 +105,7 @@ def parameter_table(result: Identification, truth: dict[str, float] | None = Non
     if truth:
         head += f"{'truth':>12}{'error %':>10}"
     head += "  unit"
-    lines = [title, head, "-" * len(head)] if title else [head, "-" * len(head)]
+    lines = ([title] if title else []) + design_lines(result) + [head, "-" * len(head)]
     for n in order:
         x, s = ls.value(n), ls.std(n)
         row = f"{n:<10}{_num(x)}{_num(2 * s)}{_num(100 * s / abs(x) if x else float('nan'), 11)}"
@@ -111,7 +130,9 @@ def physical_table(result: Identification, truth: dict[str, float] | None = None
     """Physical parameters: this method (with sigma), Table 3 as printed, the paper, truth."""
     truth = truth or {}
     unit = units(result.prismatic)
-    head = f"{'Parameter':<10}{'estimate':>12}{'2 sigma':>12}{'Table 3 eq.':>13}{'paper':>12}"
+    paper = PAPER_TABLE3 if result.paper_axis else {}   # the paper's values: its prototype only
+    head = f"{'Parameter':<10}{'estimate':>12}{'2 sigma':>12}{'Table 3 eq.':>13}" + \
+        (f"{'paper':>12}" if paper else "")
     if truth:
         head += f"{'truth':>12}{'error %':>10}{'T3 err %':>10}"
     head += "  unit"
@@ -122,7 +143,8 @@ def physical_table(result: Identification, truth: dict[str, float] | None = None
         v = result.physical[n]
         s = result.physical_sigma.get(n, float("nan"))
         t3 = result.table3.get(n, float("nan"))
-        row = f"{n:<10}{_num(v)}{_num(2 * s)}{_num(t3, 13)}{_num(PAPER_TABLE3.get(n, float('nan')))}"
+        row = f"{n:<10}{_num(v)}{_num(2 * s)}{_num(t3, 13)}" + \
+            (_num(paper.get(n, float("nan"))) if paper else "")
         if truth and n in truth:
             tv = truth[n]
             row += (f"{_num(tv)}{cell(pct_error(v, tv), 10, '.3f')}"
@@ -154,11 +176,21 @@ def to_json(result: Identification, truth: dict[str, float] | None = None) -> di
            "physical": dict(result.physical),
            "physical_sigma": dict(result.physical_sigma),
            "filter": {"wn_rad_s": result.settings.wn, "order": result.settings.m,
-                      "decimate": result.settings.Nd, "stencil": result.settings.stencil},
+                      "decimate": result.settings.Nd, "stencil": result.settings.stencil,
+                      "decimated_cutoff_hz": result.settings.decimated_cutoff_hz,
+                      "cutoff_over_f1": _cutoff_over_f1(result),
+                      "stencil_reason": result.stencil_reason},
            "residual_rms": ls.rms,
            "relative_error_pct": result.relative_error_pct,
            "condition_number": ls.cond,
-           "notes": list(result.notes)}
+           "notes": list(result.notes),
+           "warnings": list(result.warnings)}
+    mode = result.first_mode
+    if mode is not None:
+        out["first_mode"] = finite_json({"f1_hz": mode.f1_hz, "sigma_hz": mode.sigma_hz,
+                                         "method": mode.method, "found": mode.found,
+                                         "source": "given" if mode.method == "given"
+                                         else "measured", "note": mode.note})
     if result.physical_sigma_corrected:
         out["physical_sigma_corrected"] = {k: v for k, v in
                                            result.physical_sigma_corrected.items()
@@ -177,3 +209,10 @@ def to_json(result: Identification, truth: dict[str, float] | None = None) -> di
                   if k in result.physical}
         out["error_pct"] = {k: e for k, e in errors.items() if e is not None}
     return out
+
+
+def _cutoff_over_f1(result: Identification) -> float | None:
+    mode = result.first_mode
+    if mode is None or not mode.found:
+        return None
+    return result.settings.decimated_cutoff_hz / mode.f1_hz
