@@ -63,8 +63,10 @@ def _response(x: np.ndarray, y: np.ndarray, tau: np.ndarray, fs: float, nperseg:
     kw = dict(fs=fs, nperseg=nperseg, noverlap=noverlap)
     f, s_xy = signal.csd(x, y, **kw)
     _, s_xt = signal.csd(x, tau, **kw)
-    _, c_xy = signal.coherence(x, y, **kw)
-    c_xt = signal.coherence(x, tau, **kw)[1] if indirect else np.ones_like(f)
+    with np.errstate(divide="ignore", invalid="ignore"):   # constant signals: 0 / 0
+        _, c_xy = signal.coherence(x, y, **kw)
+        c_xt = signal.coherence(x, tau, **kw)[1] if indirect else np.ones_like(f)
+    c_xy, c_xt = np.nan_to_num(c_xy), np.nan_to_num(c_xt)
     step = nperseg - (noverlap if noverlap is not None else nperseg // 2)
     n_avg = max(1, (len(x) - nperseg) // step + 1)
     with np.errstate(divide="ignore", invalid="ignore"):
