@@ -13,6 +13,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from jointbench.identification.band_checks import MIN_CUTOFF_OVER_F1
 from jointbench.identification.design import design_bandpass
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.first_mode import FirstMode, given_first_mode, measure_first_mode
@@ -75,10 +76,15 @@ def wn_from_f1(rate_hz: float, f1_hz: float, m: int = 4) -> float:
 
 
 def nd_from_f1(rate_hz: float, f1_hz: float) -> int:
-    """Decimation factor placing the decimated cutoff 0.8 Fs / (2 Nd) at or just above
-    5.4 / 3.9 f1, the paper's ratio of cutoff to first mode (section 4), so that the band holds the mode."""
-    # floor: the cutoff never falls below the paper's ratio (rounding could put it at 1.1 f1)
-    return max(1, int(math.floor(0.8 * rate_hz / (2 * f1_hz * 5.4 / 3.9) + 1e-9)))
+    """Decimation factor placing the decimated cutoff 0.8 Fs / (2 Nd) at 5.4 / 3.9 f1, the
+    paper's ratio of cutoff to first mode (section 4: 0.8 x 350.87 / (2 x 5.4) = 25.99 gives
+    its Nd = 26), so that the band holds the mode; rounded down instead when rounding would
+    put the cutoff under MIN_CUTOFF_OVER_F1 f1 (few decimation steps: 2.4 -> 2 at 1.66 f1)."""
+    x = 0.8 * rate_hz / (2 * f1_hz * 5.4 / 3.9)
+    nd = max(1, int(round(x)))
+    if 0.8 * rate_hz / (2 * nd) < MIN_CUTOFF_OVER_F1 * f1_hz:
+        nd = max(1, int(math.floor(x)))
+    return nd
 
 
 def design_rate_hz(f1_hz: float, m: int = 4, margin: float = RATE_MARGIN) -> float:

@@ -104,18 +104,28 @@ def _unidentified(Ws: np.ndarray, names: tuple[str, ...]) -> dict[str, str]:
 
 def least_squares(W: np.ndarray, y: np.ndarray, names: tuple[str, ...],
                   weights: np.ndarray | None = None, time: np.ndarray | None = None,
-                  corrected: bool = True) -> LSResult:
+                  corrected: bool = True, instruments: np.ndarray | None = None) -> LSResult:
     """Solve eq. (21) for X with the paper's statistics and the corrected covariance.
     `weights` scales each row (weighted least squares, for example 1/sigma per equation
     block); `time` labels each row's sampling instant (rows of stacked equation blocks taken
     at the same instant share a label; default: every row its own instant, in order);
     `corrected=False` skips the corrected covariance (`cov_corrected` None).
+
+    `instruments` Z (the shape of W): the instrumental-variable estimate
+    X^ = (Z^T W)^-1 Z^T y, with C = sigma^2 (Z^T W)^-1 Z^T Z (W^T Z)^-1 and the sandwich on
+    the scores Z_i rho_i. In closed loop the torque noise reaches the positions, so W is
+    correlated with the equation error and least squares is biased; instruments built from
+    the reference alone (identification/instruments.py) are not.
     Raises NotIdentifiable when no parameter is excited, ValueError on shape mismatch."""
     W = np.asarray(W, dtype=float)
     y = np.asarray(y, dtype=float)
     if W.ndim != 2 or W.shape[0] != len(y) or W.shape[1] != len(names):
         raise ValueError(f"W is {W.shape}, y has {len(y)} rows and there are {len(names)} names")
+    if instruments is not None and np.shape(instruments) != W.shape:
+        raise ValueError(f"instruments are {np.shape(instruments)}, W is {W.shape}")
     Ww, yw = (W, y) if weights is None else (W * weights[:, None], y * weights)
+    Zw = None if instruments is None else (
+        np.asarray(instruments, dtype=float) * (1.0 if weights is None else weights[:, None]))
     norms = np.linalg.norm(Ww, axis=0)
     live = norms > 0
     reasons = {names[i]: "its column is zero: the data does not excite it"
@@ -133,12 +143,22 @@ def least_squares(W: np.ndarray, y: np.ndarray, names: tuple[str, ...],
         raise NotIdentifiable(f"{r} equations for {Np} parameters: too few samples")
     Wk = Ww[:, keep]
     scale = np.linalg.norm(Wk, axis=0)
-    Xs, *_ = np.linalg.lstsq(Wk / scale, yw, rcond=None)
+    Ws = Wk / scale
+    Zs = None
+    if Zw is None:
+        Xs, *_ = np.linalg.lstsq(Ws, yw, rcond=None)
+    else:
+        Zk = Zw[:, keep]
+        Zs = Zk / np.where(np.linalg.norm(Zk, axis=0) > 0, np.linalg.norm(Zk, axis=0), 1.0)
+        Xs = np.linalg.solve(Zs.T @ Ws, Zs.T @ yw)
     Xk = Xs / scale
     rho = yw - Wk @ Xk
     sigma2 = float(rho @ rho) / (r - Np)
-    Ws = Wk / scale
-    cov_s = sigma2 * np.linalg.inv(Ws.T @ Ws)
+    if Zs is None:
+        cov_s = sigma2 * np.linalg.inv(Ws.T @ Ws)
+    else:
+        B = np.linalg.inv(Zs.T @ Ws)
+        cov_s = sigma2 * B @ (Zs.T @ Zs) @ B.T
     cov_k = cov_s / np.outer(scale, scale)
     X = np.full(len(names), np.nan)
     X[keep] = Xk
@@ -148,7 +168,8 @@ def least_squares(W: np.ndarray, y: np.ndarray, names: tuple[str, ...],
     residual = y - np.nan_to_num(W[:, keep] @ Xk) if weights is not None else rho
     hac, cov_corr = None, None
     if corrected:
-        hac = hac_covariance(Wk, rho, time=time, cov_paper=cov_k)
+        hac = hac_covariance(Wk, rho, time=time, cov_paper=cov_k,
+                             instruments=None if Zw is None else Zw[:, keep])
         cov_corr = np.full((len(names), len(names)), np.nan)
         cov_corr[np.ix_(keep, keep)] = hac.cov
     return LSResult(names=tuple(names), X=X, sigma=np.sqrt(np.diag(cov)), cov=cov, sigma2=sigma2,
@@ -158,7 +179,8 @@ def least_squares(W: np.ndarray, y: np.ndarray, names: tuple[str, ...],
 
 
 def block_weighted(W: np.ndarray, y: np.ndarray, names: tuple[str, ...],
-                   block: np.ndarray, time: np.ndarray | None = None) -> LSResult:
+                   block: np.ndarray, time: np.ndarray | None = None,
+                   instruments: np.ndarray | None = None) -> LSResult:
     """Weighted least squares over equation blocks (motor and link equations of eq. 13): an
     ordinary solution gives each block's residual sigma, then every row is weighted by
     1 / sigma of its block, so that torque (N m) and link (N m, from encoder noise) residuals
@@ -174,10 +196,10 @@ def block_weighted(W: np.ndarray, y: np.ndarray, names: tuple[str, ...],
         for b in np.unique(block):
             rows = block == b
             time[rows] = np.arange(int(rows.sum()))
-    first = least_squares(W, y, names, corrected=False)
+    first = least_squares(W, y, names, corrected=False, instruments=instruments)
     weights = np.ones(len(y))
     for b in np.unique(block):
         rows = block == b
         s = np.sqrt(np.mean(first.residual[rows] ** 2))
         weights[rows] = 1.0 / s if s > 0 else 1.0
-    return least_squares(W, y, names, weights=weights, time=time)
+    return least_squares(W, y, names, weights=weights, time=time, instruments=instruments)

@@ -97,17 +97,71 @@ def derivatives(x: np.ndarray, ts: float, nd: int, stencil: int = 3) -> list[np.
     return out
 
 
-def zoh_align(tau: np.ndarray) -> np.ndarray:
+def zoh_align(tau: np.ndarray, exact: bool = False, ts: float = 1.0) -> np.ndarray:
     """The torque at the sampling instants of a zero-order-hold command.
 
     tau[k] is held over [t_k, t_k+1) while positions are samples at t_k; the band-limited
     torque acting at t_k is the mean of the values held on either side, (tau[k-1] + tau[k]) / 2.
-    Pairing raw tau[k] with positions at t_k shifts the torque by half a sample.
-    """
+    Pairing raw tau[k] with positions at t_k shifts the torque by half a sample. The paper's
+    chain (eq. 22) keeps this mean.
+
+    `exact=True` (the 5-point chain): the held torque as the 5-point second derivative sees it,
+    `stencil_view(held_double_integral(tau, ts))`: an inertia driven by the held torque then
+    satisfies Jm qm'' = tau exactly, whatever the frequency (the mean is short by
+    (w T)^2 / 12 against the accurate stencil: 1.1 % at 20 Hz and 350.87 Hz)."""
     tau = np.asarray(tau, dtype=float)
+    if exact:
+        return stencil_view(held_double_integral(tau, ts), ts)
     out = tau.copy()
     out[1:] = 0.5 * (tau[1:] + tau[:-1])
     return out
+
+
+def stencil_view(S2: np.ndarray, ts: float, stencil: int = 5) -> np.ndarray:
+    """A signal as the stencil's second derivative sees it, from samples S2 of its double
+    integral: the derivative of positions is a weighted mean of the acceleration over the
+    stencil's span, and an input that is not smooth (a held torque, a friction that switches
+    between samples) must be averaged with the same weights to stay paired with it."""
+    return derivatives(S2, ts, 2, stencil)[2]
+
+
+def held_double_integral(tau: np.ndarray, ts: float) -> np.ndarray:
+    """Samples of the double integral of the held torque (tau[k] on [t_k, t_k+1)), its mean
+    taken out and added back as c t^2 / 2 would be (`stencil_view` returns it exactly)."""
+    tau = np.asarray(tau, dtype=float)
+    c = float(np.mean(tau)) if len(tau) else 0.0
+    r = tau - c
+    S1 = np.concatenate([[0.0], np.cumsum(r[:-1] * ts)])
+    S2 = np.concatenate([[0.0], np.cumsum(S1[:-1] * ts + r[:-1] * ts ** 2 / 2)])
+    k = np.arange(len(tau)) * ts
+    return S2 + c * k ** 2 / 2
+
+
+def sign_double_integral(v: np.ndarray, ts: float) -> np.ndarray:
+    """Samples of the double integral of sign(v(t)), v taken linear between its samples: a
+    Coulomb friction FS sign(v) switches where v crosses zero, between samples. NaN where v
+    is (the stencil spreads it over its span; the decimation drops those rows)."""
+    v = np.asarray(v, dtype=float)
+    a, b = np.sign(v[:-1]), np.sign(v[1:])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        theta = np.where(a != b, v[:-1] / (v[:-1] - v[1:]), 1.0)   # share of the step at sign a
+    theta = np.clip(np.nan_to_num(theta, nan=1.0), 0.0, 1.0)
+    b = np.where(a != b, b, a)
+    step1 = (a * theta + b * (1 - theta)) * ts
+    step2 = (a * theta ** 2 / 2 + a * theta * (1 - theta) + b * (1 - theta) ** 2 / 2) * ts ** 2
+    bad = ~(np.isfinite(v[:-1]) & np.isfinite(v[1:]))
+    step1[bad], step2[bad] = 0.0, 0.0   # keep the sums finite; those samples are NaN below
+    S1 = np.concatenate([[0.0], np.cumsum(step1)])
+    S2 = np.concatenate([[0.0], np.cumsum(S1[:-1] * ts + step2)])
+    S2[~np.isfinite(v)] = np.nan
+    return S2
+
+
+def stencil_sign(v: np.ndarray, ts: float, stencil: int = 5) -> np.ndarray:
+    """sign(v) as the stencil's second derivative sees it (`stencil_view` of
+    `sign_double_integral`): each reversal placed where v crosses zero between samples and
+    weighted as the acceleration it causes is. Where v is NaN the result is NaN."""
+    return stencil_view(sign_double_integral(v, ts), ts, stencil)
 
 
 def decimate_parallel(y: np.ndarray, W: np.ndarray, settings: FilterSettings

@@ -128,6 +128,9 @@ def _fit(resp: _Response, motor: bool) -> tuple[float, float, str]:
     phase += 2 * np.pi * np.round((target - phase[np.argmin(abs(win - k))]) / (2 * np.pi))
     near = np.abs(phase - target) < np.radians(40)
     if near.sum() < 3 or not (phase.max() > target > phase.min()):
+        sharp = _sharp_crossing(resp, k, target)
+        if sharp is not None:
+            return sharp, float(f[1] - f[0]), ""
         return _nan(f"the phase does not cross {np.degrees(target):+.0f} deg near the peak at "
                     f"{f[k]:.3g} Hz: no resonance")
     w = 1.0 / resp.sd[win][near]
@@ -141,6 +144,26 @@ def _fit(resp: _Response, motor: bool) -> tuple[float, float, str]:
         float(res @ res) / max(1, near.sum() - 2), 1.0)
     g = np.array([-1.0, -(target - coef[0]) / coef[1]]) / coef[1]   # d f1 / d coef
     return f1, float(np.sqrt(g @ cov @ g)), ""
+
+
+def _sharp_crossing(resp: _Response, k: int, target: float) -> float | None:
+    """f1 of a lightly damped mode, or None: its phase falls through the target within a bin or
+    two where the coherence drops (the chirp crosses the mode in a fraction of a segment), so
+    the crossing is interpolated between the bins next to the peak whatever their coherence;
+    its uncertainty is one bin."""
+    f = resp.f
+    idx = np.flatnonzero(np.isfinite(resp.G) & (resp.G != 0) & (f >= 0.8 * f[k])
+                         & (f <= 1.25 * f[k]))
+    if len(idx) < 3:
+        return None
+    phase = np.unwrap(np.angle(resp.G[idx]))
+    phase += 2 * np.pi * np.round((target - phase[np.argmin(abs(idx - k))]) / (2 * np.pi))
+    s = phase - target
+    cross = np.flatnonzero((s[:-1] > 0) & (s[1:] <= 0))
+    if not len(cross):
+        return None
+    i = int(cross[np.argmin(abs(f[idx[cross]] - f[k]))])
+    return float(f[idx[i]] + s[i] / (s[i] - s[i + 1]) * (f[idx[i + 1]] - f[idx[i]]))
 
 
 def measure_first_mode(log: Log) -> FirstMode:

@@ -14,6 +14,7 @@ from jointbench.identification.band_checks import band_warnings
 from jointbench.identification.defaults import choose_filter, is_paper_prototype
 from jointbench.identification.first_mode import FirstMode, given_first_mode
 from jointbench.identification.filtering import FilterSettings
+from jointbench.identification.instruments import instrument_log
 from jointbench.identification.log import Log, LogError
 from jointbench.identification.physical import InversionError, PhysicalResult, invert_motor_only, table3
 from jointbench.identification.saturation import exclude_clipped  # clipped torque rows out
@@ -120,7 +121,8 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
     else:
         mode = given_first_mode(f1_hz) if f1_hz is not None else None
         why = f"given: {settings.stencil} points"
-    result = _identify(log, model, settings, notes)
+    f1 = mode.f1_hz if mode is not None and mode.found else None
+    result = _identify(log, model, settings, notes, f1)
     if mode is not None and mode.found and result.model != "rigid":
         nd = 4 if result.model.startswith("motor-only") else 2
         warnings += band_warnings(log.sample_rate_hz, settings, mode.f1_hz, nd)
@@ -128,13 +130,14 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
                    paper_axis=is_paper_prototype(log))
 
 
-def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str]
-              ) -> Identification:
-    """`identify` with the settings chosen."""
+def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
+              f1_hz: float | None = None) -> Identification:
+    """`identify` with the settings chosen; the flexible models are solved with the
+    reference's instruments when the log has q_ref (`_instruments`)."""
     if model == "auto":
         flexible = "joint-motor" if log.q is not None else "motor-only"
         try:
-            result = _identify(log, flexible, settings, [])
+            result = _identify(log, flexible, settings, [], f1_hz)
         except (InversionError, NotIdentifiable) as err:
             notes.append(f"auto: {flexible} model rejected ({err}); rigid model used")
             model = "rigid"
@@ -152,10 +155,12 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str]
     check_signals(log, model, settings)
     if model == "joint-motor":
         reg = exclude_clipped(regressors.joint_motor(log, settings), log)
-        ls = block_weighted(reg.W, reg.y, reg.names, reg.block, time=reg.index)
+        Z = _instruments(log, reg, f1_hz, notes)
+        ls = block_weighted(reg.W, reg.y, reg.names, reg.block, time=reg.index, instruments=Z)
     elif model == "motor-only":
         reg = exclude_clipped(regressors.motor_only(log, settings, corrected=True), log)
-        ls = least_squares(reg.W, reg.y, reg.names)
+        Z = _instruments(log, reg, f1_hz, notes)
+        ls = least_squares(reg.W, reg.y, reg.names, instruments=Z)
     elif model == "motor-only-printed":
         reg = exclude_clipped(regressors.motor_only(log, settings, corrected=False), log)
         ls = least_squares(reg.W, reg.y, reg.names)
@@ -195,6 +200,24 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str]
                           settings=settings, y=reg.y, y_pred=y_pred, t=log.t[reg.index],
                           block=reg.block, notes=tuple(notes), table3=t3,
                           prismatic=log.prismatic, physical_sigma_corrected=sigma_corr)
+
+
+def _instruments(log: Log, reg: regressors.Regressor, f1_hz: float | None,
+                 notes: list[str]) -> np.ndarray | None:
+    """The regressor rebuilt from the reference's predictions (identification/instruments.py),
+    or None (least squares) without q_ref; a note says which."""
+    inst = instrument_log(log, f1_hz)
+    if inst is None:
+        notes.append("least squares: no q_ref to build instruments from (closed-loop torque "
+                     "noise may bias Jm up and K down)")
+        return None
+    build = regressors.joint_motor if reg.model == "joint-motor" else regressors.motor_only
+    Z = build(inst, reg.settings)
+    if not np.array_equal(Z.index, reg.index):
+        notes.append("least squares: the instruments do not cover the regressor's rows")
+        return None
+    notes.append("instrumental variables: the regressor rebuilt from q_ref's predictions")
+    return Z.W
 
 
 def _motor_only_sigma_corrected(ls: LSResult, log: Log) -> dict[str, float]:

@@ -20,8 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from jointbench.identification.filtering import (FilterSettings, decimate_parallel, derivatives, lowpass,
-                                      zoh_align)
+from jointbench.identification.filtering import (FilterSettings, decimate_parallel, derivatives,
+                                                 lowpass, stencil_sign, zoh_align)
 from jointbench.identification.log import Log, LogError
 from jointbench.identification.parameters import JOINT_MOTOR, MOTOR_ONLY, MOTOR_ONLY_CORRECTED, RIGID
 
@@ -49,10 +49,25 @@ def _filtered(x: np.ndarray, s: FilterSettings, nd: int) -> list[np.ndarray]:
     return derivatives(lowpass(x, s.wn, s.ts, s.m), s.ts, nd, s.stencil)
 
 
-def _sign(x: np.ndarray) -> np.ndarray:
+def _sign(x: np.ndarray, s: FilterSettings) -> np.ndarray:
+    """sign(x) at the samples (the paper's chain), or as the 5-point stencil sees it
+    (`stencil_sign`: each reversal placed between samples, weighted as its acceleration)."""
+    if s.stencil == 5:
+        return stencil_sign(x, s.ts, 5)
     out = np.sign(x)
     out[~np.isfinite(x)] = np.nan
     return out
+
+
+def _torque(log: Log, s: FilterSettings, filtered: bool = True) -> np.ndarray:
+    """The torque paired with the positions: ZOH-aligned (`zoh_align`; exact with the 5-point
+    chain, applied after the Butterworth since both are linear and the exact view leaves NaN
+    at the ends) and Butterworth filtered when `filtered`."""
+    tau = np.asarray(log.tau_m, dtype=float)
+    if s.zoh and s.stencil == 5:
+        return zoh_align(lowpass(tau, s.wn, s.ts, s.m) if filtered else tau, exact=True, ts=s.ts)
+    tau = zoh_align(tau) if s.zoh else tau
+    return lowpass(tau, s.wn, s.ts, s.m) if filtered else tau
 
 
 def joint_motor(log: Log, s: FilterSettings) -> Regressor:
@@ -62,14 +77,14 @@ def joint_motor(log: Log, s: FilterSettings) -> Regressor:
                        column="q")
     qm = _filtered(log.q_m, s, 2)
     q = _filtered(log.q, s, 2)
-    tau = lowpass(zoh_align(log.tau_m), s.wn, s.ts, s.m)
+    tau = _torque(log, s)
     g = log.gravity
     n = len(log.t)
     zero = np.zeros(n)
     defl = qm[0] - q[0]
-    W1 = np.column_stack([qm[2], qm[1], _sign(qm[1]), defl, zero, zero, zero, zero, zero])
+    W1 = np.column_stack([qm[2], qm[1], _sign(qm[1], s), defl, zero, zero, zero, zero, zero])
     W2 = np.column_stack([zero, zero, zero, -defl, q[2], g * np.cos(q[0]), g * np.sin(q[0]),
-                          q[1], _sign(q[1])])
+                          q[1], _sign(q[1], s)])
     y1, W1, i1 = decimate_parallel(tau, W1, s)
     y2, W2, i2 = decimate_parallel(zero, W2, s)
     return Regressor("joint-motor", JOINT_MOTOR, np.concatenate([y1, y2]), np.vstack([W1, W2]),
@@ -80,8 +95,8 @@ def motor_only(log: Log, s: FilterSettings, corrected: bool = True) -> Regressor
     """Eqs. (18)-(20): y = tau_m, D = (-tau'', -tau', qm'''', qm''', qm'', qm', sign(qm'))
     [+ (s'', s', g cos qm, g sin qm) when corrected]."""
     qm = _filtered(log.q_m, s, 4)
-    tau = _filtered(zoh_align(log.tau_m), s, 2)
-    sgn = _sign(qm[1])
+    tau = derivatives(_torque(log, s), s.ts, 2, s.stencil)
+    sgn = _sign(qm[1], s)
     cols = [-tau[2], -tau[1], qm[4], qm[3], qm[2], qm[1], sgn]
     names = MOTOR_ONLY
     if corrected:
@@ -102,9 +117,7 @@ def rigid(log: Log, s: FilterSettings) -> Regressor:
     raw force with the filtered positions and lets the decimation filter both in parallel).
     """
     qm = _filtered(log.q_m, s, 2)
-    tau = zoh_align(log.tau_m) if s.zoh else np.asarray(log.tau_m, dtype=float)
-    if s.filter_torque:
-        tau = lowpass(tau, s.wn, s.ts, s.m)
-    W = np.column_stack([qm[2], qm[1], _sign(qm[1]), np.ones(len(log.t))])
+    tau = _torque(log, s, filtered=s.filter_torque)
+    W = np.column_stack([qm[2], qm[1], _sign(qm[1], s), np.ones(len(log.t))])
     y, W, idx = decimate_parallel(tau, W, s)
     return Regressor("rigid", RIGID, y, W, np.zeros(len(y), int), idx, s)

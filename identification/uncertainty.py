@@ -169,12 +169,14 @@ def score_series(W: np.ndarray, rho: np.ndarray, time: np.ndarray | None = None
 
 def hac_covariance(W: np.ndarray, rho: np.ndarray, time: np.ndarray | None = None,
                    kernel: str = "qs", bandwidth: float | None = None, prewhiten: bool = True,
-                   cov_paper: np.ndarray | None = None) -> HACResult:
+                   cov_paper: np.ndarray | None = None,
+                   instruments: np.ndarray | None = None) -> HACResult:
     """The sandwich covariance of the least-squares X^ = argmin ||y - W X|| with residual rho
     (module docstring). W and rho are the rows actually solved (already weighted for a
     weighted least squares). `time` labels the rows' sampling instants (rows with the same
     label belong to one instant; labels in time order). Raises ValueError on shape mismatch
-    or a rank-deficient W."""
+    or a rank-deficient W. With `instruments` Z (the shape of W, weighted alike) the sandwich
+    of the instrumental-variable estimate: bread (Z^T W)^-1, scores Z_i rho_i."""
     W = np.asarray(W, dtype=float)
     rho = np.asarray(rho, dtype=float)
     if W.ndim != 2 or rho.shape != (W.shape[0],):
@@ -186,10 +188,15 @@ def hac_covariance(W: np.ndarray, rho: np.ndarray, time: np.ndarray | None = Non
     if np.any(scale == 0):
         raise ValueError("W has a zero column: drop the unidentifiable parameters first")
     Ws = W / scale  # unit-norm columns: the bandwidth rule weighs every parameter alike
-    v = score_series(Ws, rho, time)
+    Zs = Ws
+    if instruments is not None:
+        Z = np.asarray(instruments, dtype=float)
+        zn = np.linalg.norm(Z, axis=0)
+        Zs = Z / np.where(zn > 0, zn, 1.0)
+    v = score_series(Zs, rho, time)
     S, b = long_run_covariance(v, kernel, bandwidth, prewhiten)
-    Binv = np.linalg.inv(Ws.T @ Ws)
-    cov_s = (r / (r - p)) * Binv @ S @ Binv
+    Binv = np.linalg.inv(Zs.T @ Ws)
+    cov_s = (r / (r - p)) * Binv @ S @ (Binv if instruments is None else Binv.T)
     cov = cov_s / np.outer(scale, scale)
     cov = 0.5 * (cov + cov.T)
     vv = v - v.mean(axis=0)
