@@ -137,10 +137,11 @@ def choose_filter(log: Log, f1_hz: float | None = None) -> FilterChoice:
         s = default_settings(rate, mode.f1_hz)
         return FilterChoice(s, mode, stencil_for(s)[1])
     s = generic_settings(rate)
+    s = replace(s, stencil=stencil_for(s)[0])
     text = (f"no resonance found ({mode.note}): generic band wn = {s.wn:.4g} rad/s "
             f"({s.wn / (2 * np.pi):.4g} Hz, a tenth of the rate), Nd = {s.Nd}, decimated cutoff "
             f"{s.decimated_cutoff_hz:.3g} Hz; give --f1 if the axis has a mode")
-    return FilterChoice(s, mode, "generic band: eq. (22), 3 points", (), (text,))
+    return FilterChoice(s, mode, "generic band: " + stencil_for(s)[1], (), (text,))
 
 
 def settings_for(log: Log, f1_hz: float | None = None) -> tuple[FilterSettings, str | None]:

@@ -46,6 +46,7 @@ class LSResult:
     reasons: dict[str, str]
     cov_corrected: np.ndarray | None = None
     hac: HACResult | None = None
+    instrumental: bool = False   # solved with instruments (X = (Z^T W)^-1 Z^T y)
 
     @property
     def sigma_corrected(self) -> np.ndarray:
@@ -175,7 +176,7 @@ def least_squares(W: np.ndarray, y: np.ndarray, names: tuple[str, ...],
     return LSResult(names=tuple(names), X=X, sigma=np.sqrt(np.diag(cov)), cov=cov, sigma2=sigma2,
                     residual=residual, r=r, cond=float(sv[0] / sv[-1]),
                     unidentifiable=tuple(n for n in names if n in reasons), reasons=reasons,
-                    cov_corrected=cov_corr, hac=hac)
+                    cov_corrected=cov_corr, hac=hac, instrumental=Zw is not None)
 
 
 def block_weighted(W: np.ndarray, y: np.ndarray, names: tuple[str, ...],

@@ -196,7 +196,11 @@ def to_json(result: Identification, truth: dict[str, float] | None = None) -> di
                                            result.physical_sigma_corrected.items()
                                            if math.isfinite(v)}
     if ls.hac is not None:
-        out["uncertainty"] = {"sigma": "paper: ||rho||^2 / (r - Np) (W^T W)^-1, white residuals",
+        out["uncertainty"] = {"estimator": "instrumental variables (instruments from q_ref)"
+                              if ls.instrumental else "least squares",
+                              "sigma": "paper: ||rho||^2 / (r - Np) (W^T W)^-1, white residuals"
+                              if not ls.instrumental else "||rho||^2 / (r - Np) "
+                              "(Z^T W)^-1 Z^T Z (W^T Z)^-1, white residuals",
                               "sigma_corrected": "HAC sandwich, VAR(1) prewhitened, "
                                                  f"{ls.hac.kernel} kernel",
                               "bandwidth": ls.hac.bandwidth, "lag1_autocorrelation": ls.hac.ar1}

@@ -74,11 +74,11 @@ def test_constant_data_names_what_cannot_be_identified(tmp_path, capsys, model):
 
 def test_too_few_samples_for_the_filter(tmp_path, capsys):
     path = tmp_path / "short.csv"
-    path.write_text(valid_text(300, 0))
+    path.write_text(valid_text(120, 0))   # the generic band (Nd = 10) needs 170 samples
     rc, out, err = cli(["identify", str(path), "--model", "rigid"], capsys)
     assert rc == 2 and out == ""
-    assert re.search(r"short.csv: 300 samples are too few for this filter and decimation "
-                     r"\(Nd = 26, .*at least \d+ are needed", err)
+    assert re.search(r"short.csv: 120 samples are too few for this filter and decimation "
+                     r"\(Nd = 10, .*at least \d+ are needed", err)
 
 
 def test_identify_api_raises_not_identifiable():

@@ -10,15 +10,15 @@ import numpy as np
 import pytest
 
 from jointbench.bench.sim.experiment import run_experiment
+from jointbench.identification.defaults import choose_filter
 from jointbench.identification.first_mode import measure_first_mode
 from jointbench.identification.identify import identify
 from jointbench.identification.log import Log
 from jointbench.identification.report import to_json
 
 ARM = tuple(f"axis{j}" for j in range(1, 7))
-# joint-motor K, Jm, JL at 350.87 Hz with defaults (seed 1, 60 s): measured, over 0.5 %
-JOINT_MOTOR_OVER = {"axis1": "K -0.68 %", "axis2": "Jm +1.32 %", "axis3": "K -1.27 %",
-                    "axis4": "K -1.12 %", "axis5": "K -1.54 %", "axis6": "K -0.97 %"}
+# joint-motor K, Jm, JL at 350.87 Hz with defaults (seed 1, 60 s), over 0.5 %: measured
+JOINT_MOTOR_OVER = {"axis2": "Jm +0.56 % (K -0.21, JL -0.18; 1.9 corrected sigma)"}
 
 
 @pytest.fixture(scope="session")
@@ -59,17 +59,24 @@ def test_prototype_unchanged(prototype_log):
 @pytest.mark.parametrize("joint", ARM)
 @pytest.mark.parametrize("model,tol", [("joint-motor", 0.5), ("motor-only", 3.0)])
 def test_arm_identify_with_defaults(arm_logs, joint, model, tol, request):
-    if model == "joint-motor":
+    """Issue 17: the band from the measured f1, the 5-point chain, the reference's instruments:
+    K, Jm, JL within 0.5 % (joint-motor) and 3 % (motor-only), the truth within 3 corrected
+    sigma. Measured (seed 1): joint-motor within 0.25 % for K and JL on every joint, Jm
+    +0.12..+0.56 % (a motor Coulomb friction residue, README "Accuracy on the six-axis
+    arm"); motor-only within 1.9 %."""
+    if model == "joint-motor" and joint in JOINT_MOTOR_OVER:
         request.applymarker(pytest.mark.xfail(
-            strict=True, reason=f"joint-motor at 350.87 Hz: {JOINT_MOTOR_OVER[joint]} "
-                                "(0.5 % not reached; see the report)"))
+            strict=True, reason=f"joint-motor at 350.87 Hz: {JOINT_MOTOR_OVER[joint]}"))
     log = arm_logs[joint]
     result = identify(log, model)
     truth = log.truth()
     assert result.settings.stencil == 5 and not result.paper_axis
+    assert result.ls.instrumental == (model == "joint-motor")
     assert any("too low for the mode" in w for w in result.warnings)
     for name in ("K", "Jm", "JL"):
         assert abs(err(result.physical[name], truth[name])) < tol, (name, result.physical[name])
+        z = (result.physical[name] - truth[name]) / result.physical_sigma_corrected[name]
+        assert abs(z) < 3, (name, z)
 
 
 def test_rate_too_low_is_warned(arm_logs):
@@ -95,5 +102,9 @@ def test_no_resonance_is_warned():
     mode = measure_first_mode(log)
     assert not mode.found
     result = identify(log, "rigid")
-    assert any(w.startswith("no resonance found") for w in result.warnings)
-    assert result.settings.Nd == 10
+    # a rigid model has no mode to miss: the fallback is stated as a note, not a warning
+    assert result.warnings == ()
+    assert any(w.startswith("no resonance found") for w in result.notes)
+    assert (result.settings.Nd, result.settings.stencil) == (10, 5)
+    c = choose_filter(log)
+    assert c.settings == result.settings and c.warnings[0].startswith("no resonance found")

@@ -94,7 +94,15 @@ def test_identify_json_contract(prototype_log, tmp_path, capsys):
     assert set(out["parameters"]) == {"Jm", "FVm", "FSm", "K", "JL", "MX", "MY", "FV", "FS"}
     k = out["parameters"]["K"]
     assert k["rel_sigma_pct"] == pytest.approx(100 * k["sigma"] / k["value"])
-    assert out["filter"] == {"wn_rad_s": 176.0, "order": 4, "decimate": 26, "stencil": 3}
+    assert {k: out["filter"][k] for k in ("wn_rad_s", "order", "decimate", "stencil")} == \
+        {"wn_rad_s": 176.0, "order": 4, "decimate": 26, "stencil": 3}
+    # issue 17: the design against the measured first mode, and why this stencil
+    assert out["filter"]["decimated_cutoff_hz"] == pytest.approx(0.8 * 350.87 / 52, rel=1e-3)
+    assert out["filter"]["cutoff_over_f1"] == pytest.approx(
+        out["filter"]["decimated_cutoff_hz"] / out["first_mode"]["f1_hz"])
+    assert out["filter"]["stencil_reason"].startswith("eq. (22)")
+    assert out["first_mode"]["found"] and out["first_mode"]["source"] == "measured"
+    assert out["warnings"] == [] and out["uncertainty"]["estimator"].startswith("instrumental")
     assert main(["identify", str(path), "--model", "joint-motor", "--stencil", "5",
                  "--json"]) == 0
     five = json.loads(capsys.readouterr().out)

@@ -143,7 +143,8 @@ def debias(log: Log, ident: Identification, *, replicas: int = DEFAULT_REPLICAS,
                        seed=replica_seed(seed, b))
             sim = Log(t=r.t, q_m=r.q_m, tau_m=r.tau_m, q=r.q, q_ref=log.q_ref, meta=log.meta,
                       path=f"replica {b} of {log.path or 'the log'}")
-            rows.append(identify(sim, ident.model, ident.settings).physical)
+            rows.append(identify(sim, ident.model, ident.settings,
+                                     first_mode=ident.first_mode).physical)
         except (ReplayError, LogError, NotIdentifiable, np.linalg.LinAlgError) as err:
             failed.append(f"replica {b}: {err}")
         if progress is not None:

@@ -33,7 +33,7 @@ from jointbench.bench.effects import parse_effect
 from jointbench.bench.sim.axes import build_experiment_model
 from jointbench.bench.sim.experiment import run_experiment
 from jointbench.bench.sim.sensors import Sensors
-from jointbench.identification.defaults import default_settings
+from jointbench.identification.defaults import choose_filter
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.identify import identify
 from jointbench.identification.physical import invert_motor_only
@@ -83,11 +83,12 @@ def _sensors(settings: RunSettings, model_ref: str, joint: str | None):
 
 
 def _filter(settings: RunSettings, log) -> FilterSettings | None:
-    """The run's filter: the default one with the settings' wn, Nd and stencil (None: the
-    identification's own default)."""
+    """The run's filter: the default one (`choose_filter`: the first mode measured on the
+    log, never the truth) with the settings' wn, Nd and stencil (None: the identification's
+    own default)."""
     if settings.wn is None and settings.Nd is None and settings.stencil == 3:
         return None
-    base = default_settings(log.sample_rate_hz, log.truth().get("f1_hz"))
+    base = choose_filter(log).settings
     return FilterSettings(wn=settings.wn if settings.wn is not None else base.wn, m=base.m,
                           Nd=settings.Nd if settings.Nd is not None else base.Nd, ts=log.ts,
                           stencil=settings.stencil)

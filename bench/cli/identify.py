@@ -29,7 +29,7 @@ def add_arguments(i: argparse.ArgumentParser) -> None:
     i.add_argument("--no-torque-filter", action="store_true",
                    help="rigid model: the torque goes only through the decimation filter, not "
                         "the Butterworth (the EMPS reference chain)")
-    i.add_argument("--stencil", type=int, default=3, choices=(3, 5),
+    i.add_argument("--stencil", type=int, default=None, choices=(3, 5),
                    help="central-difference points: 3, the paper's eq. (22) (default), or 5 "
                         "(fourth order: no sinc distortion of the derivatives)")
     i.add_argument("--order", type=int, default=4, help="Butterworth order m (default 4)")
@@ -101,7 +101,7 @@ def _filter_options(args: argparse.Namespace, log) -> tuple[float | None, dict] 
     chain = {"zoh": not args.no_zoh, "filter_torque": not args.no_torque_filter,
              "skip": args.skip, "stencil": args.stencil}
     if wn is None and args.decimate is None and args.order == 4 and \
-            chain == {"zoh": True, "filter_torque": True, "skip": 0, "stencil": 3}:
+            chain == {"zoh": True, "filter_torque": True, "skip": 0, "stencil": None}:
         return None
     return wn, chain
 
@@ -125,7 +125,7 @@ def run(args: argparse.Namespace) -> int:
     from jointbench.bench.present.validate import forward_text, forward_validation
     from jointbench.bench.sim.sensors import Sensors
     from jointbench.identification.checks import estimate_flags
-    from jointbench.identification.defaults import settings_for
+    from jointbench.identification.defaults import choose_filter
     from jointbench.identification.filtering import FilterSettings
     from jointbench.identification.identify import identify
     from jointbench.identification.log import read_log, unit_warnings
@@ -147,16 +147,18 @@ def run(args: argparse.Namespace) -> int:
         raise DebiasError(f"{args.file}: --debias replays the experiment with the log's "
                           "sensors: the metadata needs motor_encoder_resolution_rad, "
                           "link_encoder_resolution_rad and torque_noise_std")
-    settings = None
+    settings, mode = None, None
     options = _filter_options(args, log)
     if options is not None:
         wn, chain = options
-        base, _ = settings_for(log, args.f1)
+        choice = choose_filter(log, args.f1)   # what the options override, and the first mode
+        base, mode = choice.settings, choice.first_mode
+        chain["stencil"] = chain["stencil"] or base.stencil
         settings = FilterSettings(wn=wn if wn is not None else base.wn, m=args.order,
                                   Nd=args.decimate if args.decimate is not None else base.Nd,
                                   ts=log.ts, **chain)
     try:
-        result = identify(log, args.model, settings, f1_hz=args.f1)
+        result = identify(log, args.model, settings, f1_hz=args.f1, first_mode=mode)
     except InversionError as err:
         raise InversionError(f"{args.file}: {err}") from None
     truth = log.truth() or None

@@ -1,5 +1,5 @@
 """A virtual experiment (`bench.sim.experiment.run_experiment`) summarised: what
-`jointbench simulate` prints, as text or JSON, and its warnings about the torque limit."""
+`jointbench simulate` prints, as text or JSON, and its warnings about the torque limit and a soft MuJoCo friction."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from jointbench.bench.sim.experiment import ExperimentResult
+from jointbench.bench.sim.friction import friction_bands, soft_friction_warnings
 
 
 def saturation_warnings(result: ExperimentResult) -> list[str]:
@@ -26,7 +27,17 @@ def saturation_warnings(result: ExperimentResult) -> list[str]:
     if getattr(result, "clamped", 0):
         out.append(f"MuJoCo's actuator ctrlrange cut the applied torque (command plus noise) on "
                    f"{result.clamped} of {n} samples")
-    return out
+    return out + friction_warnings(result)
+
+
+def friction_warnings(result: ExperimentResult) -> list[str]:
+    """bench.sim.friction's check on the experiment's model and true velocities."""
+    exp, log = result.experiment, result.log
+    bands = friction_bands(exp.model, exp.axis.motor_dof, exp.axis.link_dof)
+    rate = log.sample_rate_hz
+    v_link = np.diff(result.q_true) * rate if result.q_true is not None else None
+    return soft_friction_warnings(bands, np.diff(result.q_m_true) * rate, v_link,
+                                  result.tau_applied[1:], 1.0 / rate)
 
 
 def experiment_json(result: ExperimentResult, out: Path, warnings: list[str]) -> dict:

@@ -20,7 +20,7 @@ def identify_json(result: Identification, truth: dict[str, float] | None, flags:
     the log's unit warnings and, when run, the "refined" and "debiased" objects."""
     answer = to_json(result, truth)
     answer["flags"] = flags
-    answer["warnings"] = warnings
+    answer["warnings"] = list(warnings) + [w for w in result.warnings if w not in warnings]
     if refined is not None:
         answer["refined"] = refined_json(refined, result, truth)
     if debiased is not None:

@@ -11,6 +11,8 @@ model and the gain (docs/cli.md and docs/effects.md).
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import math
 from pathlib import Path
 from typing import Callable
@@ -18,29 +20,28 @@ from typing import Callable
 from jointbench.bench.analysis.diagnose.forward import add_forward_view
 from jointbench.bench.analysis.diagnose.report import write
 from jointbench.bench.analysis.diagnose.types import Diagnosis
-from jointbench.identification.defaults import PAPER_RATE, default_settings, generic_settings
+from jointbench.identification.defaults import choose_filter
 from jointbench.identification.discrepancy import Candidate, Nominal, diagnose_inverse
 from jointbench.identification.effects import EFFECTS
 from jointbench.identification.filtering import FilterSettings
-from jointbench.identification.frequency import first_mode_hz, measured_frf
 from jointbench.identification.log import Log
 
 
 def diagnosis_settings(log: Log) -> tuple[FilterSettings, str]:
-    """The bandpass of section 3.2 for this log, and how it was chosen. At the paper's rate:
-    the paper's wn and Nd. Otherwise, with `q`: the first mode from the measured link response
-    (identification.frequency.first_mode_hz) and eqs. (28)-(29). Without `q`: generic."""
-    rate = log.sample_rate_hz
-    if abs(rate / PAPER_RATE - 1) < 0.01:
-        return default_settings(rate), "the paper's wn = 176 rad/s, Nd = 26 (section 4)"
-    if log.q is not None:
-        frf = measured_frf(log, output="q")
-        f1 = first_mode_hz(frf, fmin=0.5, fmax=min(60.0, 0.2 * rate))
-        return (default_settings(rate, f1),
-                f"first mode {f1:.2f} Hz from the measured q / tau_m response; wn and Nd "
-                "from eqs. (28)-(29)")
-    return (generic_settings(rate),
-            "no link position: generic band (Butterworth at 0.1 Fs, Nd = 10)")
+    """The bandpass of section 3.2 for this log, and how it was chosen: the one chooser
+    (identification.defaults.choose_filter: the first mode measured on the log, eqs. 28-29,
+    the paper's filter for the prototype, a stated generic band when no resonance is found)."""
+    c = choose_filter(log)
+    # the effects' columns (identification/effects) pair samples as eq. (22) does: the band
+    # follows the mode, the differences stay the paper's 3-point ones
+    s, mode = replace(c.settings, stencil=3), c.first_mode
+    if mode is not None and mode.found:
+        how = (f"first mode {mode.f1_hz:.3g} +- {mode.sigma_hz:.2g} Hz measured ({mode.method});"
+               f" wn = {s.wn:.4g} rad/s, Nd = {s.Nd} (decimated cutoff "
+               f"{s.decimated_cutoff_hz:.3g} Hz), eq. (22)")
+    else:
+        how = "; ".join(c.warnings) or "generic band"
+    return s, how
 
 
 def nominal_parameters(nom: Nominal) -> dict[str, float]:
