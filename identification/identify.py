@@ -222,11 +222,14 @@ def _instruments(log: Log, reg: regressors.Regressor, f1_hz: float | None,
                      "down")
         return None
     Z = regressors.joint_motor(inst, reg.settings)
-    if not np.array_equal(Z.index, reg.index):
+    # the same rows (block, sample) as the regressor's, which may have lost clipped ones
+    rows = {key: i for i, key in enumerate(zip(Z.block.tolist(), Z.index.tolist()))}
+    pick = [rows.get(key) for key in zip(reg.block.tolist(), reg.index.tolist())]
+    if any(i is None for i in pick):
         notes.append("least squares: the instruments do not cover the regressor's rows")
         return None
     notes.append("instrumental variables: the regressor rebuilt from q_ref's predictions")
-    return Z.W
+    return Z.W[pick]
 
 
 def _motor_only_sigma_corrected(ls: LSResult, log: Log) -> dict[str, float]:
