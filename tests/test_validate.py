@@ -46,11 +46,12 @@ def test_wrong_model_is_seen(prototype_log, seed2_log):
 
 def test_emps_estimation_model_on_the_pulses_file():
     """README "Your own data": the EMPS estimation model predicts the pulses experiment's
-    force to 4.52 % (its own fit: 3.96 %)."""
+    force to 4.50 % (its own fit: 3.93 %; 4.52 and 3.96 % with eq. (22) before the generic
+    band took the 5-point chain its cutoff asks, issue 17)."""
     result = identify(read_log(EMPS / "emps_estimation.csv"), "rigid")
     v = validate_on(result, read_log(EMPS / "emps_validation_pulses.csv"))
-    assert v.fit_relative_error_pct == pytest.approx(3.96, abs=0.01)
-    assert v.relative_error_pct == pytest.approx(4.52, abs=0.01)
+    assert v.fit_relative_error_pct == pytest.approx(3.93, abs=0.01)
+    assert v.relative_error_pct == pytest.approx(4.50, abs=0.01)
     assert v.settings.wn == pytest.approx(result.settings.wn)
 
 
