@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from jointbench.bench.sim.experiment import run_experiment
-from jointbench.identification.defaults import default_settings
+from jointbench.identification.defaults import choose_filter
 from jointbench.identification.frequency import FRF, first_mode_hz, measured_frf, model_frf, two_mass_tf
 from jointbench.identification.identify import identify
 from jointbench.identification.log import atomic_write_text, write_log
@@ -43,10 +43,13 @@ def run_demo(out: Path, duration: float = 60.0, seed: int = 1) -> int:
         f"{log.meta['chirp']}; gains kp {log.meta['kp']}, kv {log.meta['kv']}, "
         f"ki {log.meta['ki']}; saturated samples {res.saturated}. "
         f"Log: {out / 'prototype.csv'}")
-    s = default_settings(log.sample_rate_hz)
-    say(f"Filter (paper section 4): Butterworth m = {s.m}, wn = {s.wn:g} rad/s, "
-        f"Nd = {s.Nd} (decimated cutoff {s.decimated_cutoff_hz:.2f} Hz); first mode "
-        f"(truth) {truth['f1_hz']:.3f} Hz")
+    choice = choose_filter(log)   # the one chooser: f1 measured, the paper's filter kept
+    s, mode = choice.settings, choice.first_mode
+    say(f"First mode measured on the log: {mode.f1_hz:.3f} +- {mode.sigma_hz:.2g} Hz "
+        f"({mode.method}; truth {truth['f1_hz']:.3f} Hz). Filter (paper section 4): "
+        f"Butterworth m = {s.m}, wn = {s.wn:g} rad/s, Nd = {s.Nd} (decimated cutoff "
+        f"{s.decimated_cutoff_hz:.2f} Hz = {s.decimated_cutoff_hz / mode.f1_hz:.2f} f1); "
+        f"{choice.stencil_reason}")
     say()
 
     jm = identify(log, "joint-motor", s)

@@ -1,0 +1,66 @@
+"""Issue 17 on data that is not MuJoCo's: the independent simulator's clean logs (tests/
+indep_sim.py: five axis families, 350.87 Hz, 60 s, linear sweep, velocity feed-forward, default
+sensors, no hidden effect) identified with the defaults: f1 measured, band and stencil from it,
+instruments for the joint-motor model.
+
+Bounds are the issue's: f1 within 2 %; joint-motor K, Jm, JL within 0.5 % and the truth within
+3 corrected sigma; motor-only K and Jm within 3 %, JL within 8 %. Where a family misses them
+today the case is a strict xfail with the measured value (benchmarks/indep_accuracy.py prints
+the whole grid, feed-forward off and log sweeps included)."""
+
+from __future__ import annotations
+
+import pytest
+
+from indep_sim import FAMILIES, simulate
+from jointbench.identification.identify import identify
+
+# measured 2026-12-01 (seed 1): what misses the issue's bounds, and by how much
+F1_OVER = {"heavy_link": "f1 +11.3 % (6.68 against 6.00 Hz: the friction's phase lead at "
+                         "JL/Jm = 10 moves the crossing)",
+           "stiff_small": "f1 +2.8 %", "soft": "f1 +2.5 %"}
+JOINT_MOTOR_OVER = {"heavy_link": "Jm +1.65 %", "stiff_small": "K -0.79, Jm +3.83 %",
+                    "soft": "Jm +1.33 %"}
+MOTOR_ONLY_OVER = {"heavy_link": "K -15.9, JL -45.8 %", "stiff_small": "Jm +7.5 %",
+                   "soft": "Jm +3.25 %"}
+
+
+@pytest.fixture(scope="module")
+def logs():
+    return {name: simulate(fam, seed=1, duration=60.0, sweep="linear")
+            for name, fam in FAMILIES.items()}
+
+
+def _xfail(request, table, name):
+    if name in table:
+        request.applymarker(pytest.mark.xfail(strict=True, reason=table[name]))
+
+
+@pytest.mark.parametrize("name", list(FAMILIES))
+def test_first_mode_within_2_percent(logs, name, request):
+    _xfail(request, F1_OVER, name)
+    log = logs[name]
+    mode = identify(log, "joint-motor").first_mode
+    assert mode.found
+    assert abs(mode.f1_hz / log.truth()["f1_hz"] - 1) < 0.02, mode.f1_hz
+
+
+@pytest.mark.parametrize("name", list(FAMILIES))
+def test_joint_motor_with_defaults(logs, name, request):
+    _xfail(request, JOINT_MOTOR_OVER, name)
+    log = logs[name]
+    result, truth = identify(log, "joint-motor"), log.truth()
+    assert result.ls.instrumental
+    for p in ("K", "Jm", "JL"):
+        assert abs(result.physical[p] / truth[p] - 1) < 0.005, (p, result.physical[p])
+        z = (result.physical[p] - truth[p]) / result.physical_sigma_corrected[p]
+        assert abs(z) < 3, (p, z)
+
+
+@pytest.mark.parametrize("name", list(FAMILIES))
+def test_motor_only_with_defaults(logs, name, request):
+    _xfail(request, MOTOR_ONLY_OVER, name)
+    log = logs[name]
+    result, truth = identify(log, "motor-only"), log.truth()
+    for p, tol in (("K", 0.03), ("Jm", 0.03), ("JL", 0.08)):
+        assert abs(result.physical[p] / truth[p] - 1) < tol, (p, result.physical[p])
