@@ -349,3 +349,24 @@ def test_cli_json_is_one_strict_json_object(tmp_path, capsys):
     K = summary["groups"][0]["models"]["joint-motor"][0]
     assert K["name"] == "K" and K["std"] is None  # one run: no spread (null, not NaN)
     assert json.loads((tmp_path / "j.summary.json").read_text())["runs"] == 1
+
+
+def test_cli_rate_runs_the_experiment_at_that_rate(tmp_path, capsys):
+    """Issue 17: `campaign --rate` (the arm at 1 kHz here); a rate outside 10 Hz-100 kHz is
+    bad input before any run."""
+    import json
+
+    from jointbench.bench.cli import main
+
+    out = tmp_path / "r.csv"
+    rc = main(["campaign", "--model", "arm6", "--joint", "axis6", "--runs", "1", "--duration",
+               "10", "--workers", "1", "--json", "--rate", "1000", "--id-models", "joint-motor",
+               "--out", str(out)])
+    summary = json.loads(capsys.readouterr().out)
+    assert rc == 0 and summary["ok"] == 1
+    assert summary["spec"]["base"]["rate"] == 1000.0
+    K = summary["groups"][0]["models"]["joint-motor"][0]
+    assert K["name"] == "K" and abs(K["bias_pct"]) < 1.0   # 10 s at 1 kHz: measured -0.17 %
+    rc = main(["campaign", "--runs", "1", "--rate", "5", "--out", str(tmp_path / "b.csv")])
+    assert rc == 2 and "--rate" in capsys.readouterr().err
+    assert not (tmp_path / "b.csv").exists()

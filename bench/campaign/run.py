@@ -161,9 +161,10 @@ def run_task_with(methods: Sequence[Method], timeout_s: float, task: RunTask) ->
                                             scattered_factors(s.scatter, task.scatter_seed))
                 model_ref = str(Path(tmp) / "scattered.xml")
                 Path(model_ref).write_text(xml, encoding="utf-8")
+            rate = {} if s.rate is None else {"sample_rate_hz": s.rate}
             result = run_experiment(model_ref, joint, duration=s.duration, seed=task.seed,
                                     amplitude=s.amplitude, effect=effect,
-                                    sensors=_sensors(s, model_ref, joint))
+                                    sensors=_sensors(s, model_ref, joint), **rate)
         sim_s = time.perf_counter() - t0
     except Exception as err:  # noqa: BLE001 - recorded in the row
         reasons.append(f"simulation: {type(err).__name__}: {err}")

@@ -73,11 +73,12 @@ def check_settings(s: RunSettings, where: str = "") -> None:
         v = getattr(s, name)
         if v is not None and not 1 <= v <= MAX_BITS:
             fail(name, v, f"between 1 and {MAX_BITS} bits per turn")
-    nyquist, lowest = math.pi * PAPER_RATE, 2 * math.pi / s.duration
+    rate = s.rate or PAPER_RATE
+    nyquist, lowest = math.pi * rate, 2 * math.pi / s.duration
     if s.wn is not None and not lowest <= s.wn < nyquist:
         fail("wn", s.wn, f"in [{lowest:.3g}, {nyquist:.0f}) rad/s: at least one cycle over "
-                         f"the run, below the Nyquist frequency at {PAPER_RATE:g} Hz")
-    samples = s.duration * PAPER_RATE
+                         f"the run, below the Nyquist frequency at {rate:g} Hz")
+    samples = s.duration * rate
     if s.Nd is not None and not 1 <= s.Nd <= samples / MIN_ROWS:
         fail("Nd", s.Nd, f"between 1 and {int(samples / MIN_ROWS)} (a {s.duration:g} s run "
                          f"has {samples:.0f} samples, the fit needs {MIN_ROWS} decimated rows)")

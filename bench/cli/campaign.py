@@ -62,6 +62,8 @@ def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="campaign seed (default 0)")
     p.add_argument("--duration", type=float, default=60.0, help="experiment length in s (default 60)")
     p.add_argument("--amplitude", type=float, help="chirp amplitude in rad (default: automatic)")
+    p.add_argument("--rate", type=float, default=None,
+                   help="acquisition and control rate in Hz (default: the bench's, as simulate)")
     p.add_argument("--noise", type=float, default=1.0,
                    help="torque noise as a multiple of the default 1.25 %% of tau_max (default 1)")
     p.add_argument("--motor-bits", type=int, help="motor encoder bits per turn (default 17)")
@@ -144,7 +146,7 @@ def spec_arguments(args: argparse.Namespace, parse_effect: Callable[[str], objec
     """The CampaignSpec keyword arguments (base, runs, seed, sweep, values) of the command line.
     `parse_effect` (bench.effects', passed in: it imports MuJoCo) checks --effect. Raises
     CampaignError, or ValueError for a malformed --effect."""
-    for name in ("duration", "noise", "scatter", "amplitude", "wn"):
+    for name in ("duration", "noise", "scatter", "amplitude", "wn", "rate"):
         v = getattr(args, name)
         if v is not None and not math.isfinite(v):
             raise CampaignError(f"--{name}: {v} is not finite")
@@ -152,6 +154,8 @@ def spec_arguments(args: argparse.Namespace, parse_effect: Callable[[str], objec
         raise CampaignError(f"--duration must be positive, got {args.duration:g}")
     if args.noise < 0:
         raise CampaignError(f"--noise must be >= 0, got {args.noise:g}")
+    if args.rate is not None and not 10.0 <= args.rate <= 1e5:
+        raise CampaignError(f"--rate must lie in 10 Hz to 100 kHz, got {args.rate:g}")
     if args.scatter < 0:
         raise CampaignError(f"--scatter must be >= 0, got {args.scatter:g}")
     if args.effect:
@@ -160,7 +164,7 @@ def spec_arguments(args: argparse.Namespace, parse_effect: Callable[[str], objec
                        amplitude=args.amplitude, noise=args.noise, motor_bits=args.motor_bits,
                        link_bits=args.link_bits, scatter=args.scatter, wn=args.wn,
                        Nd=args.decimate, stencil=args.stencil, effect=args.effect,
-                       debias=args.debias,
+                       debias=args.debias, rate=args.rate,
                        id_models=tuple(m.strip() for m in args.id_models.split(",") if m.strip()))
     sweep, values = _parse_sweep(args.sweep) if args.sweep else (None, ())
     if not str(args.model) in ("prototype", "prototype_axis", "arm6") and not Path(args.model).is_file():
