@@ -55,7 +55,7 @@ def survey_text(sv: Survey, out: Path | None) -> str:
     """The table (one row per axis and parameter), each axis' filter, first mode and
     warnings, the accuracy against issue 17's bar, the wall time and the files written."""
     models = sorted({j.model for j in sv.joints if j.status == "ok"})
-    lines = [f"survey of {sv.model} ({sv.source}): {len(sv.joints)} axes, each a "
+    lines = [f"survey of {sv.model} ({sv.source.name}): {len(sv.joints)} axes, each a "
              f"{sv.duration:g} s chirp at {sv.sample_rate_hz:g} Hz with the others locked, "
              f"seed {sv.seed}; identified with the defaults ({', '.join(models) or 'none'} "
              "model, filter from the first mode measured on each log)", ""]
