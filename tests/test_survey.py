@@ -127,3 +127,30 @@ def test_output_guard_and_bad_input(tmp_path, capsys):
         assert status == 2, argv
         assert word in capsys.readouterr().err
         assert not (tmp_path / "x").exists()
+
+
+def test_a_failed_axis_is_reported_and_the_others_written(tmp_path, monkeypatch, capsys):
+    """An axis whose simulation fails: its reason in the table, the JSON and on stderr,
+    exit 1; the other axis is identified and written."""
+    import jointbench.bench.campaign.survey as survey
+
+    real = survey.run_experiment
+
+    def fails_on_axis4(model, joint, **kw):
+        if joint == "axis4":
+            raise RuntimeError("diverged at t = 1.5 s\nsecond line")
+        return real(model, joint, **kw)
+
+    monkeypatch.setattr(survey, "run_experiment", fails_on_axis4)
+    out = tmp_path / "out"
+    status, text = _run(["survey", "--joints", "axis1,axis4", "--duration", "20", "--seed",
+                         "1", "--workers", "1", "--quiet", "--json", "--out", str(out)])
+    assert status == 1
+    doc = _strict(text)
+    assert doc["failed"] == ["axis4"] and doc["joints"][0]["status"] == "ok"
+    assert "diverged at t = 1.5 s" in doc["joints"][1]["reason"]
+    rows = _table(out)
+    assert [r["parameter"] for r in rows if r["joint"] == "axis4"] == [""]
+    assert "RuntimeError: diverged at t = 1.5 s second line" in rows[-1]["note"]
+    assert (out / "logs" / "axis1.csv").is_file() and not (out / "logs" / "axis4.csv").exists()
+    assert "jointbench survey: error: axis4: simulation: RuntimeError" in capsys.readouterr().err

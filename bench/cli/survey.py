@@ -43,9 +43,9 @@ def _progress(args: argparse.Namespace):
         return None
 
     def say(j, done: int, total: int) -> None:
-        what = "failed" if j.status != "ok" else \
-            f"{j.model}, K {j.estimates['K'].error_pct:+.2f} %" \
-            if "K" in j.estimates and j.estimates["K"].error_pct is not None else j.model
+        k = j.estimates.get("K")
+        what = "failed" if j.status != "ok" else j.model + (
+            f", K {k.error_pct:+.2f} %" if k is not None and k.error_pct is not None else "")
         print(f"survey: {j.joint} done ({done}/{total}): {what}", file=sys.stderr, flush=True)
     return say
 

@@ -3,6 +3,8 @@ and as its figure: what `jointbench survey` prints and writes."""
 
 from __future__ import annotations
 
+import csv
+import io
 import math
 from pathlib import Path
 
@@ -161,19 +163,20 @@ def table_csv(sv: Survey) -> str:
     """The survey's table as CSV: `#` lines (model, duration, seed, rate), a header, one row
     per axis and parameter (full precision; empty cells for missing values; a failed axis
     is one row with its reason in `note`). Deterministic: no wall time."""
-    lines = ["# jointbench survey", f"# model: {sv.model}", f"# duration_s: {sv.duration!r}",
-             f"# seed: {sv.seed}", f"# sample_rate_hz: {sv.sample_rate_hz!r}",
-             ",".join(COLUMNS)]
+    buf = io.StringIO()
+    buf.write(f"# jointbench survey\n# model: {sv.model}\n# duration_s: {sv.duration!r}\n"
+              f"# seed: {sv.seed}\n# sample_rate_hz: {sv.sample_rate_hz!r}\n")
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(COLUMNS)
     for j in sv.joints:
         if j.status != "ok":
-            lines.append(f"{j.joint},,,,,,,,,\"{j.reason.replace(chr(34), chr(39))}\"")
+            w.writerow([j.joint] + [""] * (len(COLUMNS) - 2) + [" ".join(j.reason.split())])
             continue
         for name, e in rows(j):
             sigma_c = math.nan if name == F1 else e.sigma_c
-            lines.append(",".join([j.joint, name, _unit(name), _cell(e.value), _cell(e.sigma),
-                                   _cell(sigma_c), _cell(e.truth), _cell(e.error_pct),
-                                   _cell(e.z), ""]))
-    return "\n".join(lines) + "\n"
+            w.writerow([j.joint, name, _unit(name), _cell(e.value), _cell(e.sigma),
+                        _cell(sigma_c), _cell(e.truth), _cell(e.error_pct), _cell(e.z), ""])
+    return buf.getvalue()
 
 
 def plot_survey(sv: Survey):
