@@ -49,6 +49,10 @@ def _mode_text(j: JointSurvey) -> str:
     return f"f1 measured {m.f1_hz:.4g} +- {m.sigma_hz:.2g} Hz (truth {j.f1_truth_hz:.4g} Hz)"
 
 
+def _axes(n: int) -> str:
+    return f"{n} axis" if n == 1 else f"{n} axes"
+
+
 def _num(x: float | None, fmt: str) -> str:
     return "" if x is None or not math.isfinite(x) else format(x, fmt)
 
@@ -57,7 +61,7 @@ def survey_text(sv: Survey, out: Path | None) -> str:
     """The table (one row per axis and parameter), each axis' filter, first mode and
     warnings, the accuracy against issue 17's bar, the wall time and the files written."""
     models = sorted({j.model for j in sv.joints if j.status == "ok"})
-    lines = [f"survey of {sv.model} ({sv.source.name}): {len(sv.joints)} axes, each a "
+    lines = [f"survey of {sv.model} ({sv.source.name}): {_axes(len(sv.joints))}, each a "
              f"{sv.duration:g} s chirp at {sv.sample_rate_hz:g} Hz with the others locked, "
              f"seed {sv.seed}; identified with the defaults ({', '.join(models) or 'none'} "
              "model, filter from the first mode measured on each log)", ""]
@@ -85,7 +89,7 @@ def survey_text(sv: Survey, out: Path | None) -> str:
     within = sum(j.within_bar() for j in ok)
     worst = sv.worst()
     lines += ["", f"K, Jm, JL within {ACCURACY_BAR_PCT:g} % of the truth (issue 17): "
-                  f"{within} of {len(sv.joints)} axes"
+                  f"{within} of {_axes(len(sv.joints))}"
               + (f"; largest |error| {worst[1]} {worst[2]:+.3f} % on {worst[0]}" if worst else "")]
     sim = sum(j.sim_s for j in ok if math.isfinite(j.sim_s))
     ident = sum(j.identify_s for j in ok if math.isfinite(j.identify_s))
