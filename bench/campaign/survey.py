@@ -29,7 +29,7 @@ from jointbench.identification.parameters import FRICTIONS, STIFFNESS_AND_INERTI
 from jointbench.models import load_model, select_axis
 
 SURVEYED = STIFFNESS_AND_INERTIAS + FRICTIONS   # K, Jm, JL, FVm, FSm, FV, FS: the table's rows
-# Issue 17 ("Identify any axis at 350.87 Hz"): the joint-motor model's K, Jm and JL within
+# Issue 17 (any axis identified at the paper's rate): the joint-motor model's K, Jm and JL within
 # 0.5 % of the truth; the survey reports, per axis, whether each is inside.
 ACCURACY_BAR_PCT = 0.5
 
