@@ -18,6 +18,9 @@ What is measured (wall time with time.perf_counter, best of N repeats, in this p
    against a bare `python -c pass` (target: under 0.5 s), and `jointbench simulate
    --duration 60` against the simulation's own time, the in-process experiment of [1]
    (target: under 1.5x).
+6. `jointbench survey --model arm6 --seed 1 --workers 2` (six 60 s experiments, each
+   identified), in a fresh process, once: its wall time (issue 18's target: under 30 s on 2
+   cores).
 
 The script only prints figures and ratios to the targets. No wall-clock bound is asserted
 anywhere (here or in the tests): timings depend on the machine and its load.
@@ -193,6 +196,19 @@ def bench_startup(sim_wall: float) -> dict[str, float]:
     return {"bare": bare, "help": helps, "simulate": sim, "simulate_ratio": sim / sim_wall}
 
 
+SURVEY_TARGET_S = 30.0
+
+
+def bench_survey() -> float:
+    with tempfile.TemporaryDirectory() as tmp:
+        wall = _command_wall(["-m", "jointbench.bench.cli", "survey", "--model", "arm6",
+                              "--seed", "1", "--workers", "2", "--quiet", "--out",
+                              os.path.join(tmp, "survey")], 1)
+    print(f"[6] `jointbench survey --model arm6 --seed 1 --workers 2`: {wall:.1f} s wall "
+          f"(six 60 s experiments and identifications; target under {SURVEY_TARGET_S:g} s)")
+    return wall
+
+
 def main() -> None:
     header()
     t_start = time.perf_counter()
@@ -209,6 +225,7 @@ def main() -> None:
         print(f"[3b] full experiment / rollout (real-time factors): {proto_rtf / roll_rtf:.3f}; "
               f"bare loop / rollout: {bare_rtf / roll_rtf:.3f}")
     ident = bench_identify(proto_res.log)
+    survey = bench_survey()
 
     print()
     print("Summary (real-time factor = simulated s / wall s; no bound is asserted)")
@@ -233,6 +250,8 @@ def main() -> None:
     rows.append(("`python -c pass` wall", f"{startup['bare']:.3f} s", "-", "-"))
     rows.append(("`simulate --duration 60` / experiment", f"{startup['simulate_ratio']:.2f}x",
                  f"< {SIMULATE_TARGET}x", f"{startup['simulate_ratio'] / SIMULATE_TARGET:.2f}"))
+    rows.append(("`survey --model arm6` (2 workers) wall", f"{survey:.1f} s",
+                 f"< {SURVEY_TARGET_S:g} s", f"{survey / SURVEY_TARGET_S:.2f}"))
     w0 = max(len(r[0]) for r in rows + [("figure",)])
     w1 = max(len(r[1]) for r in rows + [("", "value")])
     w2 = max(len(r[2]) for r in rows + [("", "", "target")])

@@ -10,14 +10,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from jointbench.identification.band_checks import MIN_CUTOFF_OVER_F1
-from jointbench.identification.design import design_bandpass
-from jointbench.identification.filtering import FilterSettings
-from jointbench.identification.first_mode import FirstMode, given_first_mode, measure_first_mode
-from jointbench.identification.log import Log
+# The filter modules import scipy (0.6 s); a virtual experiment (bench.sim) imports only the
+# constants below and must not pay for them (README "Speed"; the literal rate lives here
+# alone, so no lighter module can hold it): the functions import them where they are used.
+if TYPE_CHECKING:
+    from jointbench.identification.filtering import FilterSettings
+    from jointbench.identification.first_mode import FirstMode
+    from jointbench.identification.log import Log
 
 PAPER_RATE = 350.87    # Hz, the prototype's acquisition rate (section 4)
 PAPER_WN = 176.0       # rad/s, the Butterworth frequency used in section 4
@@ -35,6 +38,8 @@ def default_settings(rate_hz: float, f1_hz: float | None = None, m: int = 4) -> 
     the decimated cutoff 0.8 Fs / (2 Nd) at 5.4 / 3.9 f1, the paper's ratio (so that the band
     holds the mode). The paper's Nd = 26 at 350.87 Hz would cut at 5.4 Hz, below a 15-19 Hz
     mode of the six-axis arm. Raises ValueError without f1 at another rate."""
+    from jointbench.identification.filtering import FilterSettings
+
     ts = 1.0 / rate_hz
     paper_rate = abs(rate_hz / PAPER_RATE - 1.0) < 0.01
     if paper_rate and (f1_hz is None or abs(f1_hz / PAPER_F1 - 1.0) <= 0.2):
@@ -72,6 +77,8 @@ def stencil_for(s: FilterSettings, nd: int = 4) -> tuple[int, str]:
 def wn_from_f1(rate_hz: float, f1_hz: float, m: int = 4) -> float:
     """Butterworth frequency [rad/s] from the first mode: eq. (28) with nd = 2, wc = 6 w1,
     Ac = sqrt(2)/2, rc = 1, capped at 0.8 of the Nyquist frequency."""
+    from jointbench.identification.design import design_bandpass
+
     return min(design_bandpass(f1_hz, nd=2, m=m).wn_rad_s, 0.8 * np.pi * rate_hz)
 
 
@@ -80,6 +87,8 @@ def nd_from_f1(rate_hz: float, f1_hz: float) -> int:
     paper's ratio of cutoff to first mode (section 4: 0.8 x 350.87 / (2 x 5.4) = 25.99 gives
     its Nd = 26), so that the band holds the mode; rounded down instead when rounding would
     put the cutoff under MIN_CUTOFF_OVER_F1 f1 (few decimation steps: 2.4 -> 2 at 1.66 f1)."""
+    from jointbench.identification.band_checks import MIN_CUTOFF_OVER_F1
+
     x = 0.8 * rate_hz / (2 * f1_hz * 5.4 / 3.9)
     nd = max(1, int(round(x)))
     if 0.8 * rate_hz / (2 * nd) < MIN_CUTOFF_OVER_F1 * f1_hz:
@@ -95,6 +104,8 @@ def design_rate_hz(f1_hz: float, m: int = 4, margin: float = RATE_MARGIN) -> flo
     (w1 Ts)^2 / 3 = 0.47 %, which biases K by about -0.2 % and Jm by +0.2 % (measured on the
     arm without friction, joint-motor model). Twice the rate quarters it (0.12 %, K and Jm
     within 0.05 %). For the arm's 14.7-19.5 Hz modes: 1.5-2.1 kHz."""
+    from jointbench.identification.design import design_bandpass
+
     if not margin >= 1.0:
         raise ValueError(f"margin must be >= 1 (a rate below eq. (29)'s), got {margin!r}")
     return margin * design_bandpass(f1_hz, nd=2, m=m).fs_hz
@@ -110,6 +121,8 @@ def generic_settings(rate_hz: float, m: int = 4) -> FilterSettings:
     the EMPS reference identification (1 kHz, 100 Hz, Nd = 10; Janot, Gautier, Brunot 2019)
     and they keep the rigid-body band (tens of Hz at 1 kHz) while rejecting the noise the
     double differentiation amplifies."""
+    from jointbench.identification.filtering import FilterSettings
+
     return FilterSettings(wn=2 * np.pi * GENERIC_WN_RATIO * rate_hz, m=m, Nd=GENERIC_ND,
                           ts=1.0 / rate_hz)
 
@@ -131,6 +144,8 @@ def choose_filter(log: Log, f1_hz: float | None = None) -> FilterChoice:
     from the first mode measured on the log (`measure_first_mode`), at every rate, 350.87 Hz
     included (the paper's filter stays for a measured f1 within 20 % of 3.9 Hz at that rate).
     When no resonance is found: `generic_settings` and a warning saying so."""
+    from jointbench.identification.first_mode import given_first_mode, measure_first_mode
+
     rate = log.sample_rate_hz
     mode = given_first_mode(f1_hz) if f1_hz is not None else measure_first_mode(log)
     if mode.found:

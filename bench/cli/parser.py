@@ -32,6 +32,8 @@ COMMANDS: dict[str, Command] = {
     "campaign": Command("campaign", "N virtual experiments identified, a table row per run, "
                                     "bias, spread and sigma coverage (local cores or a Dask "
                                     "cluster)"),
+    "survey": Command("survey", "every axis of a robot in turn: chirp experiment, identification "
+                                "with the defaults, one table against the truth, a figure"),
     "tune-filter": Command("tune_filter", "search wn and Nd minimising the error against truth "
                                           "over a campaign, beside the eq. (28)-(29) values"),
 }
