@@ -3,7 +3,7 @@ explains (the instrumental variables of IDIM-IV; Janot, Gautier, Jubien, Dumas 2
 
 In closed loop the current loop's torque noise moves the positions: Jm qm'' answers a noise
 the logged torque does not hold, so the columns of W are correlated with the equation error
-and least squares is biased (at 350.87 Hz on the six-axis arm: K -0.5 to -1.3 %, Jm +0.3 to
+and least squares is biased (at the paper rate on the six-axis arm: K -0.5 to -1.3 %, Jm +0.3 to
 +1.2 %, 3-5 times the corrected sigma). The reference q_ref is exogenous: the signals predicted
 from it through the measured closed-loop responses, S(q_ref, x) / S(q_ref, q_ref) (Welch),
 carry no noise, and the same regressor built from them is a valid instrument Z.

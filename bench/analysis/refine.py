@@ -236,7 +236,7 @@ def widen_on_disagreement(theta: dict[str, float], start: dict[str, float],
     differ by more than 3 of their combined corrected sigma, each estimator sees a model error
     (the nominal axis' friction, the replay's discretisation, the regressor's) that neither
     sigma holds. Such a sigma is widened to include the difference, sqrt(sigma^2 + d^2), and a
-    note says so (arm6 axis3 at 350.87 Hz: Jm refined -0.74 % at -10 white sigma, LS +0.38 %;
+    note says so (arm6 axis3 at the paper rate: Jm refined -0.74 % at -10 white sigma, LS +0.38 %;
     widened, the truth lies within 1 sigma)."""
     sigma, sigma_c, notes = dict(sigma), dict(sigma_c), []
     for n in sigma:

@@ -50,7 +50,7 @@ class RunSettings:
     effect: str | None = None
     id_models: tuple[str, ...] = ("joint-motor", "motor-only")
     debias: int = 0   # bias-correction replicas per two-mass identification (0: none)
-    rate: float | None = None   # acquisition and control rate [Hz] (None: the bench's 350.87)
+    rate: float | None = None   # acquisition and control rate [Hz] (None: the bench default, PAPER_RATE)
 
     def __post_init__(self):
         if not self.id_models:
