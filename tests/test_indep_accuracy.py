@@ -16,9 +16,8 @@ from indep_sim import FAMILIES, simulate
 from jointbench.identification.identify import identify
 
 # measured 2026-12-01 (seed 1): what misses the issue's bounds, and by how much
-F1_OVER = {"heavy_link": "f1 +11.3 % (6.68 against 6.00 Hz: the friction's phase lead at "
-                         "JL/Jm = 10 moves the crossing)",
-           "stiff_small": "f1 +2.8 %", "soft": "f1 +2.5 %"}
+F1_OVER: dict[str, str] = {}   # the frequency response alone: heavy_link +11.3 %, soft +2.5 %,
+# stiff_small +2.8 %; the identified model's f1 (reported) holds all within 1.5 %
 JOINT_MOTOR_OVER = {"heavy_link": "Jm +1.65 %", "stiff_small": "K -0.79, Jm +3.83 %",
                     "soft": "Jm +1.33 %"}
 MOTOR_ONLY_OVER = {"heavy_link": "K -15.9, JL -45.8 %", "stiff_small": "Jm +7.5 %",
@@ -38,10 +37,13 @@ def _xfail(request, table, name):
 
 @pytest.mark.parametrize("name", list(FAMILIES))
 def test_first_mode_within_2_percent(logs, name, request):
+    """The reported f1: the identified two-mass model's (measured: -1.50 to -0.04 %), with
+    the frequency response's estimate, which designed the band, in its note."""
     _xfail(request, F1_OVER, name)
     log = logs[name]
     mode = identify(log, "joint-motor").first_mode
-    assert mode.found
+    assert mode.found and mode.method.startswith("identified two-mass model")
+    assert "the frequency response gave" in mode.note
     assert abs(mode.f1_hz / log.truth()["f1_hz"] - 1) < 0.02, mode.f1_hz
 
 
