@@ -132,6 +132,7 @@ def run(args: argparse.Namespace) -> int:
     from jointbench.identification.parameters import units
     from jointbench.identification.output import finite_json
     from jointbench.identification.saturation import clipping_warnings
+    from jointbench.identification.sanity import sanity_warnings
     from jointbench.identification.physical import InversionError
     from jointbench.identification.validate import validate_on
 
@@ -161,6 +162,9 @@ def run(args: argparse.Namespace) -> int:
         result = identify(log, args.model, settings, f1_hz=args.f1, first_mode=mode)
     except InversionError as err:
         raise InversionError(f"{args.file}: {err}") from None
+    for text in sanity_warnings(result, log):   # mislabelled, too short, explains too little
+        print(f"jointbench identify: warning: {text}", file=sys.stderr)
+        warnings.append(text)
     truth = log.truth() or None
     flags = estimate_flags(result.physical, result.physical_sigma, log.prismatic)
     refined = None if not args.refine else refine(
