@@ -25,7 +25,6 @@ from jointbench.identification.defaults import choose_filter
 from jointbench.identification.discrepancy import Candidate, Nominal, diagnose_inverse
 from jointbench.identification.effects import EFFECTS
 from jointbench.identification.filtering import FilterSettings
-from jointbench.identification.first_mode import measure_first_mode
 from jointbench.identification.log import Log, unit_warnings
 from jointbench.identification.saturation import clipping_warnings
 
@@ -85,8 +84,7 @@ def diagnose(log: Log, out_dir: Path | None = None, forward: bool = True,
     d = Diagnosis(log=log, settings=settings, settings_note=how, inverse=inv,
                   nominal_parameters=nom_p, extended_parameters={},
                   warnings=tuple(unit_warnings(log) + clipping_warnings(log)))
-    mode = measure_first_mode(log) if "K" in nom_p else None
-    d = replace(d, overruled=nominal_reason(d, mode))
+    d = replace(d, overruled=nominal_reason(d))
     d = replace(d, extended_parameters=extended_parameters(d.named, inv.nominal))
     if forward:
         d = add_forward_view(d, say)
