@@ -4,7 +4,8 @@ answer is then "inconclusive", with the reason.
 - **A nominal that cannot be this axis.** Jm, K, JL (or the rigid J) not positive: the fit
   describes no physical axis, so no effect measured against it means anything
   (identification.sanity.mislabel_reason names the likely mislabelling: q and q_m swapped, the
-  torque's sign). (A check of the nominal's first mode sqrt(K (1/Jm + 1/JL)) / 2 pi against
+  torque's sign). Positions that look like degrees (identification.log.unit_warnings):
+  every parameter but the Coulomb frictions is then 180 / pi times off. (A check of the nominal's first mode sqrt(K (1/Jm + 1/JL)) / 2 pi against
   the one measured on the log was tried and left out: with heavy spring damping the
   measurement finds 23.9 Hz where the axis has 3.75 Hz, and a right nominal was overruled.)
 - **An extended model that is worse.** The named effect must improve both views: the
@@ -18,6 +19,8 @@ from __future__ import annotations
 from jointbench.bench.analysis.diagnose.types import Diagnosis
 from jointbench.identification.sanity import mislabel_reason
 
+DEGREES = "look like degrees"   # identification.log.unit_warnings' words for that warning
+
 
 def nominal_reason(d: Diagnosis) -> str:
     """Why the nominal model is not a physical model of this axis ("" when it is)."""
@@ -26,6 +29,9 @@ def nominal_reason(d: Diagnosis) -> str:
     bad = [k for k in ("Jm", "K", "JL", "J") if k in p and not p[k] > 0]
     if not why and bad:
         why = ", ".join(f"{k} = {p[k]:.4g}" for k in bad) + " must be positive"
+    if not why and any(DEGREES in w for w in d.warnings):
+        why = ("the positions look like degrees (warning): every parameter but the Coulomb "
+               "frictions scales with the angle unit, 57 times off in degrees")
     if not why:
         return ""
     return f"the nominal model is not a physical model of this axis: {why}; no effect is named"
