@@ -162,9 +162,6 @@ def run(args: argparse.Namespace) -> int:
         result = identify(log, args.model, settings, f1_hz=args.f1, first_mode=mode)
     except InversionError as err:
         raise InversionError(f"{args.file}: {err}") from None
-    for text in sanity_warnings(result, log):   # mislabelled, too short, explains too little
-        print(f"jointbench identify: warning: {text}", file=sys.stderr)
-        warnings.append(text)
     truth = log.truth() or None
     flags = estimate_flags(result.physical, result.physical_sigma, log.prismatic)
     refined = None if not args.refine else refine(
@@ -175,6 +172,9 @@ def run(args: argparse.Namespace) -> int:
         friction_timeconst=args.friction_timeconst or SOLREF_FRICTION[0])
     validation = None if other is None else validate_on(result, other, args.f1)
     forward = None if other is None else forward_validation(result, log, other)
+    for text in sanity_warnings(result, log):   # mislabelled, too short, explains too little
+        print(f"jointbench identify: warning: {text}", file=sys.stderr)
+        warnings.append(text)
     if args.json:
         answer = identify_json(result, truth, flags, warnings, refined, debiased)
         if validation is not None:
