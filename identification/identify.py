@@ -47,6 +47,9 @@ class Identification:
     warnings: tuple[str, ...] = ()        # honest checks of the band against the mode
     stencil_reason: str = ""              # why this central difference
     paper_axis: bool = False              # the paper's prototype (log metadata): paper columns
+    # auto's fallback to rigid: why the flexible model was rejected, and its estimate if any
+    # (identification.sanity reads both: a mislabelled log, data too short)
+    rejected: tuple[str, dict[str, float]] | None = None
 
     @property
     def relative_error_pct(self) -> float:
@@ -194,14 +197,15 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
             result = _identify(log, flexible, settings, [], f1_hz)
         except (InversionError, NotIdentifiable) as err:
             notes.append(f"auto: {flexible} model rejected ({err}); rigid model used")
-            model = "rigid"
+            rejected = (str(err), {})
         else:
             why = stiffness_rejection(result)
             if why is None:
                 return replace(result, notes=tuple(notes) + result.notes)
             notes.append(f"auto: the data does not identify a stiffness in the band "
                          f"({flexible} model: {why}); rigid model used")
-            model = "rigid"
+            rejected = (why, dict(result.physical))
+        return replace(_identify(log, "rigid", settings, notes, f1_hz), rejected=rejected)
     if model != "rigid" and not (settings.zoh and settings.filter_torque):
         notes.append("the no-ZOH / unfiltered-torque options apply to the rigid model only")
     nd = 4 if model.startswith("motor-only") else 2

@@ -71,13 +71,13 @@ def run(args: argparse.Namespace) -> int:
     --out the report files."""
     from jointbench.bench.analysis.diagnose import cross_validate, diagnose, summary_text
     from jointbench.bench.analysis.diagnose.report import write
+    from jointbench.bench.analysis.diagnose.run import diagnosis_settings
     from jointbench.identification.log import LogError, read_log
     from jointbench.identification.output import finite_json
     from jointbench.identification.saturation import clipping_warnings
 
     log = read_log(args.file)
-    for text in clipping_warnings(log, excluded=False):  # LogError over a third
-        print(f"jointbench diagnose: warning: {text}", file=sys.stderr)
+    clipping_warnings(log)   # LogError over a third, before any computation
     say = _progress(args)
     out = _output_folder(args)
     other = read_log(args.validate) if args.validate else None
@@ -93,10 +93,12 @@ def run(args: argparse.Namespace) -> int:
                            column=args.disturbance_column)
         dist = args.disturbance_gain * other.extra[args.disturbance_column]
     d = diagnose(log, forward=not args.no_forward, progress=say)
+    for text in d.warnings:   # units, clipped torque (left out of the fits)
+        print(f"jointbench diagnose: warning: {text}", file=sys.stderr)
     xval = None
     if other is not None:
-        say(f"cross-validation on {args.validate}")
-        xval = cross_validate(d, other, dist, args.disturbance_at)
+        say(f"cross-validation on {args.validate} (its own band)")
+        xval = cross_validate(d, other, dist, args.disturbance_at, diagnosis_settings(other)[0])
     if out is not None:
         extra = {} if xval is None else {"cross_validation.json": json.dumps(
             finite_json({"file": str(args.validate), **xval}), indent=2, allow_nan=False) + "\n"}

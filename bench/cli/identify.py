@@ -132,6 +132,7 @@ def run(args: argparse.Namespace) -> int:
     from jointbench.identification.parameters import units
     from jointbench.identification.output import finite_json
     from jointbench.identification.saturation import clipping_warnings
+    from jointbench.identification.sanity import sanity_warnings
     from jointbench.identification.physical import InversionError
     from jointbench.identification.validate import validate_on
 
@@ -171,6 +172,9 @@ def run(args: argparse.Namespace) -> int:
         friction_timeconst=args.friction_timeconst or SOLREF_FRICTION[0])
     validation = None if other is None else validate_on(result, other, args.f1)
     forward = None if other is None else forward_validation(result, log, other)
+    for text in sanity_warnings(result, log):   # mislabelled, too short, explains too little
+        print(f"jointbench identify: warning: {text}", file=sys.stderr)
+        warnings.append(text)
     if args.json:
         answer = identify_json(result, truth, flags, warnings, refined, debiased)
         if validation is not None:

@@ -51,6 +51,21 @@ class Candidate:
                 and self.p_value < 1e-3 and self.size_pct >= SIZE_MIN_PCT[self.block])
 
     @property
+    def why_not(self) -> str:
+        """Why it is not significant ("" when it is): the first bar it fails."""
+        if not self.testable:
+            return self.reason
+        for fails, text in (
+                (bool(self.unphysical), f"unphysical fit ({self.unphysical})"),
+                (not self.delta_bic > BIC_MIN, f"delta BIC {self.delta_bic:.3g} <= {BIC_MIN:g}"),
+                (not self.p_value < 1e-3, f"F-test p = {self.p_value:.2g} >= 1e-3"),
+                (self.size_pct < SIZE_MIN_PCT[self.block],
+                 f"size {self.size_pct:.3g} % under {SIZE_MIN_PCT[self.block]:g} %")):
+            if fails:
+                return text
+        return ""
+
+    @property
     def gain(self) -> float:
         return self.before_pct / self.after_pct if self.after_pct > 0 else float("inf")
 

@@ -31,6 +31,18 @@ class InverseDiagnosis:
     def named_cause(self) -> str:
         return self.named.effect if self.named else NONE
 
+    @property
+    def why_none(self) -> str:
+        """Why no effect is named ("" when one is): the best testable candidate's failed bar."""
+        if self.named is not None:
+            return ""
+        tested = [c for c in self.candidates if c.testable]
+        if not tested:
+            return "no effect is testable on this log"
+        best = max(tested, key=lambda c: c.explained_pct)
+        return (f"no effect is significant: the one that explains the most, {best.effect} "
+                f"({best.explained_pct:.3g} % of the nominal residual), fails: {best.why_not}")
+
 
 def diagnose_inverse(log: Log, settings: FilterSettings,
                      effects: tuple[str, ...] | None = None) -> InverseDiagnosis:

@@ -10,6 +10,7 @@ from scipy import signal
 
 from jointbench.identification.filtering import FilterSettings, derivatives, lowpass, zoh_align
 from jointbench.identification.log import Log, LogError
+from jointbench.identification.saturation import check_clipping, reach
 
 
 @dataclass(frozen=True)
@@ -29,7 +30,8 @@ class Signals:
     qs: float                # rest position assumed by the nominal gravity term
     settings: FilterSettings
     sl: slice                # raw samples that every derivative defines
-    index: np.ndarray        # raw index of each decimated row
+    index: np.ndarray        # raw index of each decimated row (kept rows only)
+    keep: np.ndarray | None = None   # decimated rows kept (None: all): clipped torque out
 
     @property
     def has_link(self) -> bool:
@@ -45,7 +47,8 @@ class Signals:
         x = np.asarray(x, dtype=float)[self.sl]
         xd = signal.decimate(x, s.Nd, zero_phase=True) if s.Nd > 1 else x
         e = s.edge
-        return xd[e:len(xd) - e]
+        xd = xd[e:len(xd) - e]
+        return xd if self.keep is None else xd[self.keep]
 
 
 def signals(log: Log, settings: FilterSettings) -> Signals:
@@ -67,9 +70,21 @@ def signals(log: Log, settings: FilterSettings) -> Signals:
     head = max(1, min(n // 100, 20))
     qs = float(np.mean((log.q if log.q is not None else log.q_m)[:head]))
     tau_f = lowpass(zoh_align(log.tau_m), s.wn, s.ts, s.m)
+    keep = _unclipped(log, s, index)
     return Signals(ts=s.ts, g=log.gravity, qm=qm, qmd=qmd, qmdd=qmdd, tau=tau_f,
                    tau_raw=np.asarray(log.tau_m, float), q=q, qd=qd, qdd=qdd, qs=qs,
-                   settings=s, sl=sl, index=index)
+                   settings=s, sl=sl, index=index if keep is None else index[keep], keep=keep)
+
+
+def _unclipped(log: Log, s: FilterSettings, index: np.ndarray) -> np.ndarray | None:
+    """The decimated rows out of reach of a clipped torque sample (identification.saturation,
+    as identify's exclude_clipped does), or None when no sample is clipped."""
+    clip = check_clipping(log)
+    if not clip.count:
+        return None
+    h = reach(s.wn, s.ts, s.Nd)
+    spoiled = np.convolve(clip.mask.astype(float), np.ones(2 * h + 1), mode="same") > 0.5
+    return ~spoiled[index]
 
 
 def stack(sig: Signals, motor: np.ndarray | None, link: np.ndarray | None) -> np.ndarray:

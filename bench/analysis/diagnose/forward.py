@@ -27,6 +27,7 @@ from jointbench.bench.effects.base import positive_part as _pos
 from jointbench.bench.sim import nominal as nominal_axes
 from jointbench.bench.sim.replay import ReplayError, replay
 from jointbench.identification.discrepancy import nominal as nominal_rows, predict, with_parameters
+from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.log import Log
 
 
@@ -96,13 +97,16 @@ def add_forward_view(d: Diagnosis, say: Callable[[str], None]) -> Diagnosis:
     try:
         say("forward view: nominal replay")
         fn = _view(d, build_spec(d, extended=False))
-        fe = None
-        if d.named is not None:
-            say(f"forward view: extended replay ({d.named_cause})")
-            fe = _view(d, build_spec(d, extended=True))
     except (ReplayError, ValueError) as err:
         return dataclasses.replace(d, forward_note=f"not replayed: {err}")
-    return dataclasses.replace(d, forward_nominal=fn, forward_extended=fe)
+    fe, note = None, ""
+    if d.named is not None:
+        say(f"forward view: extended replay ({d.named_cause})")
+        try:
+            fe = _view(d, build_spec(d, extended=True))
+        except (ReplayError, ValueError) as err:
+            note = f"extended model not replayed: {err}"
+    return dataclasses.replace(d, forward_nominal=fn, forward_extended=fe, forward_note=note)
 
 
 def write_models(d: Diagnosis, out: Path) -> list[Path]:
@@ -120,13 +124,14 @@ def write_models(d: Diagnosis, out: Path) -> list[Path]:
 
 
 def cross_validate(d: Diagnosis, other: Log, disturbance: np.ndarray | None = None,
-                   disturbance_at: str = "link") -> dict:
+                   disturbance_at: str = "link", settings: FilterSettings | None = None) -> dict:
     """Both models of diagnosis `d` (identified and extended on d.log) evaluated, unchanged, on
     another log: the inverse view (relative error of the motor equation, section 4's metric)
     and the forward view (closed-loop replay with `disturbance` applied to the link or
     carriage, or at the motor input: EMPS's pulses are volts at the drive input, already in
-    the logged force, so they go in as gtau x pulses at the motor)."""
-    rows = with_parameters(nominal_rows(other, d.settings), d.inverse.nominal.X)
+    the logged force, so they go in as gtau x pulses at the motor). `settings`: the other
+    log's own band (diagnosis_settings(other); d's band when None)."""
+    rows = with_parameters(nominal_rows(other, settings or d.settings), d.inverse.nominal.X)
     out: dict = {"inverse": {}, "forward": {}}
     models = {"nominal": None, "extended": d.named}
     for label, c in models.items():

@@ -65,7 +65,10 @@ def report_markdown(d: Diagnosis, figures: dict[str, str]) -> str:
                      f"{c.explained_pct:.1f} | {c.delta_bic:.1f} | {c.size_pct:.2f} | {pars} |")
         else:
             L.append(f"| {c.effect} | not testable | | | | {c.reason} |")
-    L += ["", f"**Named cause: {d.named_cause}**", ""]
+    L += ["", f"**Named cause: {d.named_cause}** (verdict: {d.verdict})", ""]
+    if d.reason:
+        L += [f"Why: {d.reason}.", ""]
+    L += [f"Warning: {w}" for w in d.warnings] + ([""] if d.warnings else [])
     c = d.named
     if c is not None:
         info = EFFECTS[c.effect]
@@ -88,6 +91,8 @@ def report_markdown(d: Diagnosis, figures: dict[str, str]) -> str:
             if a.q_rms is not None and b.q_rms is not None:
                 L.append(f"| forward | link position error, RMS | {a.q_rms:.4g} | "
                          f"{b.q_rms:.4g} | {a.q_rms / b.q_rms:.2f}x |")
+    elif d.overruled:
+        L += ["The answer is inconclusive: no extended model is written."]
     else:
         L += ["No effect is significant: the nominal model explains this log. No extended "
               "model is written."]
@@ -161,7 +166,9 @@ def summary_text(d: Diagnosis) -> str:
             pars += " (unphysical)"
         L.append(f"{c.effect:20s} {'yes' if c.significant else 'no':>7s} {c.explained_pct:11.1f} "
                  f"{c.delta_bic:10.1f} {c.size_pct:7.2f}  {pars}")
-    L += ["", f"named cause: {d.named_cause}"]
+    L += ["", f"named cause: {d.named_cause}" + (" (inconclusive)" if d.overruled else "")]
+    if d.reason:
+        L.append(f"why: {d.reason}")
     if d.named is not None:
         info = EFFECTS[d.named_cause]
         before, after = d.inverse_before_after

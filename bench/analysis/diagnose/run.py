@@ -20,11 +20,13 @@ from typing import Callable
 from jointbench.bench.analysis.diagnose.forward import add_forward_view
 from jointbench.bench.analysis.diagnose.report import write
 from jointbench.bench.analysis.diagnose.types import Diagnosis
+from jointbench.bench.analysis.diagnose.verdict import gain_reason, nominal_reason
 from jointbench.identification.defaults import choose_filter
 from jointbench.identification.discrepancy import Candidate, Nominal, diagnose_inverse
 from jointbench.identification.effects import EFFECTS
 from jointbench.identification.filtering import FilterSettings
-from jointbench.identification.log import Log
+from jointbench.identification.log import Log, unit_warnings
+from jointbench.identification.saturation import clipping_warnings
 
 
 def diagnosis_settings(log: Log) -> tuple[FilterSettings, str]:
@@ -71,17 +73,25 @@ def extended_parameters(c: Candidate | None, nom: Nominal) -> dict[str, float]:
 
 def diagnose(log: Log, out_dir: Path | None = None, forward: bool = True,
              progress: Callable[[str], None] | None = None) -> Diagnosis:
-    """The whole analysis of one log. Writes nothing unless `out_dir` is given."""
+    """The whole analysis of one log. Writes nothing unless `out_dir` is given. The best
+    candidate is not named ("inconclusive", bench.analysis.diagnose.verdict) when the nominal
+    is not a physical model of the axis or the extended model is worse."""
     say = progress or (lambda msg: None)
     settings, how = diagnosis_settings(log)
     say(f"nominal model and {len(EFFECTS)} effects, inverse view ({how})")
     inv = diagnose_inverse(log, settings)
     nom_p = nominal_parameters(inv.nominal)
-    ext_p = extended_parameters(inv.named, inv.nominal)
     d = Diagnosis(log=log, settings=settings, settings_note=how, inverse=inv,
-                  nominal_parameters=nom_p, extended_parameters=ext_p)
+                  nominal_parameters=nom_p, extended_parameters={},
+                  warnings=tuple(unit_warnings(log) + clipping_warnings(log)))
+    d = replace(d, overruled=nominal_reason(d))
+    d = replace(d, extended_parameters=extended_parameters(d.named, inv.nominal))
     if forward:
         d = add_forward_view(d, say)
+    if not d.overruled:
+        d = replace(d, overruled=gain_reason(d))
+    if d.overruled:   # nothing named: no extended model
+        d = replace(d, extended_parameters={})
     if out_dir is not None:
         d = write(d, Path(out_dir), say)
     return d

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from jointbench.identification.discrepancy import Candidate, InverseDiagnosis
+from jointbench.identification.effects import NONE
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.log import Log
 from jointbench.identification.output import finite_json
@@ -45,14 +46,28 @@ class Diagnosis:
     forward_extended: ForwardView | None = None
     forward_note: str = ""
     files: tuple[str, ...] = ()
+    # why the inverse view's best candidate is NOT named (bench.analysis.diagnose.verdict):
+    # an unphysical nominal, or an extended model that is worse; "" when nothing overrules
+    overruled: str = ""
+    warnings: tuple[str, ...] = ()   # units, clipped torque (stderr and JSON "warnings")
 
     @property
     def named(self) -> Candidate | None:
-        return self.inverse.named
+        return None if self.overruled else self.inverse.named
 
     @property
     def named_cause(self) -> str:
-        return self.inverse.named_cause
+        return self.named.effect if self.named is not None else NONE
+
+    @property
+    def verdict(self) -> str:
+        """'named', 'none' or 'inconclusive' (the best candidate overruled)."""
+        return "inconclusive" if self.overruled else ("named" if self.named else "none")
+
+    @property
+    def reason(self) -> str:
+        """Why the answer is none or inconclusive ("" when an effect is named)."""
+        return self.overruled or self.inverse.why_none
 
     @property
     def view_block(self) -> int:
@@ -70,6 +85,7 @@ class Diagnosis:
         before, after = self.inverse_before_after
         out = {
             "named_cause": self.named_cause,
+            "verdict": self.verdict,
             "candidates": [_candidate_json(c) for c in self.inverse.candidates],
             "extended_parameters": self.extended_parameters,
             "gain": {"metric": "inverse view, " + BLOCK_NAMES[self.view_block],
@@ -86,6 +102,11 @@ class Diagnosis:
             out["forward"] = fwd
         if self.forward_note:
             out["forward_note"] = self.forward_note
+        if self.reason:
+            out["reason"] = self.reason
+        if self.overruled and self.inverse.named is not None:
+            out["rejected_cause"] = self.inverse.named.effect
+        out["warnings"] = list(self.warnings)
         untested = {c.effect: c.reason for c in self.inverse.candidates if not c.testable}
         if untested:
             out["untested"] = untested
