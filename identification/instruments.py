@@ -49,7 +49,7 @@ def predicted(x: np.ndarray, ref: np.ndarray, rate_hz: float, nperseg: int) -> n
 
 
 def instrument_log(log: Log, f1_hz: float | None = None) -> Log | None:
-    """The log with q_m, q and tau_m replaced by their predictions from q_ref (`predicted`),
+    """The log with q_m and q replaced by their predictions from q_ref (`predicted`),
     or None when the log has no q_ref, the reference does not move, or the log is too short
     for the response's resolution (`segment_length`)."""
     if log.q_ref is None or not np.ptp(log.q_ref) > 0:
@@ -62,4 +62,5 @@ def instrument_log(log: Log, f1_hz: float | None = None) -> Log | None:
     def pred(x: np.ndarray | None) -> np.ndarray | None:
         return None if x is None else predicted(x, log.q_ref, rate, nper)
 
-    return replace(log, q_m=pred(log.q_m), q=pred(log.q), tau_m=pred(log.tau_m))
+    # the joint-motor regressor's columns hold positions only: the torque is y, kept
+    return replace(log, q_m=pred(log.q_m), q=pred(log.q))
