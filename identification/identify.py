@@ -174,9 +174,8 @@ def model_first_mode(result: Identification, measured: FirstMode) -> tuple[First
         sc = result.physical_sigma_corrected or result.physical_sigma
         var = sum((grad[n] * sc.get(n, math.nan)) ** 2 for n in grad)
     sigma = math.sqrt(var) if var >= 0 else math.nan
-    note = (f"from the identified K, Jm, JL; the frequency response gave "
-            f"{measured.f1_hz:.4g} +- {measured.sigma_hz:.2g} Hz ({measured.method}: "
-            f"{measured.note}), which designed the band")
+    note = (f"the frequency response gave {measured.f1_hz:.4g} +- {measured.sigma_hz:.2g} Hz "
+            f"({measured.method}), which designed the band; {measured.note}")
     mode = FirstMode(f1, sigma, "identified two-mass model, sqrt(K (1/Jm + 1/JL)) / 2 pi", True,
                      note)
     gap = abs(measured.f1_hz / f1 - 1)

@@ -80,6 +80,8 @@ def design_lines(result: Identification) -> list[str]:
     if mode.found:
         sd = f" +- {mode.sigma_hz:.2g}" if math.isfinite(mode.sigma_hz) else ""
         head = f"first mode f1 = {mode.f1_hz:.4g}{sd} Hz ({mode.method})"
+        if mode.method.startswith("identified"):   # the band's own estimate, first in the note
+            head += f"; {mode.note.split('; ')[0]}"
         ratio = f" = {s.decimated_cutoff_hz / mode.f1_hz:.2f} f1"
     else:
         head, ratio = f"first mode: not found ({mode.note})", ""

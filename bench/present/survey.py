@@ -46,7 +46,7 @@ def _mode_text(j: JointSurvey) -> str:
     m = j.first_mode
     if m is None or not m.found:
         return f"no first mode found ({m.note if m else 'not measured'})"
-    return f"f1 measured {m.f1_hz:.4g} +- {m.sigma_hz:.2g} Hz (truth {j.f1_truth_hz:.4g} Hz)"
+    return f"f1 {m.f1_hz:.4g} +- {m.sigma_hz:.2g} Hz (truth {j.f1_truth_hz:.4g} Hz; {m.method})"
 
 
 def _axes(n: int) -> str:
