@@ -35,7 +35,7 @@ def friction_bands(model: mujoco.MjModel, motor_dof: int, link_dof: int) -> list
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
     M = np.zeros((model.nv, model.nv))
-    mujoco.mj_fullM(model, M, data.qM) if hasattr(data, "qM") else mujoco.mj_fullM(model, data, M)
+    mujoco.mj_fullM(model, data, M)
     refsafe = not model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_REFSAFE
     out = []
     for name, dof in (("motor", motor_dof), ("link", link_dof)):
