@@ -184,3 +184,19 @@ def test_campaign_debias_columns_and_summary():
     assert "replicas %" in summary_text(summary)
     with pytest.raises(CampaignError, match="--debias"):
         RunSettings(debias=1)
+
+
+def test_friction_timeconst_comes_from_the_log():
+    """A bench log carries its model's friction time constant (issue 17: the nominal axis of
+    --debias / --refine takes it from the log, not from a flag); a log without it gets the
+    default, said to be one; the flag wins."""
+    from jointbench.bench.sim.friction import META_KEY, timeconst_for_log
+    from jointbench.bench.sim.nominal import SOLREF_FRICTION
+    log = run_experiment("arm6", "axis4", seed=1, duration=6.0).log
+    assert float(log.meta[META_KEY]) == pytest.approx(0.00025)
+    assert timeconst_for_log(log.meta, SOLREF_FRICTION[0]) == (
+        pytest.approx(0.00025), f"the log's {META_KEY} (the simulated model's)")
+    tc, source = timeconst_for_log({}, SOLREF_FRICTION[0])
+    assert tc == SOLREF_FRICTION[0] and source.startswith("default")
+    assert timeconst_for_log({META_KEY: "nan"}, 0.002)[1].startswith("default")
+    assert timeconst_for_log(log.meta, 0.002, given=0.001) == (0.001, "given (--friction-timeconst)")

@@ -30,7 +30,8 @@ but with few replicas it is itself uncertain (B = 8: +-25 %).
 
 It assumes that the nominal axis behaves as the robot does at the estimate: the same model
 structure (two masses, a torsional spring, MuJoCo's Coulomb friction constraint with its
-stick band, `friction_timeconst`) and the same sensors. On the virtual bench that holds by
+stick band, `friction_timeconst`: the log's own when it is a jointbench log, else a stated
+default) and the same sensors. On the virtual bench that holds by
 construction; on a real robot the bias of the structural error the nominal axis does not
 have stays (jointbench diagnose looks for it). The log must be replayable (q_ref and the
 controller gains, docs/log-format.md and docs/controller.md) and carry its sensor noise in the metadata, or be
@@ -46,6 +47,7 @@ from typing import Callable
 
 import numpy as np
 
+from jointbench.bench.sim.friction import motor_timeconst, timeconst_for_log
 from jointbench.bench.sim.nominal import SOLREF_FRICTION
 from jointbench.bench.analysis.refine import RefineError, axis_for_log, require_replayable, start_parameters
 from jointbench.bench.sim.replay import ReplayError, replay
@@ -114,7 +116,7 @@ def _sensors(log: Log, sensors: Sensors | None) -> Sensors:
 
 def debias(log: Log, ident: Identification, *, replicas: int = DEFAULT_REPLICAS, seed: int = 0,
            substeps: int = 1, sensors: Sensors | None = None,
-           friction_timeconst: float = SOLREF_FRICTION[0],
+           friction_timeconst: float | None = None,
            progress: Callable[[int, int], None] | None = None) -> DebiasResult:
     """Bias-correct `ident`, the identification of `log`, by `replicas` closed-loop replays of
     the experiment on the nominal axis at its estimate (module docstring). `substeps`: MuJoCo
@@ -131,9 +133,10 @@ def debias(log: Log, ident: Identification, *, replicas: int = DEFAULT_REPLICAS,
     except RefineError as err:
         raise DebiasError(str(err).replace("--refine", "--debias")) from None
     sens = _sensors(log, sensors)
-    model, axis = axis_for_log(log, theta, "bias-correction axis", friction_timeconst)
-    notes = [*notes, f"nominal axis: Coulomb friction time constant {1e3 * friction_timeconst:g} "
-             "ms (solreffriction; --friction-timeconst)"]
+    tc, source = timeconst_for_log(log.meta, SOLREF_FRICTION[0], friction_timeconst)
+    model, axis = axis_for_log(log, theta, "bias-correction axis", tc)
+    notes = [*notes, f"nominal axis: Coulomb friction time constant {1e3 * tc:g} ms "
+             f"(solreffriction), {source}"]
     start = time.perf_counter()
     rows: list[dict[str, float]] = []
     failed: list[str] = []
@@ -170,8 +173,7 @@ def debias(log: Log, ident: Identification, *, replicas: int = DEFAULT_REPLICAS,
 
 
 def friction_timeconst_of(model, axis) -> float:
-    """The solreffriction time constant of an axis's rotor in a compiled MuJoCo model (the
-    bench knows it for its own MJCF; pass it to `debias` so that the nominal axis sticks as
-    the robot does)."""
-    return float(model.dof_solref[axis.motor_dof][0])
+    """The solreffriction time constant of an axis's rotor in a compiled MuJoCo model (what
+    the bench's logs carry, bench.sim.friction.META_KEY)."""
+    return motor_timeconst(model, axis.motor_dof)
 

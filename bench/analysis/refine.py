@@ -37,6 +37,7 @@ import numpy as np
 from scipy import optimize
 
 from jointbench.bench.sim.controller import Gains
+from jointbench.bench.sim.friction import timeconst_for_log
 from jointbench.bench.sim.nominal import SOLREF_FRICTION, compile_axis, two_mass_axis
 from jointbench.bench.sim.replay import ReplayError, ReplayResult, forward_errors, replay
 from jointbench.identification.identify import Identification
@@ -184,9 +185,12 @@ def _bounds(start: dict[str, float], free: tuple[str, ...],
 
 
 def axis_for_log(log: Log, theta: dict[str, float], source: str,
-                 friction_timeconst: float = SOLREF_FRICTION[0]) -> tuple[mujoco.MjModel, Axis]:
+                 friction_timeconst: float | None = None) -> tuple[mujoco.MjModel, Axis]:
     """The compiled two-mass axis with parameters `theta` (all of ALL_PARAMETERS) and the
-    log's sample period, torque limit, gravity and joint name."""
+    log's sample period, torque limit, gravity and joint name; its friction time constant
+    `friction_timeconst`, else the log's (bench.sim.friction.timeconst_for_log)."""
+    if friction_timeconst is None:
+        friction_timeconst = timeconst_for_log(log.meta, SOLREF_FRICTION[0])[0]
     spec = two_mass_axis(*(theta[n] for n in ("Jm", "FVm", "FSm", "K", "JL", "FV", "FS",
                                                "MX", "MY")),
                          timestep=log.ts, tau_max=log.meta_float("tau_max"),
@@ -388,6 +392,9 @@ def refine(log: Log, ident: Identification, *, params: tuple[str, ...] | None = 
     sigma, sigma_c, widened = widen_on_disagreement(theta, start, sigma, sigma_c,
                                                     ident.physical_sigma_corrected)
     notes += widened
+    tc, source = timeconst_for_log(log.meta, SOLREF_FRICTION[0])
+    notes.append(f"nominal axis: Coulomb friction time constant {1e3 * tc:g} ms "
+                 f"(solreffriction), {source}")
     return RefineResult(
         model=ident.model, free=free, start=start, parameters=theta, sigma=sigma,
         sigma_corrected=sigma_c, outputs=outputs, scales=scales,

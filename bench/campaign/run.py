@@ -17,7 +17,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from jointbench.bench.analysis.debias import debias, friction_timeconst_of
+from jointbench.bench.analysis.debias import debias
 from jointbench.bench.campaign.executors import SerialExecutor
 from jointbench.bench.campaign.host import call, close_hosts
 from jointbench.bench.campaign.methods import (DEFAULT_TIMEOUT_S, SCORED, BadResult, Method,
@@ -194,9 +194,7 @@ def run_task_with(methods: Sequence[Method], timeout_s: float, task: RunTask) ->
             if m in debiased_models(s):
                 tm = time.perf_counter()
                 try:
-                    d = debias(log, ident, replicas=s.debias, seed=task.seed,
-                               friction_timeconst=friction_timeconst_of(
-                                   result.experiment.model, result.experiment.axis))
+                    d = debias(log, ident, replicas=s.debias, seed=task.seed)
                 except Exception as err:  # noqa: BLE001 - recorded in the row
                     reasons.append(f"{m} bias correction: {type(err).__name__}: {err}")
                     continue

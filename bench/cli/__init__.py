@@ -29,6 +29,9 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help(sys.stderr)
         return EXIT_BAD_INPUT
     command = command_module(args.command)
+    # No command renders with MuJoCo: skip its OpenGL probe at import (glfw, about 0.05 s of
+    # every start-up). A user's own MUJOCO_GL setting wins.
+    os.environ.setdefault("MUJOCO_GL", "disable")
     # The command's library first: an interrupt inside an extension's import (numpy's, say)
     # would surface as an ImportError, not as the interruption it is.
     for name in getattr(command, "library", lambda _: command.LIBRARY)(args):

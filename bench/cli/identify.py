@@ -54,7 +54,8 @@ def add_arguments(i: argparse.ArgumentParser) -> None:
                         "metadata; bench/analysis/debias.py)")
     i.add_argument("--friction-timeconst", type=positive, default=None, metavar="S",
                    help="--debias: Coulomb friction time constant of the nominal axis in s "
-                        "(MuJoCo solreffriction; default 0.002, models/arm6.xml uses 0.00025)")
+                        "(MuJoCo solreffriction; default: the log's friction_timeconst_s, which "
+                        "jointbench logs carry, else 0.002 with a note)")
 
 
 def _check_options(args: argparse.Namespace) -> None:
@@ -119,7 +120,7 @@ def _refine_progress(msg: str) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Identify, refine, bias-correct as asked; print the text or the JSON object."""
-    from jointbench.bench.analysis.debias import SOLREF_FRICTION, DebiasError, debias
+    from jointbench.bench.analysis.debias import DebiasError, debias
     from jointbench.bench.analysis.refine import refine, require_replayable
     from jointbench.bench.present.identify import identify_json, identify_text
     from jointbench.bench.present.validate import forward_text, forward_validation
@@ -169,7 +170,7 @@ def run(args: argparse.Namespace) -> int:
         progress=None if args.json else _refine_progress)
     debiased = None if args.debias is None else debias(
         log, result, replicas=args.debias, progress=None if args.json else _debias_progress,
-        friction_timeconst=args.friction_timeconst or SOLREF_FRICTION[0])
+        friction_timeconst=args.friction_timeconst)
     validation = None if other is None else validate_on(result, other, args.f1)
     forward = None if other is None else forward_validation(result, log, other)
     for text in sanity_warnings(result, log):   # mislabelled, too short, explains too little

@@ -22,6 +22,7 @@ import numpy as np
 
 from jointbench.bench.sim.axes import ExperimentModel, build_experiment_model
 from jointbench.bench.sim.controller import Gains, gains_rule
+from jointbench.bench.sim.friction import META_KEY, motor_timeconst
 from jointbench.bench.sim.defaults import (ACCELERATION_SHARE, AMPLITUDE_REDUCTION, AMPLITUDE_RAD,
                                            MAX_REDUCTIONS)
 from jointbench.bench.sim.loop import (INSTABILITY_WARNINGS, LoopChecks, LoopTrace,
@@ -125,6 +126,7 @@ def run_experiment(model: str | Path = "prototype", joint: str | None = None, *,
         "saturated_samples": str(trace.saturated),
         "actuator_clamped_samples": str(trace.clamped),
         "amplitude_reductions": str(reductions),
+        META_KEY: format_meta_number(motor_timeconst(m, ax.motor_dof)),
     })
     if truth.gear_ratio is not None:
         meta["gear_ratio"] = format_meta_number(truth.gear_ratio)

@@ -12,6 +12,7 @@ gives v_b ~ 1e-4 rad/s.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import mujoco
@@ -74,3 +75,33 @@ def soft_friction_warnings(bands: list[FrictionBand], v_motor: np.ndarray,
                 f"\"{period / 10:.3g} 1\" on the joints and <flag refsafe=\"disable\"/> in "
                 "<option> (as models/arm6.xml)")
     return out
+
+
+META_KEY = "friction_timeconst_s"   # docs/log-format.md: the simulated axis' solreffriction
+
+
+def motor_timeconst(model: mujoco.MjModel, motor_dof: int) -> float:
+    """The solreffriction time constant of the rotor dof [s] (what a log of this model carries
+    under META_KEY, so that replicas of it stick as it does)."""
+    return float(model.dof_solref[motor_dof][0])
+
+
+def timeconst_for_log(meta: dict[str, str], default: float, given: float | None = None
+                      ) -> tuple[float, str]:
+    """The friction time constant of a nominal axis replaying a log, and where it comes from:
+    `given` (the command's flag), else the log's META_KEY (a jointbench log carries its
+    model's), else `default`, said to be one: a measured robot's friction has no MuJoCo time
+    constant, and the bias correction depends on it (README, "Bias correction")."""
+    if given is not None:
+        return given, "given (--friction-timeconst)"
+    raw = meta.get(META_KEY)
+    try:
+        value = float(raw) if raw is not None else math.nan
+    except ValueError:
+        value = math.nan
+    if math.isfinite(value) and value > 0:
+        return value, f"the log's {META_KEY} (the simulated model's)"
+    return default, (f"default: the log has no {META_KEY}; a measured axis's Coulomb friction "
+                     "has none, and the correction of Jm and the frictions depends on it "
+                     "(set --friction-timeconst)")
+
