@@ -22,6 +22,7 @@ from jointbench.identification.physical import InversionError, PhysicalResult, i
 from jointbench.identification.saturation import exclude_clipped  # clipped torque rows out
 
 MODEL_CHOICES = ("joint-motor", "motor-only", "motor-only-printed", "rigid", "auto")
+REVERSAL_PASSES = 3   # fixed-point passes of `_place_reversals` (the 3rd moves Jm by < 0.1 %)
 
 
 @dataclass(frozen=True)
@@ -214,6 +215,7 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
         reg = exclude_clipped(regressors.joint_motor(log, settings), log)
         Z = _instruments(log, reg, f1_hz, notes)
         ls = block_weighted(reg.W, reg.y, reg.names, reg.block, time=reg.index, instruments=Z)
+        reg, ls = _place_reversals(log, settings, reg, ls, Z, notes)
     elif model == "motor-only":
         # least squares: the torque's own derivatives are columns here, and instruments
         # predicted for them are weak (prototype seed 5: K -1.7 % against -0.7 %)
@@ -258,6 +260,36 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
                           settings=settings, y=reg.y, y_pred=y_pred, t=log.t[reg.index],
                           block=reg.block, notes=tuple(notes), table3=t3,
                           prismatic=log.prismatic, physical_sigma_corrected=sigma_corr)
+
+
+def reversal_rates(p: dict[str, float]) -> tuple[float, float]:
+    """(FSm / Jm, FS / JL) [rad/s^2 or m/s^2] of joint-motor parameters `p`, 0 where a
+    friction or inertia is missing or not positive: where `regressors.joint_motor` places the
+    Coulomb reversals."""
+    return tuple(p[f] / p[j] if p.get(j, 0) > 0 and p.get(f, 0) > 0 else 0.0
+                 for f, j in (("FSm", "Jm"), ("FS", "JL")))
+
+
+def _place_reversals(log: Log, settings: FilterSettings, reg: regressors.Regressor,
+                     ls: LSResult, Z: np.ndarray | None, notes: list[str]
+                     ) -> tuple[regressors.Regressor, LSResult]:
+    """Eq. (13) solved again with the sign(q') columns switching where the identified Coulomb
+    frictions put the reversals (`filtering.kink_corrected` with FSm / Jm and FS / JL of the
+    previous pass), REVERSAL_PASSES times: the filtered velocity's own zero crossings come
+    late by an amount that grows with FS / J, and Jm with them."""
+    for _ in range(REVERSAL_PASSES):
+        rates = reversal_rates({n: ls.value(n) for n in ls.names if n not in ls.unidentifiable})
+        if not any(rates):
+            return reg, ls
+        again = exclude_clipped(regressors.joint_motor(log, settings, rates), log)
+        if not np.array_equal(again.index, reg.index):   # NaN rows moved: keep the first pass
+            return reg, ls
+        reg = again
+        ls = block_weighted(reg.W, reg.y, reg.names, reg.block, time=reg.index, instruments=Z)
+    notes.append(f"Coulomb reversals placed by the identified FSm / Jm = {rates[0]:.4g} and "
+                 f"FS / JL = {rates[1]:.4g} (the filtered velocity's zero crossings come late "
+                 f"by the friction's kink; {REVERSAL_PASSES} passes)")
+    return reg, ls
 
 
 def _instruments(log: Log, reg: regressors.Regressor, f1_hz: float | None,

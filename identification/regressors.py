@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from jointbench.identification.filtering import (FilterSettings, decimate_parallel, derivatives,
-                                                 lowpass, stencil_sign, zoh_align)
+                                                 kink_corrected, lowpass, stencil_sign, zoh_align)
 from jointbench.identification.log import Log, LogError
 from jointbench.identification.parameters import JOINT_MOTOR, MOTOR_ONLY, MOTOR_ONLY_CORRECTED, RIGID
 
@@ -49,9 +49,13 @@ def _filtered(x: np.ndarray, s: FilterSettings, nd: int) -> list[np.ndarray]:
     return derivatives(lowpass(x, s.wn, s.ts, s.m), s.ts, nd, s.stencil)
 
 
-def _sign(x: np.ndarray, s: FilterSettings) -> np.ndarray:
+def _sign(x: np.ndarray, s: FilterSettings, rate: float = 0.0) -> np.ndarray:
     """sign(x) at the samples (the paper's chain), or as the 5-point stencil sees it
-    (`stencil_sign`: each reversal placed between samples, weighted as its acceleration)."""
+    (`stencil_sign`: each reversal placed between samples, weighted as its acceleration).
+    `rate` = FS / J > 0: the reversals of the velocity x moved back to where the friction's
+    kink has them (`kink_corrected`)."""
+    if rate > 0:
+        x = kink_corrected(x, rate, s)
     if s.stencil == 5:
         return stencil_sign(x, s.ts, 5)
     out = np.sign(x)
@@ -70,8 +74,11 @@ def _torque(log: Log, s: FilterSettings, filtered: bool = True) -> np.ndarray:
     return lowpass(tau, s.wn, s.ts, s.m) if filtered else tau
 
 
-def joint_motor(log: Log, s: FilterSettings) -> Regressor:
-    """Eq. (13): y = (tau_m, 0), rows of eq. (10); gravity g cos q, g sin q from the log's g."""
+def joint_motor(log: Log, s: FilterSettings,
+                friction_rates: tuple[float, float] = (0.0, 0.0)) -> Regressor:
+    """Eq. (13): y = (tau_m, 0), rows of eq. (10); gravity g cos q, g sin q from the log's g.
+    `friction_rates` = (FSm / Jm, FS / JL) of an earlier estimate place the Coulomb
+    reversals of the sign columns (`_sign`); zero keeps the filtered velocity's."""
     if log.q is None:
         raise LogError("the joint-motor model needs the link position column 'q'", log.path,
                        column="q")
@@ -82,9 +89,11 @@ def joint_motor(log: Log, s: FilterSettings) -> Regressor:
     n = len(log.t)
     zero = np.zeros(n)
     defl = qm[0] - q[0]
-    W1 = np.column_stack([qm[2], qm[1], _sign(qm[1], s), defl, zero, zero, zero, zero, zero])
+    rm, rl = friction_rates
+    W1 = np.column_stack([qm[2], qm[1], _sign(qm[1], s, rm), defl, zero, zero, zero, zero,
+                          zero])
     W2 = np.column_stack([zero, zero, zero, -defl, q[2], g * np.cos(q[0]), g * np.sin(q[0]),
-                          q[1], _sign(q[1], s)])
+                          q[1], _sign(q[1], s, rl)])
     y1, W1, i1 = decimate_parallel(tau, W1, s)
     y2, W2, i2 = decimate_parallel(zero, W2, s)
     return Regressor("joint-motor", JOINT_MOTOR, np.concatenate([y1, y2]), np.vstack([W1, W2]),

@@ -16,14 +16,17 @@ import numpy as np
 from jointbench.identification import regressors
 from jointbench.identification.defaults import settings_for
 from jointbench.identification.filtering import FilterSettings
-from jointbench.identification.identify import Identification
+from jointbench.identification.identify import Identification, reversal_rates
 from jointbench.identification.log import Log, LogError
 from jointbench.identification.output import finite_json, rms
 
-REGRESSORS = {"joint-motor": regressors.joint_motor,
-              "motor-only": lambda log, s: regressors.motor_only(log, s, corrected=True),
-              "motor-only-printed": lambda log, s: regressors.motor_only(log, s, corrected=False),
-              "rigid": regressors.rigid}
+# each model's rows on another log, given the identified physical parameters p (the
+# joint-motor model's Coulomb reversals are placed by its frictions, identify.reversal_rates)
+REGRESSORS = {
+    "joint-motor": lambda log, s, p: regressors.joint_motor(log, s, reversal_rates(p)),
+    "motor-only": lambda log, s, p: regressors.motor_only(log, s, corrected=True),
+    "motor-only-printed": lambda log, s, p: regressors.motor_only(log, s, corrected=False),
+    "rigid": lambda log, s, p: regressors.rigid(log, s)}
 
 
 @dataclass(frozen=True)
@@ -91,7 +94,7 @@ def validate_on(result: Identification, other: Log, f1_hz: float | None = None) 
     if len(other) < settings.min_samples(nd):
         raise LogError(f"{len(other)} samples are too few to validate with this filter "
                        f"(Nd = {settings.Nd})", other.path)
-    reg = REGRESSORS[result.model](other, settings)
+    reg = REGRESSORS[result.model](other, settings, result.physical)
     ls = result.ls
     keep = [i for i, n in enumerate(ls.names) if n not in ls.unidentifiable]
     y_pred = reg.W[:, keep] @ ls.X[keep]
