@@ -177,3 +177,20 @@ def test_sigma_widened_where_refined_and_least_squares_disagree():
     assert abs(14.591 - 14.7) / sc["Jm"] < 1 < abs(14.591 - 14.7) / sigma_c["Jm"]
     assert (s["K"], sc["K"]) == (54.1, 192.6)
     assert len(notes) == 1 and notes[0].startswith("Jm: refined and least squares differ")
+
+
+def test_sigma_withdrawn_when_the_refinement_stays_at_its_start():
+    """Issue 17: arm6 axis2 at 350.87 Hz (seed 1), the refinement ended at Jm 40.9568 from the
+    least squares' 40.9566 (corrected sigma 0.125), with a white sigma of 3.3e-5 that put the
+    truth 40.96 about 50 sigma away. Nothing moved by a least-squares sigma, so the sigma
+    printed is the least squares' corrected one (truth then within 0.1 of it); one parameter
+    that moves keeps the refinement's own sigma."""
+    from jointbench.bench.analysis.refine import withdraw_when_unmoved
+    start, theta = {"Jm": 40.9566, "K": 200056.0}, {"Jm": 40.9568, "K": 200057.0}
+    ls_c = {"Jm": 0.1254, "K": 431.0}
+    sigma, sigma_c = {"Jm": 3.25e-5, "K": 0.049}, {"Jm": 9e-5, "K": 0.2}
+    s, sc, notes = withdraw_when_unmoved(theta, start, sigma, sigma_c, ls_c)
+    assert s == sc == ls_c and len(notes) == 1 and "withdrawn" in notes[0]
+    assert abs(theta["Jm"] - 40.96) / s["Jm"] < 0.1 < 3 < abs(theta["Jm"] - 40.96) / sigma["Jm"]
+    moved = {**theta, "K": 200056.0 + 2 * 431.0}
+    assert withdraw_when_unmoved(moved, start, sigma, sigma_c, ls_c) == (sigma, sigma_c, [])

@@ -37,6 +37,8 @@ import numpy as np
 from scipy import optimize
 
 from jointbench.bench.sim.controller import Gains
+from jointbench.bench.analysis.refine_sigma import (  # noqa: F401 - public here too
+    widen_on_disagreement, withdraw_when_unmoved)
 from jointbench.bench.sim.friction import timeconst_for_log
 from jointbench.bench.sim.nominal import SOLREF_FRICTION, compile_axis, two_mass_axis
 from jointbench.bench.sim.replay import ReplayError, ReplayResult, forward_errors, replay
@@ -229,36 +231,6 @@ def _standard_deviations(J: np.ndarray, r: np.ndarray, scale: np.ndarray,
                    for i, name in enumerate(free)}
 
 
-DISAGREEMENT_Z = 3.0   # refined - LS over their combined sigma beyond which sigma is widened
-
-
-def widen_on_disagreement(theta: dict[str, float], start: dict[str, float],
-                          sigma: dict[str, float], sigma_c: dict[str, float],
-                          ls_sigma_c: dict[str, float]
-                          ) -> tuple[dict[str, float], dict[str, float], list[str]]:
-    """Both estimates come from one log: where the refined value and the least-squares one
-    differ by more than 3 of their combined corrected sigma, each estimator sees a model error
-    (the nominal axis' friction, the replay's discretisation, the regressor's) that neither
-    sigma holds. Such a sigma is widened to include the difference, sqrt(sigma^2 + d^2), and a
-    note says so (arm6 axis3 at the paper rate: Jm refined -0.74 % at -10 white sigma, LS +0.38 %;
-    widened, the truth lies within 1 sigma)."""
-    sigma, sigma_c, notes = dict(sigma), dict(sigma_c), []
-    for n in sigma:
-        s_ls = ls_sigma_c.get(n, math.nan)
-        s_ref = sigma_c.get(n, sigma[n])
-        d = abs(theta[n] - start[n])
-        both = math.hypot(s_ref, s_ls)
-        if not (math.isfinite(both) and both > 0 and d > DISAGREEMENT_Z * both):
-            continue
-        sigma[n] = math.hypot(sigma[n], d)
-        if n in sigma_c:
-            sigma_c[n] = math.hypot(sigma_c[n], d)
-        notes.append(f"{n}: refined and least squares differ by {d:.4g} ({d / both:.1f} of "
-                     "their combined sigma): a model error neither sigma holds; sigma widened "
-                     "to include the difference")
-    return sigma, sigma_c, notes
-
-
 def refine(log: Log, ident: Identification, *, params: tuple[str, ...] | None = None,
            outputs: tuple[str, ...] | None = None, max_nfev: int | None = None,
            substeps: int = 1, skip: int = 0, diff_step: float = DIFF_STEP,
@@ -392,6 +364,9 @@ def refine(log: Log, ident: Identification, *, params: tuple[str, ...] | None = 
     sigma, sigma_c, widened = widen_on_disagreement(theta, start, sigma, sigma_c,
                                                     ident.physical_sigma_corrected)
     notes += widened
+    sigma, sigma_c, withdrawn = withdraw_when_unmoved(theta, start, sigma, sigma_c,
+                                                      ident.physical_sigma_corrected)
+    notes += withdrawn
     tc, source = timeconst_for_log(log.meta, SOLREF_FRICTION[0])
     notes.append(f"nominal axis: Coulomb friction time constant {1e3 * tc:g} ms "
                  f"(solreffriction), {source}")
