@@ -45,9 +45,10 @@ def _cell(row: int, col: int, value: str):
 # --- 7. Messages that name the file, line, column or option ---------------------------------
 
 LOG_EDITS = [  # (edit of the log text, what the message must hold)
-    (_cell(100, 3, "1e300"), ":136: column 'tau_m': value 1e+300 is out of range"),
-    (_cell(100, 3, "1_000"), ":136: column 'tau_m': not a number: '1_000'"),
-    (_cell(100, 1, "\u0661"), ":136: column 'q_m': not a number"),
+    # {line}: the file line of data row 100 (after the metadata and the header)
+    (_cell(100, 3, "1e300"), ":{line}: column 'tau_m': value 1e+300 is out of range"),
+    (_cell(100, 3, "1_000"), ":{line}: column 'tau_m': not a number: '1_000'"),
+    (_cell(100, 1, "\u0661"), ":{line}: column 'q_m': not a number"),
     (lambda s: _meta(s, "tau_max", "3 kN m"), "metadata 'tau_max' must be a plain number"),
     (lambda s: _meta(s, "gravity", "9.81 ft/s^2"), "metadata 'gravity' must be a plain number"),
     (lambda s: _meta(s, "kp", "1_0"), "metadata 'kp' must be a number"),
@@ -60,6 +61,8 @@ def test_bad_cells_and_metadata_are_named(tmp_path, sim, edit, says, command):
     path = tmp_path / "bad.csv"
     path.write_text(edit(sim[2]))
     rc, out, err = run([command, path, "--json"])
+    header = next(i for i, ln in enumerate(sim[2].splitlines()) if not ln.startswith("#"))
+    says = says.format(line=header + 1 + 100)
     assert rc == 2 and out == "", err
     assert err.startswith(f"jointbench {command}: error: {path}") and says in err, err
 
