@@ -66,7 +66,7 @@ class Candidate:
         if not self.significant:
             return (f"held out ({FOLDS} folds), it explains {self.heldout_pct:.3g} % of the "
                     f"residual; that it explains more than {100 * MATERIAL:g} % has t = "
-                    f"{self.t_stat:.3g} (p = {self.p_heldout:.2g}); the bar is p < "
+                    f"{self.t_stat:.3g} (p = {self.p_heldout:.3g}); the bar is p < "
                     f"{self.alpha:.2g} (t > {t_bar(self.alpha):.3g})")
         return ""
 
