@@ -136,7 +136,8 @@ def test_demo_discrepancy_rows_survive_machine_level_differences(backlash_log):
         idx = rng.choice(len(x), 20, replace=False)
         x[idx] += rng.choice([-1.0, 1.0], 20) * res
     flipped = _candidates(dataclasses.replace(backlash_log, q=q, q_m=qm))
-    # Since issue 14's nominal the unphysical hardening fit sits on a flatter branch: the
-    # flips move it by 8e-4 (measured), still far from another branch (a factor of 3 away).
-    for effect, rel in (("hardening", 2e-3), ("backlash", 1e-4)):
+    # Since issue 14's nominal (FS, the chain's column q(4)) the unphysical hardening fit sits
+    # on a flatter branch: the flips move it by 4e-3 (measured), still far from another branch
+    # (the older one is a factor of 5 away in K).
+    for effect, rel in (("hardening", 1e-2), ("backlash", 1e-4)):
         assert flipped[effect] == pytest.approx(rows[effect], rel=rel), effect
