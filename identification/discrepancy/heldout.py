@@ -93,24 +93,24 @@ def scores(nom: Nominal, folds: np.ndarray, y: np.ndarray, W: np.ndarray) -> Sco
     A = A / scale
     k = int(folds.max()) + 1
     parts = [np.flatnonzero(folds == f) for f in range(k)]
-    grams = [(A[i].T @ A[i], A[i].T @ b[i]) for i in parts]
-    G, c = sum(g for g, _ in grams), sum(v for _, v in grams)
+    # per fold: its Gram matrix, A^T b and b^T b; a fit on the others subtracts them
+    grams = [(A[i].T @ A[i], A[i].T @ b[i], float(b[i] @ b[i])) for i in parts]
+    G, c, bb = (sum(g[j] for g in grams) for j in range(3))
     x = np.linalg.lstsq(G, c, rcond=None)[0]
-    full = float(np.sum(_residual(A, b, x) ** 2))
+    full = _rss(G, c, bb, x)
     train, held, errors = np.empty(k), np.empty(k), np.empty(len(b))
-    for f, (i, (Gf, cf)) in enumerate(zip(parts, grams)):
+    for f, (i, (Gf, cf, bf)) in enumerate(zip(parts, grams)):
         x_f = np.linalg.lstsq(G - Gf, c - cf, rcond=None)[0]
-        e2 = _residual(A, b, x_f) ** 2
-        errors[i] = b[i] - (A[i] * x_f).sum(axis=1)
-        held[f] = float(np.sum(e2[i]))
-        train[f] = float(np.sum(e2)) - held[f]
+        errors[i] = b[i] - (A[i] * x_f).sum(axis=1)   # elementwise: no BLAS thread wake-up
+        held[f] = float(errors[i] @ errors[i])
+        train[f] = _rss(G - Gf, c - cf, bb - bf, x_f)
     return Scores(full=full, X=x / scale, train=train, held=held, errors=errors)
 
 
-def _residual(A: np.ndarray, b: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """b - A x by elementwise products: a tall matrix-vector product would wake the BLAS
-    threads, which on a loaded machine costs more than the product (10-100 ms a call)."""
-    return b - (A * x).sum(axis=1)
+def _rss(G: np.ndarray, c: np.ndarray, bb: float, x: np.ndarray) -> float:
+    """||b - A x||^2 from the normal equations' terms: b^T b - 2 x^T A^T b + x^T A^T A x (the
+    residual is a few % of b here, so the cancellation costs about 1e-13 of it)."""
+    return float(bb - 2 * x @ c + x @ G @ x)
 
 
 def held_out(records: list[Scores], folds: np.ndarray) -> np.ndarray:
