@@ -22,7 +22,7 @@ NOMINAL_TWO_MASS_NO_FS = tuple(n for n in NOMINAL_TWO_MASS if n != "FS")
 NOMINAL_RIGID = RIGID[:3]   # J FV FS: the offset is the `offset` effect
 # The 3-point chain's own error in the link equation (eq. 22 at the sample period T): its
 # second difference reads q'' + T^2 / 12 q(4) + ..., an error of 0.4 % of the spring torque at
-# 12 Hz and 350.87 Hz. A free column q(4) carries it, so that no effect is credited with it:
+# 12 Hz at the paper's rate. A free column q(4) carries it, so that no effect is credited with it:
 # without it a dead band of a few tenths of a mrad "explains" half the residual of an exactly
 # linear axis (tests/indep_sim.py's wrist, frictionless, ideal sensors). (The same column in
 # the motor equation removed the error there too, but it took K 11 % off on a log with a

@@ -98,7 +98,7 @@ def hat(x: np.ndarray) -> np.ndarray:
     acceleration with the hat-weighted mean of the forces; for the spring torque K (qm - q),
     that mean is K d + K T^2 / 12 d'' + ..., which the (1, 10, 1) / 12 taps give. (The held
     torque's mean of zoh_align is already exact for it.) Sampled instead, the spring torque is
-    off by (w T)^2 / 12 of itself, 0.4 % at 12 Hz and 350.87 Hz.
+    off by (w T)^2 / 12 of itself, 0.4 % at 12 Hz and the paper's rate (PAPER_RATE).
     """
     x = np.asarray(x, dtype=float)
     out = x.copy()
