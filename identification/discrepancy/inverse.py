@@ -82,7 +82,7 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
     for name in effects or tuple(EFFECTS):
         if not nom.sig.has_link and name not in RIGID_TESTS:
             first.append(Candidate(effect=name, testable=False, reason=WHY_NOT_RIGID))
-        elif EFFECTS[name].parameter in nom.names:   # link_coulomb's FS, when nominal
+        elif name in EFFECTS and EFFECTS[name].parameter in nom.names:   # FS of link_coulomb
             first.append(Candidate(effect=name, testable=False, reason=WHY_IN_NOMINAL))
         else:
             names.append(name)
