@@ -128,13 +128,16 @@ def test_demo_discrepancy_rows_survive_machine_level_differences(backlash_log):
     one-count encoder flips at 40 samples (what another CPU's last bits can do to a
     quantised simulation); the README's older row (ratio 14.63, K 1306) is another branch."""
     rows = _candidates(backlash_log)
-    assert rows["hardening"] == pytest.approx(
-        {"hardening_ratio": -10.75, "deflection_rad": 0.001885, "K": -2091}, rel=5e-4)
+    assert rows["hardening"] == pytest.approx(   # since issue 14's nominal (FS, chain error)
+        {"hardening_ratio": -33.594, "deflection_rad": 0.0019438, "K": -624.11}, rel=5e-4)
     rng = np.random.default_rng(3)
     q, qm = backlash_log.q.copy(), backlash_log.q_m.copy()
     for x, res in ((q, 2 * np.pi / 2**20), (qm, 2 * np.pi / (2**17 * 100))):
         idx = rng.choice(len(x), 20, replace=False)
         x[idx] += rng.choice([-1.0, 1.0], 20) * res
     flipped = _candidates(dataclasses.replace(backlash_log, q=q, q_m=qm))
-    for effect in ("hardening", "backlash"):
-        assert flipped[effect] == pytest.approx(rows[effect], rel=1e-4), effect
+    # Since issue 14's nominal (FS, the chain's column q(4)) the unphysical hardening fit sits
+    # on a flatter branch: the flips move it by 4e-3 (measured), still far from another branch
+    # (the older one is a factor of 5 away in K).
+    for effect, rel in (("hardening", 1e-2), ("backlash", 1e-4)):
+        assert flipped[effect] == pytest.approx(rows[effect], rel=rel), effect

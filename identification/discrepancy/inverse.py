@@ -1,11 +1,20 @@
 """The inverse view's verdict: every effect tested against the nominal model of a log and
-ranked; the first is named when it is significant."""
+ranked; then, once a cause is named, the others tested again against the nominal extended by
+it (issue 15 item 2), and every one that passes named in turn.
+
+A round tests every remaining effect against its reference (identification.discrepancy.
+heldout: held-out folds, a one-sided Diebold-Mariano test at ALPHA / m, m the number of tests
+run so far, this round's included: Bonferroni over the whole diagnosis, so that the chance of
+naming any effect the log does not carry stays under ALPHA); the named cause of a round is,
+among the significant ones, the one that explains the most of the held-out residual. The
+rounds stop when none is significant.
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-from jointbench.identification.discrepancy.candidates import Candidate, candidate
+from jointbench.identification.discrepancy.candidates import Candidate, candidate, reference
 from jointbench.identification.discrepancy.nominal import Nominal, nominal
 from jointbench.identification.effects import EFFECTS, NONE
 from jointbench.identification.filtering import FilterSettings
@@ -15,17 +24,21 @@ from jointbench.identification.log import Log
 RIGID_TESTS = tuple(name for name, e in EFFECTS.items() if not e.needs_link)
 WHY_NOT_RIGID = ("it acts between the motor and the link or on the link: without the link "
                  "position q the rigid motor-side model cannot separate it")
+WHY_IN_NOMINAL = ("the nominal model holds it: eq. (13)'s link Coulomb friction FS is "
+                  "identified with the nominal parameters (a diagnosis against a model "
+                  "without link friction can name it)")
 
 
 @dataclass(frozen=True)
 class InverseDiagnosis:
     nominal: Nominal
-    candidates: tuple[Candidate, ...]   # ranked, best first; untestable ones last
+    candidates: tuple[Candidate, ...]   # first round, ranked, best first; untestable last
+    causes: tuple[Candidate, ...] = ()  # every named cause in order, each against the ones
+    #                                     before it (causes[0] is candidates[0])
 
     @property
     def named(self) -> Candidate | None:
-        best = self.candidates[0] if self.candidates else None
-        return best if best is not None and best.significant else None
+        return self.causes[0] if self.causes else None
 
     @property
     def named_cause(self) -> str:
@@ -39,26 +52,47 @@ class InverseDiagnosis:
         tested = [c for c in self.candidates if c.testable]
         if not tested:
             return "no effect is testable on this log"
-        best = max(tested, key=lambda c: c.explained_pct)
-        return (f"no effect is significant: the one that explains the most, {best.effect} "
-                f"({best.explained_pct:.3g} % of the nominal residual), fails: {best.why_not}")
+        best = tested[0]
+        return (f"no effect is significant: the best, {best.effect} (explains "
+                f"{best.heldout_pct:.3g} % of the held-out residual, {best.explained_pct:.3g} % "
+                f"in sample), fails: {best.why_not}")
 
 
-def diagnose_inverse(log: Log, settings: FilterSettings,
-                     effects: tuple[str, ...] | None = None) -> InverseDiagnosis:
-    """Evaluate every effect of docs/effects.md against the nominal model of `log` and rank
-    them: significant ones (BIC and F-test, and a practical size) first, by delta BIC; the
-    first is named when it is significant."""
-    nom = nominal(log, settings)
-    out: list[Candidate] = []
+def _rank(cands: list[Candidate]) -> list[Candidate]:
+    # Significant ones first, by the share of the held-out residual they remove; then the
+    # physical fits, then the unphysical, each by the same share.
+    return sorted(cands, key=lambda c: (not c.testable, not c.significant, bool(c.unphysical),
+                                        -c.heldout_pct))
+
+
+def _round(nom: Nominal, names: list[str], causes: tuple[Candidate, ...],
+           m: int) -> list[Candidate]:
+    ref = reference(nom, tuple((c.effect, c.fixed) for c in causes), m=m)
+    return _rank([candidate(nom, name, ref) for name in names])
+
+
+def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...] | None = None,
+                     link_friction: bool = True) -> InverseDiagnosis:
+    """Evaluate every effect of docs/effects.md against the nominal model of `log` (with the
+    link Coulomb friction FS unless `link_friction` is False) and rank them; name the best
+    significant one, then test the others on top of it, and so on."""
+    nom = nominal(log, settings, link_friction)
+    first: list[Candidate] = []
+    names: list[str] = []
     for name in effects or tuple(EFFECTS):
         if not nom.sig.has_link and name not in RIGID_TESTS:
-            out.append(Candidate(effect=name, testable=False, reason=WHY_NOT_RIGID))
-            continue
-        out.append(candidate(nom, name))
-    # Significant effects first, by delta BIC; then the others. Ranking all by delta BIC alone
-    # would let the link Coulomb friction every real link has (large delta BIC, small size)
-    # hide a significant motor-side effect.
-    out.sort(key=lambda c: (not c.testable, not c.significant, bool(c.unphysical),
-                            -c.delta_bic))
-    return InverseDiagnosis(nominal=nom, candidates=tuple(out))
+            first.append(Candidate(effect=name, testable=False, reason=WHY_NOT_RIGID))
+        elif name in EFFECTS and EFFECTS[name].parameter in nom.names:   # FS of link_coulomb
+            first.append(Candidate(effect=name, testable=False, reason=WHY_IN_NOMINAL))
+        else:
+            names.append(name)
+    m = len(names)
+    ranked = _round(nom, names, (), m)
+    causes: tuple[Candidate, ...] = ()
+    round_ = ranked
+    while round_ and round_[0].significant:
+        causes += (round_[0],)
+        rest = [c.effect for c in round_[1:]]
+        m += len(rest)   # Bonferroni over every test the diagnosis has run
+        round_ = _round(nom, rest, causes, m) if rest else []
+    return InverseDiagnosis(nominal=nom, candidates=tuple(_rank(ranked + first)), causes=causes)

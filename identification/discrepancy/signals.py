@@ -3,6 +3,7 @@ discrepancy regression is built from, and their common decimation."""
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -42,13 +43,35 @@ class Signals:
         return lowpass(x, s.wn, s.ts, s.m)
 
     def dec(self, x: np.ndarray) -> np.ndarray:
-        """The raw-rate column x on the decimated rows (scipy.signal.decimate, zero phase)."""
+        """The raw-rate column x on the decimated rows (scipy.signal.decimate, zero phase:
+        its order-8 Chebyshev I at 0.8 / Nd, designed once per Nd)."""
         s = self.settings
         x = np.asarray(x, dtype=float)[self.sl]
-        xd = signal.decimate(x, s.Nd, zero_phase=True) if s.Nd > 1 else x
+        xd = _filtfilt(s.Nd, x)[::s.Nd] if s.Nd > 1 else x
         e = s.edge
         xd = xd[e:len(xd) - e]
         return xd if self.keep is None else xd[self.keep]
+
+
+@functools.lru_cache(maxsize=8)
+def _antialias(q: int) -> tuple[np.ndarray, np.ndarray, int]:
+    """scipy.signal.decimate's zero-phase IIR filter for factor q (the same sos), its
+    steady-state initial conditions and sosfiltfilt's default odd padding."""
+    sos = signal.cheby1(8, 0.05, 0.8 / q, output="sos")
+    ntaps = 2 * len(sos) + 1 - min(int((sos[:, 2] == 0).sum()), int((sos[:, 5] == 0).sum()))
+    return sos, signal.sosfilt_zi(sos), 3 * ntaps
+
+
+def _filtfilt(q: int, x: np.ndarray) -> np.ndarray:
+    """scipy.signal.sosfiltfilt(sos, x) of the factor-q filter, same arithmetic, with the
+    filter designed once (diagnose decimates thousands of trial columns)."""
+    sos, zi, edge = _antialias(q)
+    if len(x) <= edge:
+        return signal.sosfiltfilt(sos, x)
+    ext = np.concatenate((2 * x[0:1] - x[edge:0:-1], x, 2 * x[-1:] - x[-2:-(edge + 2):-1]))
+    y, _ = signal.sosfilt(sos, ext, zi=zi * ext[0])
+    y, _ = signal.sosfilt(sos, y[::-1], zi=zi * y[-1])
+    return y[::-1][edge:-edge]
 
 
 def signals(log: Log, settings: FilterSettings) -> Signals:

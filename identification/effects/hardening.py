@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from jointbench.identification.effects.base import Design, Effect, Rows, deadzone
+from jointbench.identification.effects.base import Design, Effect, Rows, deadzone, hat
 
 
 def design(rows: Rows, fixed: dict) -> Design:
     sig = rows.sig
-    dz = deadzone(sig.qm - sig.q, fixed["deflection_rad"])
+    dz = hat(deadzone(sig.qm - sig.q, fixed["deflection_rad"]))   # paired as K's column
     return rows.extend(("Kh", dz, -dz))
 
 

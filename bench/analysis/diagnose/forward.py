@@ -46,7 +46,7 @@ def build_spec(d: Diagnosis, extended: bool) -> mujoco.MjSpec:
     common = dict(timestep=log.ts, tau_max=log.meta_float("tau_max"), gravity=log.gravity,
                   prismatic=log.prismatic, name=name)
     if "K" in d.nominal_parameters:
-        # FS: only link_coulomb's extended parameters hold it (the nominal moves it out).
+        # FS: the nominal's link Coulomb friction (eq. 13); the extended model's is refitted.
         FS = _pos(p, "FS")
         spec = nominal_axes.two_mass_axis(
             Jm=p["Jm"], FVm=_pos(p, "FVm"), FSm=_pos(p, "FSm"), K=p["K"], JL=p["JL"],

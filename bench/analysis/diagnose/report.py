@@ -18,7 +18,7 @@ from jointbench.bench.analysis.diagnose.figures import (plot_forward, plot_forwa
 from jointbench.bench.analysis.diagnose.forward import write_models
 from jointbench.bench.analysis.diagnose.types import BLOCK_NAMES, Diagnosis
 from jointbench.bench.output import OutputFolder
-from jointbench.identification.discrepancy import SIZE_MIN_PCT
+from jointbench.identification.discrepancy import ALPHA, FOLDS, MATERIAL, SEGMENTS
 from jointbench.identification.effects import EFFECTS
 from jointbench.identification.log import atomic_write_text
 from jointbench.identification.output import finite_json
@@ -49,23 +49,21 @@ def report_markdown(d: Diagnosis, figures: dict[str, str]) -> str:
     for key in ("structure", "spectrum", "inverse", "forward", "forward_frf"):
         if key in figures:
             L += ["", f"![{key}]({figures[key]})"]
-    L += ["", "## 3. The cause", "",
-          "Every effect of docs/effects.md added to the nominal model, ranked. Named only "
-          "when significant: delta BIC > 10, F-test p < 1e-3, and a practical size (the "
-          f"effect moves its equation's prediction by >= {SIZE_MIN_PCT[0]:g} % RMS on the "
-          f"motor side, {SIZE_MIN_PCT[1]:g} % on the link side).", "",
-          "| effect | significant | explained % | delta BIC | size % | parameters |",
-          "| --- | --- | --- | --- | --- | --- |"]
+    L += ["", "## 3. The cause", "", RULE, "",
+          "| effect | significant | held-out % | t | explained % | delta BIC | size % | "
+          "parameters |", "| --- | --- | --- | --- | --- | --- | --- | --- |"]
     for c in inv.candidates:
         if c.testable:
             pars = ", ".join(f"{k} = {v:.4g}" for k, v in c.parameters.items())
             if c.unphysical:
                 pars += f" (unphysical: {c.unphysical})"
             L.append(f"| {c.effect} | {'yes' if c.significant else 'no'} | "
-                     f"{c.explained_pct:.1f} | {c.delta_bic:.1f} | {c.size_pct:.2f} | {pars} |")
+                     f"{c.heldout_pct:.1f} | {c.t_stat:.2f} | {c.explained_pct:.1f} | "
+                     f"{c.delta_bic:.1f} | {c.size_pct:.2f} | {pars} |")
         else:
-            L.append(f"| {c.effect} | not testable | | | | {c.reason} |")
+            L.append(f"| {c.effect} | not testable | | | | | | {c.reason} |")
     L += ["", f"**Named cause: {d.named_cause}** (verdict: {d.verdict})", ""]
+    L += _causes_lines(d)
     if d.reason:
         L += [f"Why: {d.reason}.", ""]
     L += [f"Warning: {w}" for w in d.warnings] + ([""] if d.warnings else [])
@@ -97,6 +95,30 @@ def report_markdown(d: Diagnosis, figures: dict[str, str]) -> str:
         L += ["No effect is significant: the nominal model explains this log. No extended "
               "model is written."]
     return "\n".join(L) + "\n"
+
+
+def _causes_lines(d: Diagnosis) -> list[str]:
+    """Every named cause after the first, each with its own gain (issue 15 item 2)."""
+    if len(d.causes) < 2:
+        return []
+    L = ["Named causes, in order (each tested against the nominal extended by the ones "
+         "before it):", ""]
+    for c in d.causes:
+        pars = ", ".join(f"{k} = {v:.4g}" for k, v in c.parameters.items())
+        L.append(f"- {c.effect}: {pars}; held out it explains {c.heldout_pct:.3g} % "
+                 f"(t {c.t_stat:.3g}); {BLOCK_NAMES[c.block].split(':')[0]} "
+                 f"{c.before_pct:.3g} % -> {c.after_pct:.3g} % ({c.gain:.2f}x)")
+    return L + [""]
+
+
+RULE = ("Every effect of docs/effects.md added to the nominal model and fitted on all rows but "
+        f"one of {FOLDS} folds (each made of contiguous segments spread over the experiment), "
+        "which it then predicts. An effect is significant when, segment by segment, its "
+        f"held-out errors are smaller than the nominal's by more than {100 * MATERIAL:g} % "
+        f"(Student's t of the log-ratios over {SEGMENTS} segments, one-sided, at {ALPHA:g} "
+        "divided by the number of tests: Bonferroni) and its fit is physical. The named cause "
+        "is the significant one that explains the most of the held-out residual; the others "
+        "are then tested again on top of it. Delta BIC and size are information.")
 
 
 FIGURES = ("structure", "spectrum", "inverse", "forward", "forward_frf")
@@ -155,8 +177,8 @@ def summary_text(d: Diagnosis) -> str:
                  "RMS" + (f", q {f.q_rms:.3g} RMS" if f.q_rms is not None else ""))
     elif d.forward_note:
         L.append(f"forward view: {d.forward_note}")
-    L += ["", f"{'effect':20s} {'signif.':>7s} {'explained %':>11s} {'delta BIC':>10s} "
-              f"{'size %':>7s}  parameters"]
+    L += ["", f"{'effect':20s} {'signif.':>7s} {'held-out %':>10s} {'t':>7s} "
+              f"{'explained %':>11s} {'delta BIC':>10s} {'size %':>7s}  parameters"]
     for c in inv.candidates:
         if not c.testable:
             L.append(f"{c.effect:20s} {'-':>7s}  not testable: {c.reason}")
@@ -164,9 +186,15 @@ def summary_text(d: Diagnosis) -> str:
         pars = ", ".join(f"{k} = {v:.4g}" for k, v in c.parameters.items())
         if c.unphysical:
             pars += " (unphysical)"
-        L.append(f"{c.effect:20s} {'yes' if c.significant else 'no':>7s} {c.explained_pct:11.1f} "
+        L.append(f"{c.effect:20s} {'yes' if c.significant else 'no':>7s} "
+                 f"{c.heldout_pct:10.1f} {c.t_stat:7.2f} {c.explained_pct:11.1f} "
                  f"{c.delta_bic:10.1f} {c.size_pct:7.2f}  {pars}")
     L += ["", f"named cause: {d.named_cause}" + (" (inconclusive)" if d.overruled else "")]
+    if len(d.causes) > 1:
+        L += [f"named causes: {', '.join(c.effect for c in d.causes)}"]
+        L += [f"  {c.effect}: held out {c.heldout_pct:.3g} %, t {c.t_stat:.3g}, "
+              f"{BLOCK_NAMES[c.block].split(':')[0]} {c.before_pct:.3g} % -> "
+              f"{c.after_pct:.3g} % ({c.gain:.2f}x)" for c in d.causes]
     if d.reason:
         L.append(f"why: {d.reason}")
     if d.named is not None:

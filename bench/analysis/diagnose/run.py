@@ -22,7 +22,7 @@ from jointbench.bench.analysis.diagnose.report import write
 from jointbench.bench.analysis.diagnose.types import Diagnosis
 from jointbench.bench.analysis.diagnose.verdict import gain_reason, nominal_reason
 from jointbench.identification.defaults import choose_filter
-from jointbench.identification.discrepancy import Candidate, Nominal, diagnose_inverse
+from jointbench.identification.discrepancy import NUMERICS, Candidate, Nominal, diagnose_inverse
 from jointbench.identification.effects import EFFECTS
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.log import Log, unit_warnings
@@ -48,7 +48,7 @@ def diagnosis_settings(log: Log) -> tuple[FilterSettings, str]:
 
 def nominal_parameters(nom: Nominal) -> dict[str, float]:
     """Physical parameters of the nominal axis; gravity as MX, MY of eq. 13 (rest at qs)."""
-    p = {n: float(v) for n, v in zip(nom.names, nom.X)}
+    p = {n: float(v) for n, v in zip(nom.names, nom.X) if n not in NUMERICS}
     if "P" in p:
         P = p.pop("P")
         p["MX"], p["MY"] = -P * math.sin(nom.sig.qs), P * math.cos(nom.sig.qs)
@@ -61,7 +61,8 @@ def extended_parameters(c: Candidate | None, nom: Nominal) -> dict[str, float]:
     if c is None:
         return {}
     out = {k: float(v) for k, v in c.parameters.items()}
-    refit = {n: float(v) for n, v in zip(c.names, c.X) if n in nom.names}
+    refit = {n: float(v) for n, v in zip(c.names, c.X)
+             if n in nom.names and n not in NUMERICS}
     for n, v in refit.items():
         if n != "P":
             out.setdefault(n, v)

@@ -60,6 +60,12 @@ class Diagnosis:
         return self.named.effect if self.named is not None else NONE
 
     @property
+    def causes(self) -> tuple[Candidate, ...]:
+        """Every named cause in order (issue 15 item 2), each tested on top of the ones
+        before it; () when nothing is named."""
+        return () if self.overruled else self.inverse.causes
+
+    @property
     def verdict(self) -> str:
         """'named', 'none' or 'inconclusive' (the best candidate overruled)."""
         return "inconclusive" if self.overruled else ("named" if self.named else "none")
@@ -85,8 +91,10 @@ class Diagnosis:
         before, after = self.inverse_before_after
         out = {
             "named_cause": self.named_cause,
+            "named_causes": [c.effect for c in self.causes],
             "verdict": self.verdict,
             "candidates": [_candidate_json(c) for c in self.inverse.candidates],
+            "causes": [_cause_json(c) for c in self.causes],
             "extended_parameters": self.extended_parameters,
             "gain": {"metric": "inverse view, " + BLOCK_NAMES[self.view_block],
                      "before": before, "after": after,
@@ -115,6 +123,14 @@ class Diagnosis:
         return finite_json(out)
 
 
+def _cause_json(c: Candidate) -> dict:
+    """One named cause: its parameters and its own gain, against the causes before it."""
+    return {"effect": c.effect, "after": [e for e, _ in c.base], "parameters": c.parameters,
+            "heldout_pct": c.heldout_pct, "t": c.t_stat, "p_heldout": c.p_heldout,
+            "block": BLOCK_NAMES[c.block].split(":")[0], "before_pct": c.before_pct,
+            "after_pct": c.after_pct, "gain": c.gain}
+
+
 def _forward_json(f: ForwardView) -> dict:
     out = {"tau_rel_pct": f.tau_rel_pct, "q_m_rms": f.q_m_rms, "q_m_rel_pct": f.q_m_rel_pct}
     if f.q_rms is not None:
@@ -125,7 +141,8 @@ def _forward_json(f: ForwardView) -> dict:
 def _candidate_json(c: Candidate) -> dict:
     out = {"effect": c.effect, "significant": c.significant, "testable": c.testable}
     if c.testable:
-        out.update({"explained_pct": c.explained_pct, "score": c.delta_bic,
+        out.update({"heldout_pct": c.heldout_pct, "t": c.t_stat, "p_heldout": c.p_heldout,
+                    "alpha": c.alpha, "explained_pct": c.explained_pct, "score": c.delta_bic,
                     "p_value": c.p_value, "size_pct": c.size_pct,
                     "before_pct": c.before_pct, "after_pct": c.after_pct,
                     "parameters": c.parameters})

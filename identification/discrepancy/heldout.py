@@ -1,0 +1,165 @@
+"""Out-of-sample evidence for an effect (issue 14 item 2): does adding it predict rows the fit
+has not seen better, by more than this log's own spread?
+
+**Folds.** The decimated instants are cut into SEGMENTS = 40 contiguous segments of equal
+length (1.5 s of a 60 s log; the motor and link rows of an instant stay together), and segment
+s belongs to fold s mod FOLDS (10 folds): every fold then spans the whole experiment, each
+band of the chirp, in contiguous pieces much longer than the residual's correlation (the
+band's impulse response, a few decimated rows). Contiguous folds would instead make every
+held-out fold a frequency range no training row has: its error would be extrapolation, not
+the effect. For each fold the reference design (the nominal model, or the nominal extended by
+the causes already named) and the extended design are fitted on the other folds, with the
+nominal's block weights, and predict the held-out rows: the weighted errors e0_i and e1_i. An
+effect's nonlinear value (backlash width, lag time constant, ...) is chosen for each fold by
+the training rows' RSS among the values its search evaluated, so the held-out rows do not
+pick it.
+
+**Statistic.** In each segment, the log-ratio of the held-out error sums,
+l_s = log(sum e0^2 / sum e1^2) + log(1 - MATERIAL), and Student's t of the 40 l_s (39 degrees
+of freedom). The segments are far apart in correlation terms, so the l_s are close to
+independent; as ratios within a segment they do not depend on how loud the residual is there
+(the chirp makes it vary by orders of magnitude from one band to the next), and their spread
+holds the noise, the residual's colour and the effect's own uneven visibility as this log has
+them: no noise level, correlation time or effect size is assumed. Under the null hypothesis
+(the effect's columns carry nothing the reference misses) the extra columns only add
+estimation variance to the held-out prediction: E[l_s] < 0.
+
+**Materiality.** On a 60 s log a test without margin finds mismatches that are real but
+immaterial: dead bands at the encoder's resolution, MuJoCo's own small damping; they remove
+0.1-3 % of the held-out residual. The margin log(1 - MATERIAL) asks the effect to remove
+significantly more than MATERIAL = 5 % of what the reference misses in a typical segment (its
+prediction then moves by more than a fifth of the residual's RMS, sqrt(0.05) = 0.22). It is a
+share of this log's own residual, whatever its noise or scale, not a share of the torque.
+
+**Rule.** An effect is significant when its one-sided p-value P(T_39 >= t) is under ALPHA / m,
+m the number of tests the diagnosis has run (identification.discrepancy.inverse: Bonferroni):
+on a log without any unmodelled effect the chance that any effect is named is at most about
+ALPHA = 0.1 %, whatever the log's length, noise or sample rate. The level is set from that
+rate alone. (With the 8 effects a log with q tests in the first round the bar is t > 4.03;
+4 effects without q, t > 3.80.)
+
+Among the significant effects the named one explains the most of the held-out residual,
+100 (1 - sum e1^2 / sum e0^2).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import stats
+
+from jointbench.identification.discrepancy.nominal import Nominal
+
+FOLDS = 10
+ALPHA = 1e-3
+MATERIAL = 0.05
+SEGMENTS = 40
+
+
+def segment_of_rows(n: int) -> np.ndarray:
+    """The segment (0 .. SEGMENTS-1) of each of n instants: contiguous, equal lengths."""
+    return (np.arange(n) * SEGMENTS) // max(n, 1)
+
+
+def fold_of_rows(nom: Nominal, k: int = FOLDS) -> np.ndarray:
+    """The fold (0 .. k-1) of each stacked row: segment s belongs to fold s mod k, so that
+    every fold spans the whole experiment (a chirp's every band) in contiguous pieces; both
+    equation blocks of an instant alike."""
+    n = len(nom.sig.index)
+    return np.tile(segment_of_rows(n) % k, len(nom.y) // max(n, 1))
+
+
+@dataclass(frozen=True)
+class Scores:
+    """One design's weighted RSS: on all rows, on each fold's training rows, held out."""
+
+    full: float
+    X: np.ndarray
+    train: np.ndarray
+    held: np.ndarray
+    errors: np.ndarray       # each row's weighted held-out error (its fold's fit)
+
+
+def scores(nom: Nominal, folds: np.ndarray, y: np.ndarray, W: np.ndarray) -> Scores:
+    """Fit `y = W X` on all rows and on each fold's complement (the nominal's weights), by
+    the normal equations of the column-scaled design (the Gram matrix, less the fold's for a
+    fold fit): the designs are well conditioned once scaled (condition numbers 5 to 40 on
+    the bench axes), and one small solve per fit is what makes the folds affordable."""
+    w = nom.weights
+    A, b = W * w[:, None], y * w
+    scale = np.linalg.norm(A, axis=0)
+    scale[scale == 0] = 1.0
+    A = A / scale
+    k = int(folds.max()) + 1
+    parts = [np.flatnonzero(folds == f) for f in range(k)]
+    # per fold: its Gram matrix, A^T b and b^T b; a fit on the others subtracts them
+    grams = [(A[i].T @ A[i], A[i].T @ b[i], float(b[i] @ b[i])) for i in parts]
+    G, c, bb = (sum(g[j] for g in grams) for j in range(3))
+    x = np.linalg.lstsq(G, c, rcond=None)[0]
+    full = _rss(G, c, bb, x)
+    train, held, errors = np.empty(k), np.empty(k), np.empty(len(b))
+    for f, (i, (Gf, cf, bf)) in enumerate(zip(parts, grams)):
+        x_f = np.linalg.lstsq(G - Gf, c - cf, rcond=None)[0]
+        errors[i] = b[i] - (A[i] * x_f).sum(axis=1)   # elementwise: no BLAS thread wake-up
+        held[f] = float(errors[i] @ errors[i])
+        train[f] = _rss(G - Gf, c - cf, bb - bf, x_f)
+    return Scores(full=full, X=x / scale, train=train, held=held, errors=errors)
+
+
+def _rss(G: np.ndarray, c: np.ndarray, bb: float, x: np.ndarray) -> float:
+    """||b - A x||^2 from the normal equations' terms: b^T b - 2 x^T A^T b + x^T A^T A x (the
+    residual is a few % of b here, so the cancellation costs about 1e-13 of it)."""
+    return float(bb - 2 * x @ c + x @ G @ x)
+
+
+def held_out(records: list[Scores], folds: np.ndarray) -> np.ndarray:
+    """Each row's held-out error at the trial (of a searched effect) its fold's training rows
+    prefer."""
+    train = np.array([r.train for r in records])
+    best = np.argmin(train, axis=0)
+    out = np.empty(len(folds))
+    for f, j in enumerate(best):
+        rows = folds == f
+        out[rows] = records[j].errors[rows]
+    return out
+
+
+@dataclass(frozen=True)
+class Evidence:
+    """The held-out comparison of an extended model with its reference."""
+
+    explained_pct: float     # 100 (1 - sum e1^2 / sum e0^2): share of the held-out RSS removed
+    t: float                 # Student's t of the segments' log-ratios, MATERIAL margin
+    p: float                 # its one-sided p-value, SEGMENTS - 1 degrees of freedom
+
+
+def evidence(e0: np.ndarray, e1: np.ndarray, n_times: int) -> Evidence:
+    """Segment test of e1 removing more than MATERIAL of e0's squared error (module
+    docstring); rows are stacked by block, `n_times` instants each."""
+    a0 = (e0 ** 2).reshape(-1, n_times).sum(axis=0)
+    a1 = (e1 ** 2).reshape(-1, n_times).sum(axis=0)
+    total0 = float(a0.sum())
+    share = 100 * (1 - float(a1.sum()) / total0) if total0 > 0 else 0.0
+    seg = segment_of_rows(n_times)
+    h0 = np.bincount(seg, a0, SEGMENTS)
+    h1 = np.bincount(seg, a1, SEGMENTS)
+    ok = (h0 > 0) & (h1 > 0)
+    l = np.log(h0[ok] / h1[ok]) + np.log(1 - MATERIAL)
+    k = len(l)
+    if k < 3:
+        return Evidence(explained_pct=share, t=0.0, p=1.0)
+    sd = float(np.std(l, ddof=1))
+    t = float(np.mean(l)) / (sd / np.sqrt(k)) if sd > 0 else (np.inf if np.mean(l) > 0 else 0.0)
+    p = float(stats.t.sf(t, k - 1)) if np.isfinite(t) else (0.0 if t > 0 else 1.0)
+    return Evidence(explained_pct=share, t=t, p=p)
+
+
+def bar(m: int) -> float:
+    """The p-value bar for one of m effects tested together (Bonferroni at ALPHA)."""
+    return ALPHA / max(m, 1)
+
+
+def t_bar(alpha: float) -> float:
+    """The t value that p-value bar `alpha` corresponds to."""
+    return float(stats.t.isf(alpha, SEGMENTS - 1))

@@ -1,0 +1,96 @@
+"""The nominal model extended by several effects at once (issue 15 item 2): the design a
+candidate is tested against once other causes are named, and the design of a model with all
+the named causes.
+
+An effect's `design(rows, fixed)` (identification.effects.base) either adds columns
+(`rows.extend`) or rebuilds the nominal columns with another torque or spring deflection
+(`rows.columns`: torque lag, backlash). `Stacked` holds what the effects applied so far did;
+an effect applied on top of it adds its columns to theirs and its torque or deflection to
+theirs, so that any set of effects composes into one linear regression.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+from jointbench.identification.discrepancy.nominal import Nominal
+from jointbench.identification.discrepancy.signals import stack
+from jointbench.identification.effects import EFFECTS
+from jointbench.identification.effects.base import Column, Design
+
+
+@dataclass(frozen=True)
+class Stacked:
+    """The nominal model of `nom` with `effects` ((name, fixed values), in order) applied."""
+
+    nom: Nominal
+    effects: tuple[tuple[str, dict], ...] = ()
+    tau: np.ndarray | None = None          # the torque the nominal columns are built with
+    deflection: np.ndarray | None = None   # the spring deflection they are built with
+    extra: tuple[tuple[str, np.ndarray], ...] = ()   # added columns, stacked rows
+
+    def design(self) -> Design:
+        """y, W and the column names: nominal columns, then the effects' columns."""
+        nom = self.nom
+        if self.tau is None and self.deflection is None:
+            y, W, names = nom.y, nom.W, nom.names
+        else:
+            y, W, names = nom.columns(self.tau, self.deflection)
+        if not self.extra:
+            return y, W, names
+        return (y, np.column_stack([W, *(c for _, c in self.extra)]),
+                names + tuple(n for n, _ in self.extra))
+
+
+class _Rows:
+    """The identification.effects.base.Rows an effect's design sees on top of `base`; it
+    records the state the effect leaves (`after`)."""
+
+    def __init__(self, base: Stacked):
+        self.base = base
+        self.after = base
+        self.sig = base.nom.sig
+
+    def value(self, name: str) -> float:
+        return self.base.nom.value(name)
+
+    def extend(self, *columns: Column) -> Design:
+        cols = tuple((n, stack(self.sig, m, li)) for n, m, li in columns)
+        self.after = dataclasses.replace(self.base, extra=self.base.extra + cols)
+        return self.after.design()
+
+    def columns(self, tau: np.ndarray | None = None,
+                deflection: np.ndarray | None = None) -> Design:
+        b = self.base
+        self.after = dataclasses.replace(
+            b, tau=b.tau if tau is None else tau,
+            deflection=b.deflection if deflection is None else deflection)
+        return self.after.design()
+
+
+def apply(base: Stacked, effect: str, fixed: dict) -> tuple[Stacked, Design]:
+    """`base` with one more effect (nonlinear values `fixed`), and its design."""
+    rows = _Rows(base)
+    d = EFFECTS[effect].design(rows, fixed)
+    after = dataclasses.replace(rows.after, effects=base.effects + ((effect, dict(fixed)),))
+    return after, d
+
+
+def stacked(nom: Nominal, effects: Sequence[tuple[str, dict]]) -> Stacked:
+    """The nominal model of `nom` extended by every effect of `effects`, in order."""
+    s = Stacked(nom)
+    for name, fixed in effects:
+        if name not in EFFECTS:
+            raise ValueError(f"unknown effect {name!r}")
+        s, _ = apply(s, name, fixed)
+    return s
+
+
+def design_many(nom: Nominal, effects: Sequence[tuple[str, dict]]) -> Design:
+    """y, W and names of the nominal model extended by several effects (name, fixed values)
+    at once: the inverse view of a model with all the named causes."""
+    return stacked(nom, effects).design()

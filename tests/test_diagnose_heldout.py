@@ -1,0 +1,149 @@
+"""`diagnose` decides from the log's own statistics (issue 14 items 1, 2 and 4) and names every
+cause it finds (issue 15 item 2, inverse side).
+
+- Link Coulomb friction FS is part of the nominal (eq. 13): `link_coulomb` is listed as not
+  testable, FS is a nominal parameter; against a nominal without FS it is the named cause.
+- Clean logs (prototype and arm6 joints at the paper's rate, and the independent simulator's
+  axis families) give `none`, with the reason.
+- The issue-14 cases the size bars used to miss (prototype, backlash 1 mrad, asymmetry 0.15,
+  offset 5 N m) are named with their parameter within 20 % (the battery's tolerance).
+- A log with two causes (a hidden backlash, and a current-sensor offset added to the logged
+  torque, which is what the `offset` effect is) names both, in order, each with its value.
+- The held-out statistic itself, on synthetic errors: nothing where there is nothing, a
+  clear yes where the extended model halves the error.
+
+Logs are 30 s (the issue's cases are 60 s; the decisions hold at 30 s and the suite stays fast).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from jointbench.bench.analysis.diagnose import diagnose
+from jointbench.bench.analysis.diagnose.run import diagnosis_settings
+from jointbench.bench.campaign.battery import Case, run_case
+from jointbench.identification.defaults import PAPER_RATE
+from jointbench.identification.discrepancy import (FOLDS, NOMINAL_TWO_MASS, WHY_IN_NOMINAL,
+                                                   design, design_many, diagnose_inverse,
+                                                   nominal)
+from jointbench.identification.discrepancy.heldout import (MATERIAL, SEGMENTS, evidence,
+                                                           fold_of_rows)
+from jointbench.identification.effects import EFFECTS, NONE
+
+DURATION = 30.0
+
+
+def _log(model, joint, seed, effect=NONE, strength=0.0):
+    return run_case(Case(0, model, joint, PAPER_RATE, seed, effect, strength), duration=DURATION)
+
+
+@pytest.fixture(scope="module")
+def clean_prototype():
+    return _log("prototype", None, 3)
+
+
+@pytest.mark.parametrize("model,joint,seed", [("prototype", None, 3), ("prototype", None, 4),
+                                              ("arm6", "axis1", 5), ("arm6", "axis6", 6)])
+def test_clean_logs_name_nothing_and_say_why(model, joint, seed, clean_prototype):
+    log = clean_prototype if seed == 3 else _log(model, joint, seed)
+    d = diagnose(log, forward=False)
+    assert d.named_cause == NONE and d.causes == ()
+    assert d.verdict == "none"
+    # the reason names the best candidate and the bar it failed, with numbers
+    best = next(c for c in d.inverse.candidates if c.testable)
+    assert best.effect in d.reason and "held out" in d.reason and "t = " in d.reason
+
+
+# The independent simulator (tests/indep_sim.py: no MuJoCo, RK4 with substeps, Coulomb
+# friction smoothed by tanh): its axes are continuous-time, so the 3-point chain's own error
+# shows there (before the nominal's column q(4), the wrist named hardening). stiff_small is
+# left to benchmarks (7 s to simulate); all five, both seeds, 60 s: docs/effects.md 4.3.
+@pytest.mark.parametrize("family", ["wrist", "heavy_link", "soft", "balanced"])
+def test_independent_simulator_clean_logs_name_nothing(family):
+    from indep_sim import FAMILIES, simulate
+
+    d = diagnose(simulate(FAMILIES[family], seed=3, duration=DURATION), forward=False)
+    assert d.named_cause == NONE and d.causes == (), d.reason
+
+
+def test_link_coulomb_is_nominal(clean_prototype):
+    log = clean_prototype
+    d = diagnose(log, forward=False)
+    lc = next(c for c in d.inverse.candidates if c.effect == "link_coulomb")
+    assert not lc.testable and lc.reason == WHY_IN_NOMINAL
+    assert "FS" in NOMINAL_TWO_MASS
+    # FS is reported with the nominal parameters: Table 1's 8.46 N m within 20 %
+    assert d.nominal_parameters["FS"] == pytest.approx(log.meta_float("truth_FS"), rel=0.2)
+    # Against a nominal without FS (a user's model without link friction) it is the cause.
+    settings, _ = diagnosis_settings(log)
+    inv = diagnose_inverse(log, settings, link_friction=False)
+    assert inv.named_cause == "link_coulomb"
+    assert inv.named.parameters["FS"] == pytest.approx(log.meta_float("truth_FS"), rel=0.2)
+
+
+@pytest.mark.parametrize("effect,strength", [("backlash", 0.001), ("asymmetric_friction", 0.15),
+                                             ("offset", 5.0)])
+def test_issue14_cases_are_named(effect, strength):
+    d = diagnose(_log("prototype", None, 1, effect, strength), forward=False)
+    assert d.named_cause == effect
+    assert d.extended_parameters[EFFECTS[effect].parameter] == pytest.approx(strength, rel=0.2)
+    c = d.named
+    assert c.significant and c.heldout_pct > 100 * MATERIAL and c.p_heldout < c.alpha
+
+
+def test_two_causes_are_named_in_order():
+    log = _log("prototype", None, 4, "backlash", 0.002)
+    two = dataclasses.replace(log, tau_m=np.asarray(log.tau_m) + 10.0)   # sensor offset 10 N m
+    d = diagnose(two, forward=False)
+    assert [c.effect for c in d.causes] == ["backlash", "offset"]
+    first, second = d.causes
+    assert first is d.named and second.base[0][0] == "backlash"
+    assert first.parameters["backlash_rad"] == pytest.approx(0.002, rel=0.2)
+    assert second.parameters["offset"] == pytest.approx(10.0, rel=0.2)
+    assert first.gain > 1 and second.gain > 1
+    doc = d.to_json()
+    assert doc["named_causes"] == ["backlash", "offset"]
+    assert [c["effect"] for c in doc["causes"]] == ["backlash", "offset"]
+    assert doc["causes"][1]["after"] == ["backlash"]
+
+
+def test_design_many_composes_effects(clean_prototype):
+    settings, _ = diagnosis_settings(clean_prototype)
+    nom = nominal(clean_prototype, settings)
+    b = {"backlash_rad": 0.001}
+    y1, W1, n1 = design(nom, "backlash", b)
+    y2, W2, n2 = design_many(nom, [("backlash", b)])
+    assert n1 == n2 and np.array_equal(W1, W2) and np.array_equal(y1, y2)
+    y3, W3, n3 = design_many(nom, [("backlash", b), ("offset", {})])
+    assert n3 == n1 + ("offset",)
+    assert np.array_equal(W3[:, :-1], W1)            # backlash's stiffness column kept
+    _, Wo, _ = design(nom, "offset", {})
+    assert np.array_equal(W3[:, -1], Wo[:, -1])       # offset's column added
+
+
+def test_folds_span_the_experiment(clean_prototype):
+    settings, _ = diagnosis_settings(clean_prototype)
+    nom = nominal(clean_prototype, settings)
+    folds = fold_of_rows(nom)
+    n = len(nom.sig.index)
+    assert np.array_equal(folds[:n], folds[n:])       # motor and link rows of an instant
+    for f in range(FOLDS):                             # every fold early and late
+        where = np.flatnonzero(folds[:n] == f) / n
+        assert where.min() < 0.25 and where.max() > 0.75
+
+
+def test_heldout_evidence_on_synthetic_errors():
+    rng = np.random.default_rng(0)
+    n = 40 * SEGMENTS
+    noise = rng.normal(size=n)
+    same = evidence(noise, noise * (1 + 0.01 * rng.normal(size=n)), n)
+    assert same.p > 0.4                               # nothing explained: no evidence
+    signal = 2.0 * np.sin(np.linspace(0, 60, n))      # what the effect explains
+    e0, e1 = signal + noise, noise
+    yes = evidence(e0, e1, n)
+    share = 100 * (1 - np.sum(e1 ** 2) / np.sum(e0 ** 2))
+    assert yes.explained_pct == pytest.approx(share)
+    assert yes.p < 1e-6
