@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from jointbench.bench.effects import axis_keys
 from jointbench.identification.discrepancy import Candidate, InverseDiagnosis
 from jointbench.identification.effects import NONE
 from jointbench.identification.filtering import FilterSettings
@@ -86,8 +87,9 @@ class Diagnosis:
         out = {
             "named_cause": self.named_cause,
             "verdict": self.verdict,
-            "candidates": [_candidate_json(c) for c in self.inverse.candidates],
-            "extended_parameters": self.extended_parameters,
+            "candidates": [_candidate_json(c, self.log.prismatic)
+                           for c in self.inverse.candidates],
+            "extended_parameters": axis_keys(self.extended_parameters, self.log.prismatic),
             "gain": {"metric": "inverse view, " + BLOCK_NAMES[self.view_block],
                      "before": before, "after": after,
                      "ratio": before / after if after > 0 else None},
@@ -122,13 +124,13 @@ def _forward_json(f: ForwardView) -> dict:
     return out
 
 
-def _candidate_json(c: Candidate) -> dict:
+def _candidate_json(c: Candidate, prismatic: bool = False) -> dict:
     out = {"effect": c.effect, "significant": c.significant, "testable": c.testable}
     if c.testable:
         out.update({"explained_pct": c.explained_pct, "score": c.delta_bic,
                     "p_value": c.p_value, "size_pct": c.size_pct,
                     "before_pct": c.before_pct, "after_pct": c.after_pct,
-                    "parameters": c.parameters})
+                    "parameters": axis_keys(c.parameters, prismatic)})
         if c.unphysical:
             out["unphysical"] = c.unphysical
     else:
