@@ -12,12 +12,16 @@ The user's MJCF (axis convention of models/__init__.py) is the nominal:
    (`bench.effects.write_effects`); `link_coulomb` is named when the MJCF has no link
    friction and the data shows some;
 5. the forward view: the logged experiment replayed in closed loop (bench.sim.replay, the
-   log's reference, gains and sensors) on the user's model, the corrected and the extended
-   one: the torque error before and after, and the same on a `validate` log.
+   log's reference, gains and encoder resolutions) on the user's model, the corrected and
+   the extended one: the torque error before and after, and the same on a `validate` log.
+   The replay adds no torque noise: the log's noise realisation is unknown, and another one
+   would add its own closed-loop response (measured on the prototype's true model: 2.13 %
+   torque error with noise, 1.49 % without) to every model alike.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import tempfile
 from dataclasses import dataclass, field
@@ -193,8 +197,11 @@ def _replay_errors(path: Path, joint: str, config: dict[str, float], log: Log) -
     with the log's reference, gains and sensors; forward_errors of the result."""
     exp = build_experiment_model(path, joint, config=config, sample_rate_hz=1.0 / log.ts,
                                  tau_max=log.meta_float("tau_max"))
+    sensors = Sensors.from_log(log)
+    if sensors is not None:   # the encoders' resolutions, no noise (module docstring)
+        sensors = dataclasses.replace(sensors, torque_noise_std=0.0)
     r = replay(exp.model, exp.axis, log, tau0=replay_tau0(log),
-               loop=loop_effects_from_model(exp.model, joint), sensors=Sensors.from_log(log))
+               loop=loop_effects_from_model(exp.model, joint), sensors=sensors)
     return forward_errors(log, r)
 
 
