@@ -59,7 +59,15 @@ def run(cases_per_axis: int, duration: float, seed: int) -> None:
             print(f"  ({model}/{joint}: {time.time() - t0:.0f} s)", flush=True)
     right = sum(s.right for s in rows)
     ratios = np.array([s.ratio for s in rows])
-    print(f"\nright: {right} of {len(rows)} ({100 * right / len(rows):.1f} %)")
+    print(f"\nright: {right} of {len(rows)} ({100 * right / len(rows):.1f} %); the right "
+          f"parameters named, whatever the error: {sum(s.named_right for s in rows)}")
+    off = {}
+    for s in rows:
+        for k, v in s.named.items():
+            if k in s.expected and abs(v - s.expected[k]) > 2.0:
+                off.setdefault(k, []).append(round(v - s.expected[k], 1))
+    print("errors more than 2 points off (reported - true): "
+          + ("; ".join(f"{k} {v}" for k, v in off.items()) or "none"))
     print(f"true models with something named: {len(false_named)} of {len(AXES)} "
           f"{false_named or ''}")
     print(f"forward torque gain (wrong copy / corrected): min {ratios.min():.2f}x, "

@@ -75,6 +75,7 @@ class Score:
     expected: dict[str, float]      # true errors (%) of the parameters put off
     named: dict[str, float]         # reported errors (%) of the parameters named wrong
     right: bool                     # named == the expected beyond the floor, each within POINTS
+    named_right: bool               # the same names, whatever the errors reported
     torque_before: float            # forward torque error (% RMS), the wrong copy
     torque_after: float             # the corrected model
 
@@ -88,8 +89,9 @@ def score(md: ModelDiagnosis, expected: dict[str, float]) -> Score:
     floor, each reported within POINTS of its true error."""
     named = {n: md.errors[n].error_pct for n in md.wrong_parameters}
     want = {k: v for k, v in expected.items() if abs(v) > FLOOR_PCT}
-    right = set(named) == set(want) and all(abs(named[k] - want[k]) <= POINTS for k in want)
+    same = set(named) == set(want)
+    right = same and all(abs(named[k] - want[k]) <= POINTS for k in want)
     g = md.gain()
-    return Score(expected=expected, named=named, right=right,
+    return Score(expected=expected, named=named, right=right, named_right=same,
                  torque_before=float(g.get("model", np.nan)),
                  torque_after=float(g.get("corrected", np.nan)))
