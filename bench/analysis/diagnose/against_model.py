@@ -90,13 +90,16 @@ def significant(model: float, data: float, sigma: float, scale: float) -> tuple[
 
 def compare(model: dict[str, float], data: dict[str, float],
             sigma: dict[str, float]) -> dict[str, ParameterError]:
-    """ParameterError for every name of COMPARED both sides know (`significant`'s rule)."""
+    """ParameterError for every name of COMPARED both sides know with a finite value
+    (`significant`'s rule)."""
     out = {}
     g = math.hypot(data.get("MX", 0.0), data.get("MY", 0.0))
     for name in COMPARED:
         if name not in model or name not in data:
             continue
         m, d, s = float(model[name]), float(data[name]), float(sigma.get(name, math.nan))
+        if not (math.isfinite(m) and math.isfinite(d)):   # K of a rigid MJCF: not comparable
+            continue
         err, sig = significant(m, d, s, g if name in GRAVITY else abs(d))
         out[name] = ParameterError(name, m, d, s, err, sig)
     return out

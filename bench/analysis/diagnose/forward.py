@@ -22,7 +22,7 @@ import mujoco
 import numpy as np
 
 from jointbench.bench.analysis.diagnose.types import Diagnosis, ForwardView
-from jointbench.bench.effects import loop_effects_from_model, write_extended
+from jointbench.bench.effects import loop_effects_from_model, write_effects
 from jointbench.bench.effects.base import positive_part as _pos
 from jointbench.bench.sim import nominal as nominal_axes
 from jointbench.bench.sim.replay import ReplayError, replay
@@ -57,8 +57,8 @@ def build_spec(d: Diagnosis, extended: bool) -> mujoco.MjSpec:
         spec = nominal_axes.rigid_axis(J=p["J"], FV=_pos(p, "FV"), FS=_pos(p, "FS"),
                                        offset=0.0, **common)
         K = 0.0
-    if c is not None:
-        write_extended(spec, name, c.effect, p, K)
+    if c is not None:   # several named causes: one (effect, parameters) pair each
+        write_effects(spec, name, [(c.effect, p)], K)
     return spec
 
 
