@@ -127,7 +127,9 @@ def test_cli_json_files_and_the_written_models_run(prototype, tmp_path):
     doc = json.loads((out / "diagnosis.json").read_text())
     assert doc["wrong_parameters"] == ["K"]
     assert set(doc["parameter_errors"]["K"]) == {"model", "data", "sigma", "error_pct",
-                                                 "significant"}
+                                                 "significant", "identified"}
+    assert set(doc["parameter_errors"]["Jm"]) == {"model", "data", "sigma", "error_pct",
+                                                  "significant"}
     assert doc["parameter_errors"]["K"]["error_pct"] == pytest.approx(25.0, abs=2.0)
     assert doc["named_cause"] == "none" and doc["named_causes"] == []
     assert doc["gain"]["ratio_corrected"] >= 2.0
