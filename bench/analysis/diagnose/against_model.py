@@ -176,10 +176,10 @@ def _config(log: Log, given: dict[str, float] | None, axes: Sequence[str]) -> di
 
 
 def refit(log: Log, ident: Identification, model: dict[str, float],
-          free: Sequence[str]) -> dict[str, tuple[float, float]]:
+          free: Sequence[str]) -> dict[str, float]:
     """The parameters `free` fitted again on the joint-motor regression of eq. (13) (the
     identification's rows and filter, block-weighted least squares) with every other
-    parameter held at the model's value: {name: (value, corrected sigma)}. Fewer free
+    parameter held at the model's value: {name: value}. Fewer free
     columns: less of the correlation between them leaks into the wrong ones (measured on arm6
     axis1, FVm alone: -2.0 % from the truth against -4.7 % free). {} when the identification
     is not the joint-motor model or nothing is free."""
@@ -194,21 +194,20 @@ def refit(log: Log, ident: Identification, model: dict[str, float],
     y = reg.y - reg.W[:, held] @ np.array([model[names[k]] for k in held])
     ls = block_weighted(reg.W[:, cols], y, tuple(names[k] for k in cols), reg.block,
                         time=reg.index)
-    sig = ls.sigma_corrected
-    return {n: (float(x), float(sg) if math.isfinite(sg) else float(sd))
-            for n, x, sg, sd in zip(ls.names, ls.X, sig, ls.sigma)}
+    return {n: float(x) for n, x in zip(ls.names, ls.X)}
 
 
-def _refitted(errors: dict[str, ParameterError], values: dict[str, tuple[float, float]],
+def _refitted(errors: dict[str, ParameterError], values: dict[str, float],
               data: dict[str, float]) -> dict[str, ParameterError]:
-    """`errors` with each refitted parameter's data value, sigma and error replaced (the
-    significance decided on the free identification stays)."""
+    """`errors` with each refitted parameter's data value and error replaced. The sigma stays
+    the free identification's (the refit's own, conditional on the held values, would claim
+    more than the log knows), and so does the significance it decided."""
     out = dict(errors)
     g = math.hypot(data.get("MX", 0.0), data.get("MY", 0.0))
-    for n, (v, sg) in values.items():
+    for n, v in values.items():
         e = errors[n]
-        err, _ = significant(e.model, v, sg, g if n in GRAVITY else abs(v))
-        out[n] = ParameterError(n, e.model, v, sg, err, e.significant, identified=e.data)
+        err, _ = significant(e.model, v, e.sigma, g if n in GRAVITY else abs(v))
+        out[n] = ParameterError(n, e.model, v, e.sigma, err, e.significant, identified=e.data)
     return out
 
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 from pathlib import Path
 from typing import Callable
 
@@ -20,7 +21,8 @@ from jointbench.identification.parameters import units
 FILES = ("corrected.xml", "extended.xml", "report.md", "diagnosis.json")
 RULE = (f"significant: |model - data| > {SIGMAS:g} corrected sigma of the log's "
         f"identification AND |error| > {FLOOR_PCT:g} % of the data's value (MX, MY: of the "
-        "gravity moment sqrt(MX^2 + MY^2))")
+        "gravity moment sqrt(MX^2 + MY^2)); a significant one's data value is then refitted "
+        "with the other parameters held at the model's")
 
 
 def output_folder(out: Path) -> OutputFolder:
@@ -70,8 +72,10 @@ def _error_lines(md: ModelDiagnosis) -> list[str]:
     L = [f"{'parameter':9s} {'model':>12s} {'data':>12s} {'sigma':>10s} {'error %':>8s}  "
          "significant"]
     for n, e in md.errors.items():
+        refit = (f"  (refitted; identified {e.identified:.5g})"
+                 if math.isfinite(e.identified) else "")
         L.append(f"{n:9s} {e.model:12.5g} {e.data:12.5g} {e.sigma:10.3g} {e.error_pct:8.2f}  "
-                 f"{'yes' if e.significant else 'no'}  [{u.get(n, '')}]")
+                 f"{'yes' if e.significant else 'no'}  [{u.get(n, '')}]{refit}")
     return L
 
 
