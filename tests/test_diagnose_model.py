@@ -14,7 +14,7 @@ from pathlib import Path
 import mujoco
 import pytest
 
-from jointbench.bench.analysis.diagnose.against_model import (FLOOR_PCT, compare,
+from jointbench.bench.analysis.diagnose.against_model import (COMPARED, FLOOR_PCT, compare,
                                                               diagnose_against_model,
                                                               significant)
 from jointbench.bench.analysis.diagnose.model_cases import Case, score, true_errors
@@ -24,6 +24,7 @@ from jointbench.bench.effects import HiddenEffect
 from jointbench.bench.sim.experiment import run_experiment
 from jointbench.bench.sim.nominal import write_xml
 from jointbench.identification.log import read_log, write_log
+from jointbench.identification.parameters import TWO_MASS
 from jointbench.models import model_path
 
 DURATION = 30.0
@@ -168,5 +169,6 @@ def test_bad_input_exit_2(prototype, argv, text, capsys):
     assert text in capsys.readouterr().err
 
 
-def test_floor_is_stated():
+def test_floor_is_stated_and_every_parameter_compared():
     assert FLOOR_PCT == 5.0
+    assert sorted(COMPARED) == sorted(TWO_MASS)

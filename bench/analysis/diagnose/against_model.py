@@ -47,13 +47,15 @@ from jointbench.identification import regressors
 from jointbench.identification.estimate import block_weighted
 from jointbench.identification.identify import Identification, identify
 from jointbench.identification.log import Log
+from jointbench.identification.parameters import FRICTIONS, STIFFNESS_AND_INERTIAS
 from jointbench.identification.saturation import exclude_clipped
 from jointbench.models import find_axes, model_path, select_axis
 
-COMPARED = ("K", "Jm", "JL", "FVm", "FSm", "FV", "FS", "MX", "MY")
+GRAVITY = ("MX", "MY")
+# The physical parameters of eq. (13) (identification.parameters.TWO_MASS), in the order.
+COMPARED = STIFFNESS_AND_INERTIAS + FRICTIONS + GRAVITY
 SIGMAS = 3.0        # |model - data| beyond this many corrected sigmas ...
 FLOOR_PCT = 5.0     # ... and beyond this share of the data's value
-GRAVITY = ("MX", "MY")
 # Effects a user's MJCF carries as parameters, not as extra elements.
 AS_PARAMETERS = {"gravity": "MX, MY (the MJCF's masses and centres of mass)",
                  "link_coulomb": "FS (frictionloss of the link joint)"}

@@ -13,7 +13,8 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from jointbench.bench.analysis.diagnose.against_model import FLOOR_PCT, ModelDiagnosis
+from jointbench.bench.analysis.diagnose.against_model import (COMPARED, FLOOR_PCT,
+                                                              ModelDiagnosis)
 from jointbench.bench.analysis.diagnose.model_edit import corrected_spec, spec_truth
 from jointbench.bench.sim.nominal import write_xml
 from jointbench.models import model_path
@@ -60,7 +61,7 @@ def true_errors(case: Case, config: dict[str, float], path: Path) -> dict[str, f
     after = spec_truth(wrong.spec, case.joint, config)[0]
     g = float(np.hypot(truth.MX, truth.MY))
     out = {}
-    for k in ("K", "Jm", "JL", "FVm", "FSm", "FV", "FS", "MX", "MY"):
+    for k in COMPARED:
         t, a = getattr(truth, k), getattr(after, k)
         scale = g if k in ("MX", "MY") else abs(t)
         if scale > 0 and abs(a - t) > 1e-4 * scale:
