@@ -1,5 +1,6 @@
 """`jointbench diagnose FILE`: what the simulation gets wrong on a log, the named causes, the
-extended model and its gain (docs/cli.md), optionally cross-validated on another log."""
+extended model and its gain (docs/cli.md), optionally cross-validated on another log. With
+`--model ROBOT.xml` the user's MJCF is the nominal (bench.analysis.diagnose.against_model)."""
 
 from __future__ import annotations
 
@@ -9,17 +10,32 @@ import sys
 from pathlib import Path
 from typing import Callable
 
-from jointbench.bench.cli.common import UsageError, finite
+from jointbench.bench.cli.common import UsageError, finite, parse_config
 
 # The library `run` imports, loaded by the dispatcher before it traps the signals.
 LIBRARY = ("jointbench.bench.analysis.diagnose.forward",
            "jointbench.bench.analysis.diagnose.run")
+AGAINST_MODEL = ("jointbench.bench.analysis.diagnose.against_model",
+                 "jointbench.bench.analysis.diagnose.model_report")
+
+
+def library(args: argparse.Namespace) -> tuple[str, ...]:
+    """The modules `run` imports for these arguments."""
+    return LIBRARY + (AGAINST_MODEL if getattr(args, "model", None) else ())
 
 
 def add_arguments(g: argparse.ArgumentParser) -> None:
     """The options of `diagnose`."""
     g.add_argument("file", help="log file (docs/log-format.md)")
-    g.add_argument("--out", help="folder for figures, report.md, nominal.xml, extended.xml")
+    g.add_argument("--out", help="folder for figures, report.md, nominal.xml, extended.xml "
+                                 "(with --model: corrected.xml, extended.xml, report.md)")
+    g.add_argument("--model", metavar="ROBOT.xml",
+                   help="compare with this MJCF (axis convention; prototype, arm6 or a file): "
+                        "its parameter errors, corrected.xml and extended.xml")
+    g.add_argument("--joint", help="--model: the axis the log moves, by name or index from 1 "
+                                   "(default: the log's joint metadata, else the first)")
+    g.add_argument("--config", help="--model: locked angles of the other axes, e.g. "
+                                    "axis2=-0.5,axis3=1.0 (default: the log's locked_config)")
     g.add_argument("--json", action="store_true", help="print the JSON object of docs/cli.md")
     g.add_argument("--no-forward", action="store_true",
                    help="skip the closed-loop replay (forward view)")
@@ -78,6 +94,10 @@ def run(args: argparse.Namespace) -> int:
 
     log = read_log(args.file)
     clipping_warnings(log)   # LogError over a third, before any computation
+    if args.model:
+        return run_model(args, log)
+    if args.joint or args.config:
+        raise UsageError("--joint and --config apply with --model")
     say = _progress(args)
     out = _output_folder(args)
     other = read_log(args.validate) if args.validate else None
@@ -112,4 +132,32 @@ def run(args: argparse.Namespace) -> int:
         print(summary_text(d))
         if xval is not None:
             print(_cross_validation_text(args, xval))
+    return 0
+
+
+def run_model(args: argparse.Namespace, log) -> int:
+    """`diagnose FILE --model ROBOT.xml`: the log against the user's MJCF."""
+    from jointbench.bench.analysis.diagnose.against_model import diagnose_against_model
+    from jointbench.bench.analysis.diagnose.model_report import (output_folder, summary_text,
+                                                                 to_json, write)
+    from jointbench.identification.log import read_log
+    from jointbench.identification.output import finite_json
+
+    if args.disturbance_column:
+        raise UsageError("--disturbance-column does not apply with --model")
+    say = _progress(args)
+    out = Path(args.out) if args.out else None
+    if out is not None:
+        output_folder(out)
+    other = read_log(args.validate) if args.validate else None
+    if other is not None and Path(args.validate).resolve() == Path(args.file).resolve():
+        raise UsageError("--validate must name another log than FILE (cross-validation)")
+    md = diagnose_against_model(log, args.model, args.joint, parse_config(args.config),
+                                forward=not args.no_forward, validate=other, progress=say)
+    if out is not None:
+        md = write(md, out, say)
+    if args.json:
+        print(json.dumps(finite_json(to_json(md)), allow_nan=False))
+    else:
+        print(summary_text(md))
     return 0

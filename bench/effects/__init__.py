@@ -11,8 +11,10 @@ from __future__ import annotations
 from jointbench.bench.effects.base import BenchEffect
 from jointbench.bench.effects.hidden import OPTIONS, HiddenEffect, parse_effect
 from jointbench.bench.effects.loop import LoopEffects, loop_effects_from_model
-from jointbench.bench.effects.mjcf import apply_to_spec, write_extended
+from jointbench.bench.effects.mjcf import (apply_to_spec, axis_key, axis_keys, write_effects,
+                                           write_extended)
 from jointbench.bench.effects.registry import BENCH_EFFECTS
 
 __all__ = ["BENCH_EFFECTS", "OPTIONS", "BenchEffect", "HiddenEffect", "LoopEffects",
-           "apply_to_spec", "loop_effects_from_model", "parse_effect", "write_extended"]
+           "apply_to_spec", "axis_key", "axis_keys", "loop_effects_from_model", "parse_effect",
+           "write_effects", "write_extended"]

@@ -11,6 +11,8 @@ from jointbench.bench.effects.base import BenchEffect, Uniform, nonnegative
 
 
 def mjcf(spec: mujoco.MjSpec, axis: str, strength: float, options: dict, K: float) -> None:
+    if not strength > 0:   # no lag: MuJoCo's filter with a zero time constant diverges
+        return
     act = spec.actuator(f"{axis}_motor")
     act.dyntype = mujoco.mjtDyn.mjDYN_FILTEREXACT
     act.dynprm[0] = strength

@@ -37,6 +37,12 @@ SAMPLE_RATE_HZ = PAPER_RATE  # the paper's acquisition rate, the mission's
 DEFAULT_SUBSTEPS = 1      # RK4; see README "Substeps" for the convergence check
 
 
+def position_unit(model: mujoco.MjModel, axis) -> str:
+    """"m" for an axis whose link joint slides (prismatic: m and N), else "rad"."""
+    slide = int(model.jnt_type[axis.link_joint]) == int(mujoco.mjtJoint.mjJNT_SLIDE)
+    return "m" if slide else "rad"
+
+
 class SimulationError(RuntimeError):
     """The simulation diverged or MuJoCo raised a warning: names the joint, time and reason."""
 
@@ -120,7 +126,8 @@ def run_experiment(model: str | Path = "prototype", joint: str | None = None, *,
         "joint": ax.name, "source": f"jointbench virtual experiment, model {exp.source.name}",
         "seed": str(seed), "lock": lock, "substeps": str(substeps),
         "integrator": mujoco.mjtIntegrator(m.opt.integrator).name,
-        "chirp": f"{chirp.method} {chirp.f0:g}-{chirp.f1:g} Hz, amplitude {chirp.amplitude:g} rad, "
+        "chirp": f"{chirp.method} {chirp.f0:g}-{chirp.f1:g} Hz, amplitude {chirp.amplitude:g} "
+                 f"{position_unit(m, ax)}, "
                  f"{chirp.duration:g} s, taper {chirp.taper:g} s",
         "locked_config": " ".join(f"{k}={v:.6g}" for k, v in exp.config.items()),
         "saturated_samples": str(trace.saturated),
@@ -128,6 +135,8 @@ def run_experiment(model: str | Path = "prototype", joint: str | None = None, *,
         "amplitude_reductions": str(reductions),
         META_KEY: format_meta_number(motor_timeconst(m, ax.motor_dof)),
     })
+    if position_unit(m, ax) == "m":   # a slide joint: m and N (docs/log-format.md)
+        meta["axis"] = "prismatic"
     if truth.gear_ratio is not None:
         meta["gear_ratio"] = format_meta_number(truth.gear_ratio)
     meta.update(sensors.to_meta())
@@ -170,7 +179,8 @@ def _simulate(exp: ExperimentModel, chirp: Chirp, sensors: Sensors, gains: Gains
                     float(np.max(np.abs(m.actuator_ctrlrange[act])))
                     if m.actuator_ctrllimited[act] else math.inf,
                     [d.warning[int(w)] for w in INSTABILITY_WARNINGS],
-                    2 * math.pi * truth.f1_hz * m.opt.timestep, 2.78 if rk4 else 2.0)
+                    2 * math.pi * truth.f1_hz * m.opt.timestep, 2.78 if rk4 else 2.0,
+                    position_unit(m, ax))
     with _mujoco_warnings() as fault.texts:
         trace = run_loop(m, d, ax, gains, T, exp.tau0, q_ref, substeps=substeps,
                          sensors=sensors, seed=seed, loop=loop if loop.active else None,
@@ -192,9 +202,10 @@ class _Faults(LoopChecks):
     position_limit = link_limit = DIVERGED_POSITION
 
     def __init__(self, joint: str, T: float, amplitude: float, tau_max: float,
-                 ctrl_limit: float, bad: list, w1_dt: float, w_dt_limit: float):
-        self.joint, self.T, self.tau_max, self.ctrl_limit, self.bad = \
-            joint, T, tau_max, ctrl_limit, bad
+                 ctrl_limit: float, bad: list, w1_dt: float, w_dt_limit: float,
+                 unit: str = "rad"):
+        self.joint, self.T, self.tau_max, self.ctrl_limit, self.bad, self.unit = \
+            joint, T, tau_max, ctrl_limit, bad, unit
         # w1 dt against the integrator's stability bound on the imaginary axis (RK4 2.78,
         # Euler 2): beyond it the spring mode itself blows up, whatever the gains.
         self.cause = (f"the timestep is too large for the joint's mode: w1 dt = {w1_dt:.3g} is "
@@ -214,11 +225,13 @@ class _Faults(LoopChecks):
                               f"t = {k * self.T:.4f} s: {reason}")
 
     def diverged(self, k: int, qm: float, q: float) -> None:
-        self._fail(k, f"the state diverged (q_m = {qm:.3g}, q = {q:.3g} rad): {self.cause}")
+        self._fail(k, f"the state diverged (q_m = {qm:.3g}, q = {q:.3g} {self.unit}): "
+                      f"{self.cause}")
 
     def lost_track(self, k: int, error: float) -> None:
-        self._fail(k, f"the motor is {abs(error):.3g} rad from the reference (limit "
-                      f"{self.track_limit:.3g} rad, {TRACKING_LIMIT:g} chirp amplitudes): "
+        self._fail(k, f"the motor is {abs(error):.3g} {self.unit} from the reference (limit "
+                      f"{self.track_limit:.3g} {self.unit}, {TRACKING_LIMIT:g} chirp "
+                      "amplitudes): "
                       f"{self.cause}; or the torque limit {self.torque_limit:g} cannot hold "
                       "the axis")
 

@@ -22,7 +22,7 @@ import mujoco
 import numpy as np
 
 from jointbench.bench.analysis.diagnose.types import Diagnosis, ForwardView
-from jointbench.bench.effects import loop_effects_from_model, write_extended
+from jointbench.bench.effects import loop_effects_from_model, write_effects
 from jointbench.bench.effects.base import positive_part as _pos
 from jointbench.bench.sim import nominal as nominal_axes
 from jointbench.bench.sim.replay import ReplayError, replay
@@ -57,12 +57,13 @@ def build_spec(d: Diagnosis, extended: bool) -> mujoco.MjSpec:
         spec = nominal_axes.rigid_axis(J=p["J"], FV=_pos(p, "FV"), FS=_pos(p, "FS"),
                                        offset=0.0, **common)
         K = 0.0
-    if c is not None:
-        write_extended(spec, name, c.effect, p, K)
+    if c is not None:   # several named causes: one (effect, parameters) pair each
+        write_effects(spec, name, [(c.effect, p)], K)
     return spec
 
 
-def _tau0(log: Log) -> float | None:
+def replay_tau0(log: Log) -> float | None:
+    """The integrator's initial state of a replay of `log` (None: the logged tau_m[0])."""
     # With ki = 0 there is no integrator: docs/controller.md's I[-1] = tau_m[0] would hold the first
     # logged torque for ever, which is only right for a log starting at rest (EMPS starts in
     # motion: 89 N held, a constant 65 um off). A P-only drive starts with I = 0.
@@ -75,7 +76,7 @@ def _view(d: Diagnosis, spec: mujoco.MjSpec, disturbance: np.ndarray | None = No
     model, axis = nominal_axes.compile_axis(spec, "<diagnosis>")
     loop = loop_effects_from_model(model, axis.name)
     r = replay(model, axis, log, disturbance=disturbance, disturbance_at=disturbance_at,
-               tau0=_tau0(log), loop=loop)
+               tau0=replay_tau0(log), loop=loop)
     e_qm = float(np.sqrt(np.mean((r.q_m - log.q_m) ** 2)))
     motion = float(np.sqrt(np.mean((log.q_m - np.mean(log.q_m)) ** 2)))
     e_tau = 100 * float(np.linalg.norm(r.tau_m - log.tau_m) / np.linalg.norm(log.tau_m))

@@ -17,6 +17,7 @@ from jointbench.bench.analysis.diagnose.figures import (plot_forward, plot_forwa
                                                         plot_structure)
 from jointbench.bench.analysis.diagnose.forward import write_models
 from jointbench.bench.analysis.diagnose.types import BLOCK_NAMES, Diagnosis
+from jointbench.bench.effects import axis_keys
 from jointbench.bench.output import OutputFolder
 from jointbench.identification.discrepancy import ALPHA, FOLDS, MATERIAL, SEGMENTS
 from jointbench.identification.effects import EFFECTS
@@ -54,7 +55,8 @@ def report_markdown(d: Diagnosis, figures: dict[str, str]) -> str:
           "parameters |", "| --- | --- | --- | --- | --- | --- | --- | --- |"]
     for c in inv.candidates:
         if c.testable:
-            pars = ", ".join(f"{k} = {v:.4g}" for k, v in c.parameters.items())
+            pars = ", ".join(f"{k} = {v:.4g}" for k, v in
+                             axis_keys(c.parameters, d.log.prismatic).items())
             if c.unphysical:
                 pars += f" (unphysical: {c.unphysical})"
             L.append(f"| {c.effect} | {'yes' if c.significant else 'no'} | "
@@ -74,7 +76,8 @@ def report_markdown(d: Diagnosis, figures: dict[str, str]) -> str:
               "", "## 4. Extended model", "",
               "`extended.xml` is the nominal axis with the effect added "
               "(`jointbench simulate --model extended.xml` runs it).", ""]
-        L += [f"- {k} = {v:.6g}" for k, v in d.extended_parameters.items()]
+        L += [f"- {k} = {v:.6g}" for k, v in
+              axis_keys(d.extended_parameters, d.log.prismatic).items()]
         before, after = d.inverse_before_after
         L += ["", "## 5. Gain", "", "| view | metric | nominal | extended | gain |",
               "| --- | --- | --- | --- | --- |",
@@ -183,7 +186,8 @@ def summary_text(d: Diagnosis) -> str:
         if not c.testable:
             L.append(f"{c.effect:20s} {'-':>7s}  not testable: {c.reason}")
             continue
-        pars = ", ".join(f"{k} = {v:.4g}" for k, v in c.parameters.items())
+        pars = ", ".join(f"{k} = {v:.4g}" for k, v in
+                         axis_keys(c.parameters, d.log.prismatic).items())
         if c.unphysical:
             pars += " (unphysical)"
         L.append(f"{c.effect:20s} {'yes' if c.significant else 'no':>7s} "
@@ -200,7 +204,8 @@ def summary_text(d: Diagnosis) -> str:
     if d.named is not None:
         info = EFFECTS[d.named_cause]
         before, after = d.inverse_before_after
-        L.append(f"{info.parameter} = {d.extended_parameters[info.parameter]:.5g} {info.unit}")
+        L.append(f"{info.parameter} = {d.extended_parameters[info.parameter]:.5g} "
+                 f"{info.unit_for(d.log.prismatic)}")
         L.append(f"gain, inverse view ({BLOCK_NAMES[d.view_block].split(':')[0]}): "
                  f"{before:.2f} % -> {after:.2f} % ({before / after:.2f}x)")
         if d.forward_nominal is not None and d.forward_extended is not None:

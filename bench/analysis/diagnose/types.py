@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from jointbench.bench.effects import axis_keys
 from jointbench.identification.discrepancy import Candidate, InverseDiagnosis
 from jointbench.identification.effects import NONE
 from jointbench.identification.filtering import FilterSettings
@@ -93,9 +94,10 @@ class Diagnosis:
             "named_cause": self.named_cause,
             "named_causes": [c.effect for c in self.causes],
             "verdict": self.verdict,
-            "candidates": [_candidate_json(c) for c in self.inverse.candidates],
-            "causes": [_cause_json(c) for c in self.causes],
-            "extended_parameters": self.extended_parameters,
+            "candidates": [_candidate_json(c, self.log.prismatic)
+                           for c in self.inverse.candidates],
+            "causes": [_cause_json(c, self.log.prismatic) for c in self.causes],
+            "extended_parameters": axis_keys(self.extended_parameters, self.log.prismatic),
             "gain": {"metric": "inverse view, " + BLOCK_NAMES[self.view_block],
                      "before": before, "after": after,
                      "ratio": before / after if after > 0 else None},
@@ -123,9 +125,10 @@ class Diagnosis:
         return finite_json(out)
 
 
-def _cause_json(c: Candidate) -> dict:
+def _cause_json(c: Candidate, prismatic: bool = False) -> dict:
     """One named cause: its parameters and its own gain, against the causes before it."""
-    return {"effect": c.effect, "after": [e for e, _ in c.base], "parameters": c.parameters,
+    return {"effect": c.effect, "after": [e for e, _ in c.base],
+            "parameters": axis_keys(c.parameters, prismatic),
             "heldout_pct": c.heldout_pct, "t": c.t_stat, "p_heldout": c.p_heldout,
             "block": BLOCK_NAMES[c.block].split(":")[0], "before_pct": c.before_pct,
             "after_pct": c.after_pct, "gain": c.gain}
@@ -138,14 +141,14 @@ def _forward_json(f: ForwardView) -> dict:
     return out
 
 
-def _candidate_json(c: Candidate) -> dict:
+def _candidate_json(c: Candidate, prismatic: bool = False) -> dict:
     out = {"effect": c.effect, "significant": c.significant, "testable": c.testable}
     if c.testable:
         out.update({"heldout_pct": c.heldout_pct, "t": c.t_stat, "p_heldout": c.p_heldout,
                     "alpha": c.alpha, "explained_pct": c.explained_pct, "score": c.delta_bic,
                     "p_value": c.p_value, "size_pct": c.size_pct,
                     "before_pct": c.before_pct, "after_pct": c.after_pct,
-                    "parameters": c.parameters})
+                    "parameters": axis_keys(c.parameters, prismatic)})
         if c.unphysical:
             out["unphysical"] = c.unphysical
     else:

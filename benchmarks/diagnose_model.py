@@ -1,0 +1,94 @@
+"""Benchmark of `diagnose LOG --model ROBOT.xml` (issue 15, "wrong parameters").
+
+    .venv/bin/python benchmarks/diagnose_model.py [--cases 4] [--duration 60] [--seed 0]
+
+For the prototype axis and each of the six arm6 joints: one virtual experiment of the true
+model (`jointbench simulate`, 350.87 Hz default rate, default sensors, seed 1), diagnosed
+against the true MJCF (nothing may be named) and against `--cases` copies with one or two of
+K, Jm, JL, FS, FVm off by 10-30 % (bench.analysis.diagnose.model_cases, drawn with
+numpy's default_rng(seed)). Printed per case: the true and reported errors, right or wrong
+(the named set is the set put off beyond the floor, each error within 2 points), the forward
+torque error of the wrong copy and of the corrected model. Then the share right, the false
+namings on the true models and the smallest and median forward gains. Nothing is asserted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from jointbench.bench.analysis.diagnose.against_model import diagnose_against_model  # noqa: E402
+from jointbench.bench.analysis.diagnose.model_cases import (Case, draw_cases, score,  # noqa: E402
+                                                            true_errors)
+from jointbench.bench.sim.experiment import run_experiment  # noqa: E402
+
+AXES = [("prototype", "axis1")] + [("arm6", f"axis{i}") for i in range(1, 7)]
+
+
+def run(cases_per_axis: int, duration: float, seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    rows, false_named = [], []
+    with tempfile.TemporaryDirectory() as tmp:
+        for model, joint in AXES:
+            t0 = time.time()
+            log = run_experiment(model, joint, duration=duration, seed=1).log
+            config = {k: float(v) for k, v in
+                      (item.split("=") for item in log.meta["locked_config"].split())}
+            for case in [Case(model, joint, {})] + draw_cases(rng, model, joint,
+                                                              cases_per_axis):
+                path = Path(tmp) / "wrong.xml"
+                expected = true_errors(case, config, path)
+                md = diagnose_against_model(log, path, joint)
+                s = score(md, expected)
+                print(f"{case.label:45s} true {fmt(s.expected)} | named {fmt(s.named)} | "
+                      f"{'right' if s.right else 'WRONG'} | torque {s.torque_before:.2f} % -> "
+                      f"{s.torque_after:.2f} % ({s.ratio:.2f}x) | causes "
+                      f"{','.join(md.named_causes) or 'none'}", flush=True)
+                if case.factors:
+                    rows.append(s)
+                elif s.named or md.named_causes:
+                    false_named.append(case.label)
+            print(f"  ({model}/{joint}: {time.time() - t0:.0f} s)", flush=True)
+    right = sum(s.right for s in rows)
+    ratios = np.array([s.ratio for s in rows])
+    print(f"\nright: {right} of {len(rows)} ({100 * right / len(rows):.1f} %); the right "
+          f"parameters named, whatever the error: {sum(s.named_right for s in rows)}")
+    off = {}
+    for s in rows:
+        for k, v in s.named.items():
+            if k in s.expected and abs(v - s.expected[k]) > 2.0:
+                off.setdefault(k, []).append(round(v - s.expected[k], 1))
+    print("errors more than 2 points off (reported - true): "
+          + ("; ".join(f"{k} {v}" for k, v in off.items()) or "none"))
+    print(f"true models with something named: {len(false_named)} of {len(AXES)} "
+          f"{false_named or ''}")
+    print(f"forward torque gain (wrong copy / corrected): min {ratios.min():.2f}x, "
+          f"median {np.median(ratios):.2f}x; >= 2x in {int(np.sum(ratios >= 2))} of "
+          f"{len(rows)}")
+
+
+def fmt(errors: dict[str, float]) -> str:
+    return ", ".join(f"{k} {v:+.1f}" for k, v in errors.items()) or "-"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--cases", type=int, default=4, help="wrong copies per axis (default 4)")
+    ap.add_argument("--duration", type=float, default=60.0, help="log length, s (default 60)")
+    ap.add_argument("--seed", type=int, default=0, help="case draw seed (default 0)")
+    args = ap.parse_args()
+    t0 = time.time()
+    run(args.cases, args.duration, args.seed)
+    print(f"wall time {time.time() - t0:.0f} s")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,174 @@
+"""`diagnose LOG --model ROBOT.xml` (issue 15, item 1): the user's MJCF as the nominal.
+
+Ground truth: virtual logs of the shipped models, diagnosed against copies of the MJCF with
+known parameters off (bench.analysis.diagnose.model_cases). The parameters put off must be
+named, each with its error within 2 points of the truth; nothing may be named on the true
+model; the corrected model must replay the log at least twice as well. The battery of at
+least 20 cases is benchmarks/diagnose_model.py (README)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import mujoco
+import pytest
+
+from jointbench.bench.analysis.diagnose.against_model import (COMPARED, FLOOR_PCT, compare,
+                                                              diagnose_against_model,
+                                                              significant)
+from jointbench.bench.analysis.diagnose.model_cases import Case, score, true_errors
+from jointbench.bench.analysis.diagnose.model_edit import corrected_spec, spec_truth
+from jointbench.bench.cli import main
+from jointbench.bench.effects import HiddenEffect
+from jointbench.bench.sim.experiment import run_experiment
+from jointbench.bench.sim.nominal import write_xml
+from jointbench.identification.log import read_log, write_log
+from jointbench.identification.parameters import TWO_MASS
+from jointbench.models import model_path
+
+DURATION = 30.0
+
+
+def _config(log) -> dict[str, float]:
+    return {k: float(v) for k, v in (i.split("=") for i in log.meta["locked_config"].split())}
+
+
+@pytest.fixture(scope="module")
+def prototype(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("proto")
+    log = run_experiment("prototype", duration=DURATION, seed=1).log
+    write_log(log, folder / "log.csv")
+    other = run_experiment("prototype", duration=DURATION, seed=2).log
+    write_log(other, folder / "other.csv")
+    return read_log(folder / "log.csv"), folder
+
+
+def test_rule_is_both_sigma_and_floor():
+    # 10 sigma but 1 %: not significant; 20 % but 2 sigma: not significant; both: significant
+    assert significant(101.0, 100.0, 0.1, 100.0) == (pytest.approx(1.0), False)
+    assert significant(120.0, 100.0, 10.0, 100.0)[1] is False
+    assert significant(120.0, 100.0, 1.0, 100.0) == (pytest.approx(20.0), True)
+    assert significant(1.0, 1.0, float("nan"), 1.0)[1] is False
+    e = compare({"MX": 0.0, "MY": -50.0}, {"MX": 4.0, "MY": -50.0}, {"MX": 0.1, "MY": 0.1})
+    assert e["MX"].error_pct == pytest.approx(-100 * 4 / (50 ** 2 + 16) ** 0.5)
+    assert e["MX"].significant and not e["MY"].significant
+
+
+def test_corrected_spec_sets_each_parameter_and_keeps_the_rest():
+    src = model_path("arm6")
+    spec = mujoco.MjSpec.from_file(str(src))
+    t0 = spec_truth(spec, "axis3", {})[0]
+    want = {"K": 1.2 * t0.K, "Jm": 0.8 * t0.Jm, "JL": 1.25 * t0.JL, "FVm": 0.7 * t0.FVm,
+            "FSm": 1.1 * t0.FSm, "FV": 1.3 * t0.FV, "FS": 0.9 * t0.FS}
+    c = corrected_spec(src, "axis3", {}, want)
+    t1 = spec_truth(c.spec, "axis3", {})[0]
+    for k, v in want.items():
+        assert getattr(t1, k) == pytest.approx(v, rel=1e-9), k
+    assert (t1.MX, t1.MY) == pytest.approx((t0.MX, t0.MY), rel=1e-9, abs=1e-12)
+    # another axis untouched
+    assert spec_truth(c.spec, "axis2", {})[0] == spec_truth(spec, "axis2", {})[0]
+    # JL lowered through the rotational inertias only (gravity kept) where they suffice
+    c = corrected_spec(model_path("prototype"), "axis1", {}, {"JL": 0.75 * 47.4458})
+    t = spec_truth(c.spec, "axis1", {})[0]
+    assert t.JL == pytest.approx(0.75 * 47.4458, rel=1e-9) and not c.notes
+    assert t.MY == pytest.approx(-53.4201, rel=1e-9)
+
+
+@pytest.mark.parametrize("factors", [{}, {"K": 1.2, "FS": 0.8}, {"JL": 0.75},
+                                     {"Jm": 1.15, "FVm": 1.3}])
+def test_wrong_parameters_named_within_two_points(prototype, factors, tmp_path):
+    log, _ = prototype
+    case = Case("prototype", "axis1", factors)
+    expected = true_errors(case, _config(log), tmp_path / "wrong.xml")
+    md = diagnose_against_model(log, tmp_path / "wrong.xml")
+    s = score(md, expected)
+    assert s.right, (s.expected, s.named)
+    if factors:
+        assert set(s.named) == set(factors)
+        assert s.ratio >= 2.0, (s.torque_before, s.torque_after)
+    else:
+        assert md.wrong_parameters == () and md.named_causes == ()
+        assert s.ratio == pytest.approx(1.0)
+
+
+def test_arm_joint(tmp_path):
+    log = run_experiment("arm6", "axis2", duration=DURATION, seed=1).log
+    case = Case("arm6", "axis2", {"K": 0.8, "JL": 1.2})
+    expected = true_errors(case, _config(log), tmp_path / "wrong.xml")
+    md = diagnose_against_model(log, tmp_path / "wrong.xml")
+    assert md.joint == "axis2" and md.config == _config(log)
+    s = score(md, expected)
+    assert s.right, (s.expected, s.named)
+    assert s.ratio >= 2.0
+
+
+def test_missing_link_friction_is_link_coulomb(prototype, tmp_path):
+    log, _ = prototype
+    src = model_path("prototype")
+    write_xml(corrected_spec(src, "axis1", {}, {}).spec, tmp_path / "nofs.xml")
+    spec = mujoco.MjSpec.from_file(str(tmp_path / "nofs.xml"))
+    spec.joint("axis1").frictionloss = 0.0
+    write_xml(spec, tmp_path / "nofs.xml")
+    md = diagnose_against_model(log, tmp_path / "nofs.xml")
+    assert md.named_causes[0] == "link_coulomb"
+    assert md.wrong_parameters == ("FS",)
+    assert md.errors["FS"].error_pct == pytest.approx(-100.0)
+    assert "frictionloss=\"8.4" in md.xml["corrected.xml"]
+
+
+def test_cli_json_files_and_the_written_models_run(prototype, tmp_path):
+    log, folder = prototype
+    case = Case("prototype", "axis1", {"K": 1.25})
+    true_errors(case, _config(log), tmp_path / "wrong.xml")
+    out = tmp_path / "d"
+    code = main(["diagnose", str(folder / "log.csv"), "--model", str(tmp_path / "wrong.xml"),
+                 "--json", "--out", str(out), "--validate", str(folder / "other.csv")])
+    assert code == 0
+    doc = json.loads((out / "diagnosis.json").read_text())
+    assert doc["wrong_parameters"] == ["K"]
+    assert set(doc["parameter_errors"]["K"]) == {"model", "data", "sigma", "error_pct",
+                                                 "significant", "identified"}
+    assert set(doc["parameter_errors"]["Jm"]) == {"model", "data", "sigma", "error_pct",
+                                                  "significant"}
+    assert doc["parameter_errors"]["K"]["error_pct"] == pytest.approx(25.0, abs=2.0)
+    assert doc["named_cause"] == "none" and doc["named_causes"] == []
+    assert doc["gain"]["ratio_corrected"] >= 2.0
+    assert doc["cross_validation"]["gain"]["ratio_corrected"] >= 2.0
+    assert (out / "corrected.xml").exists() and not (out / "extended.xml").exists()
+    assert main(["simulate", "--quiet", "--model", str(out / "corrected.xml"), "--duration",
+                 "5", "--out", str(tmp_path / "sim.csv")]) == 0
+    assert main(["simulate", "--quiet", "--replay", str(folder / "log.csv"), "--model",
+                 str(out / "corrected.xml"), "--out", str(tmp_path / "rep.csv")]) == 0
+
+
+def test_hidden_effect_goes_into_extended(tmp_path):
+    log = run_experiment("prototype", duration=DURATION, seed=3,
+                         effect=HiddenEffect("backlash", 0.002)).log
+    md = diagnose_against_model(log, "prototype")
+    assert md.named_causes == ("backlash",)
+    assert [n for n, _ in md.effects] == ["backlash"]
+    assert "springlength" in md.xml["extended.xml"]
+    write_log(log, tmp_path / "log.csv")
+    (tmp_path / "extended.xml").write_text(md.xml["extended.xml"])
+    assert main(["simulate", "--quiet", "--replay", str(tmp_path / "log.csv"), "--model",
+                 str(tmp_path / "extended.xml"), "--out", str(tmp_path / "rep.csv")]) == 0
+    g = md.gain()
+    assert g["extended"] < g["model"]
+
+
+@pytest.mark.parametrize("argv, text", [
+    (["--joint", "axis1"], "--joint and --config apply with --model"),
+    (["--model", "no_such.xml"], "no such model file"),
+    (["--model", "prototype", "--joint", "axis9"], "no axis 'axis9'"),
+    (["--model", "prototype", "--config", "axis1=x"], "--config"),
+])
+def test_bad_input_exit_2(prototype, argv, text, capsys):
+    _, folder = prototype
+    assert main(["diagnose", str(folder / "log.csv"), *argv]) == 2
+    assert text in capsys.readouterr().err
+
+
+def test_floor_is_stated_and_every_parameter_compared():
+    assert FLOOR_PCT == 5.0
+    assert sorted(COMPARED) == sorted(TWO_MASS)
