@@ -40,8 +40,8 @@ def build_spec(d: Diagnosis, extended: bool) -> mujoco.MjSpec:
     log = d.log
     name = _axis_name(d)
     p = dict(d.nominal_parameters)
-    c = d.named if extended else None
-    if c is not None:
+    causes = d.causes if extended else ()
+    if causes:
         p.update(d.extended_parameters)
     common = dict(timestep=log.ts, tau_max=log.meta_float("tau_max"), gravity=log.gravity,
                   prismatic=log.prismatic, name=name)
@@ -57,8 +57,8 @@ def build_spec(d: Diagnosis, extended: bool) -> mujoco.MjSpec:
         spec = nominal_axes.rigid_axis(J=p["J"], FV=_pos(p, "FV"), FS=_pos(p, "FS"),
                                        offset=0.0, **common)
         K = 0.0
-    if c is not None:   # several named causes: one (effect, parameters) pair each
-        write_effects(spec, name, [(c.effect, p)], K)
+    if causes:   # every named cause, in order: one (effect, parameters) pair each
+        write_effects(spec, name, [(c.effect, {**p, **c.parameters}) for c in causes], K)
     return spec
 
 

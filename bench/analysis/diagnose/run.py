@@ -86,7 +86,10 @@ def diagnose(log: Log, out_dir: Path | None = None, forward: bool = True,
                   nominal_parameters=nom_p, extended_parameters={},
                   warnings=tuple(unit_warnings(log) + clipping_warnings(log)))
     d = replace(d, overruled=nominal_reason(d))
-    d = replace(d, extended_parameters=extended_parameters(d.named, inv.nominal))
+    ext: dict[str, float] = {}
+    for c in d.causes:   # each cause's own parameters; the last one's refit of the nominal
+        ext.update(extended_parameters(c, inv.nominal))
+    d = replace(d, extended_parameters=ext)
     if forward:
         d = add_forward_view(d, say)
     if not d.overruled:
