@@ -200,7 +200,7 @@ def stepper_with_effects(family, gravity: float, T: float, substeps: int, e: Pla
     # Exact first-order lag over a hold: tau_a(s) = u + (tau_a(0) - u) exp(-s / lag).
     decay_half, decay = (math.exp(-0.5 * h / e.lag), math.exp(-h / e.lag)) if e.lag > 0 \
         else (0.0, 0.0)
-    lagged = [tau_init]
+    lagged, lag = [tau_init], e.lag > 0
     tanh, cos, sin = math.tanh, math.cos, math.sin
 
     def accel(qm: float, q: float, vm: float, v: float, tau: float) -> tuple[float, float]:
@@ -214,7 +214,7 @@ def stepper_with_effects(family, gravity: float, T: float, substeps: int, e: Pla
 
     def step(x: State, u: float) -> State:
         for _ in range(substeps):
-            t0 = lagged[0]
+            t0 = lagged[0] if lag else u
             t_half, t_end = u + (t0 - u) * decay_half, u + (t0 - u) * decay
             lagged[0] = t_end
             x = rk4_step(accel, x, h, t0, t_half, t_end)

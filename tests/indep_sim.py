@@ -176,11 +176,14 @@ def energy(family: AxisFamily, x: State) -> float:
 
 
 def open_loop(family: AxisFamily, x0: State, tau: np.ndarray, sample_rate_hz: float = PAPER_RATE,
-              substeps: int | None = None, gravity: float = 9.81) -> np.ndarray:
+              substeps: int | None = None, gravity: float = 9.81, effects=None,
+              tau_init: float = 0.0) -> np.ndarray:
     """States at every tick (len(tau) + 1 rows: x0, then after each tick) under the held
-    torques `tau` [N m], loop open."""
-    n = default_substeps(family, sample_rate_hz) if substeps is None else substeps
-    step = make_stepper(family, gravity, 1.0 / sample_rate_hz, n)
+    torques `tau` [N m], loop open; `effects` as in `simulate` (a torque lag starts from
+    the rotor torque `tau_init`)."""
+    extra = plant(as_hidden(effects), family.K, family.gear_ratio, True)
+    n = default_substeps(family, sample_rate_hz, extra) if substeps is None else substeps
+    step = make_stepper(family, gravity, 1.0 / sample_rate_hz, n, extra, tau_init)
     out = np.empty((len(tau) + 1, 4))
     x = tuple(float(v) for v in x0)
     out[0] = x
