@@ -4,6 +4,7 @@ visibility, not by the detector's thresholds.
 
     .venv/bin/python benchmarks/battery.py [--out battery_out] [--jobs 2] [--per-effect 8]
         [--clean 24] [--pairs 20] [--seed 2026] [--duration 40] [--figure docs/figures/detection.png]
+    .venv/bin/python benchmarks/battery.py --from battery_out/cases.json   # summary, figure again
 
 Every case runs at the paper's rate (350.87 Hz), cycling over the places (bench prototype,
 arm6 axis2 and axis4; independent families balanced, soft, wrist, pendulum) and over velocity
@@ -47,11 +48,11 @@ def _init(duration: float) -> None:
 
 
 def named_causes(d) -> list[str]:
-    """The causes a Diagnosis names, in order (a detector naming several exposes
-    `named_causes`; main's names one)."""
-    several = getattr(d, "named_causes", None)
+    """The causes a Diagnosis names, in order: its `causes` (Candidates, issue 15 item 2)
+    when the detector names several, else its one `named_cause`."""
+    several = getattr(d, "causes", None)
     if several is not None:
-        return [n for n in several if n != NONE]
+        return [c.effect for c in several]
     return [] if d.named_cause == NONE else [d.named_cause]
 
 
@@ -113,6 +114,7 @@ def figure(records: list[dict], path: Path) -> None:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    import matplotlib.ticker
 
     from jointbench.identification.log_write import save_figure_atomic
 
@@ -124,6 +126,7 @@ def figure(records: list[dict], path: Path) -> None:
              for lo, hi, _ in pts]
         ax.plot(x, [100 * s for *_, s in pts], "o-", label=e)
     ax.set_xscale("log")
+    ax.xaxis.set_minor_locator(matplotlib.ticker.NullLocator())
     ax.set_xticks([100 * b for b in BINS])
     ax.set_xticklabels([f"{100 * b:g}" for b in BINS])
     ax.axhline(95, color="0.5", ls="--", lw=0.8)
@@ -149,7 +152,14 @@ def main(argv=None) -> int:
     ap.add_argument("--duration", type=float, default=40.0, help="log length [s] (default 40)")
     ap.add_argument("--figure", default="docs/figures/detection.png",
                     help="detection-curve figure (default docs/figures/detection.png)")
+    ap.add_argument("--from", dest="source", metavar="CASES.json",
+                    help="run nothing: the summary and figure of an earlier cases.json")
     args = ap.parse_args(argv)
+    if args.source:
+        records = json.loads(Path(args.source).read_text())["cases"]
+        print("\n".join(summary_lines(records)))
+        figure(records, Path(args.figure))
+        return 0
     specs = plan(PLACES, args.per_effect, args.clean, args.pairs, args.seed)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

@@ -61,6 +61,8 @@ def test_bench_case_hits_its_target_and_visibility_grows_with_strength():
     assert abs(out.visibilities[0] / 0.12 - 1) <= SEARCH_TOLERANCE
     assert out.log.meta["truth_effect"] == "offset"
     assert float(out.log.meta["truth_offset"]) == pytest.approx(out.strengths[0], rel=1e-9)
+    again = run_spec(spec, BenchRunner(duration=8.0))                # same seed, fresh runner
+    assert again.strengths == out.strengths and np.array_equal(again.log.tau_m, out.log.tau_m)
     tau_max, f1, _ = runner.scales(BENCH_PLACES[0])
     clean = runner.log(BENCH_PLACES[0], (), 3, False, False).tau_m
     v = [visibility(clean, runner.log(BENCH_PLACES[0], (("backlash", b, {}),), 3, False,

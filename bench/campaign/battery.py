@@ -295,9 +295,14 @@ def run_spec(spec: Spec, runner: Runner, cache: dict | None = None) -> Outcome:
     if key not in cache:
         cache[key] = runner.log(place, (), spec.seed, spec.feedforward, False).tau_m
     clean = cache[key]
-    vis = lambda effects: visibility(clean, runner.log(place, effects, spec.seed,
-                                                       spec.feedforward, False).tau_m,
-                                     f1, runner.rate_hz)
+    quiet: dict = {}       # noise-free logs of the search, by effects: the final log of a
+                           # case without torque noise is one of them
+
+    def vis(effects: tuple[Effect, ...]) -> float:
+        log = runner.log(place, effects, spec.seed, spec.feedforward, False)
+        quiet[repr(effects)] = log
+        return visibility(clean, log.tau_m, f1, runner.rate_hz)
+
     found: list[Effect] = []
     searches: list[Search] = []
     for k, (name, target) in enumerate(zip(spec.effects, spec.targets)):
@@ -309,6 +314,8 @@ def run_spec(spec: Spec, runner: Runner, cache: dict | None = None) -> Outcome:
         searches.append(search)
     effects = tuple(found)
     combined = searches[0].visibility if len(effects) == 1 else vis(effects) if effects else 0.0
-    log = runner.log(place, effects, spec.seed, spec.feedforward, spec.noise)
+    log = quiet.get(repr(effects)) if not spec.noise else None
+    if log is None:
+        log = runner.log(place, effects, spec.seed, spec.feedforward, spec.noise)
     return Outcome(spec, tuple(e[1] for e in effects), tuple(e[2] for e in effects),
                    tuple(s.visibility for s in searches), combined, tuple(searches), log)

@@ -16,6 +16,7 @@ from jointbench.identification.effects import EFFECTS, NONE
 BINS = (0.03, 0.05, 0.10, 0.20, 0.40)   # visibility bin edges (ratios); the last bin is open
 FOUND_SHARE = 0.95                      # "found 95 % of the time"
 MIN_CASES = 3                           # cases at or above a visibility to claim the share
+PAIR_VISIBLE = 0.10                     # a two-effect case counts when both effects reach it
 
 
 def first_named(record: dict) -> str:
@@ -110,4 +111,9 @@ def summary_lines(records: list[dict]) -> list[str]:
     if pairs:
         one = sum(bool(set(r["effects"]) & set(r["named"])) for r in pairs)
         lines.append(f"two-effect cases with at least one named: {one}/{len(pairs)}")
+        visible = [r for r in pairs if min(r["visibilities"]) >= PAIR_VISIBLE]
+        k = sum(right(r) for r in visible)
+        lines.append(f"two-effect cases with both visibilities >= {100 * PAIR_VISIBLE:g} %: "
+                     f"{len(visible)}, both named in {k}, over "
+                     f"{len({r['family'] for r in visible})} axis families")
     return lines
