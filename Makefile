@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test bench bench-peers bench-campaign bench-diagnose clean
+.PHONY: demo test bench bench-peers bench-campaign bench-diagnose battery clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -35,5 +35,10 @@ bench-campaign: $(STAMP)
 bench-diagnose: $(STAMP)
 	$(BIN)/python benchmarks/diagnose_battery.py --per-effect 5
 
+# The discrepancy battery by visibility (README "Discrepancy battery"): cases in battery_out/,
+# the detection curve in docs/figures/detection.png.
+battery: $(STAMP)
+	$(BIN)/python benchmarks/battery.py --jobs 2 --out battery_out
+
 clean:
-	rm -rf $(VENV) demo_out build *.egg-info
+	rm -rf $(VENV) demo_out battery_out build *.egg-info

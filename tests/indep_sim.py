@@ -6,7 +6,8 @@ flexible axis from the paper's eqs. (5)-(6) on the joint side (SI, radians):
     Jm qm'' = tau - FVm qm' - FSm tanh(qm' / v_s) - K (qm - q)                      (6)
     JL q''  = K (qm - q) - FV q' - FS tanh(q' / v_s) - MX g cos q - MY g sin q      (5), (7)
 
-Coulomb friction is smoothed over `v_s` (a parameter, default 1e-3 rad/s). The plant is
+Coulomb friction is smoothed over `v_s` (a parameter, default 1e-3 rad/s). The hidden effects
+of docs/effects.md (tests/indep_effects.py) add their terms to these equations. The plant is
 integrated by fixed-step RK4, `substeps` steps per control period, with the torque held over
 the period (zero-order hold). The controller is docs/controller.md, written here again from the
 contract's text (not imported), evaluated at 350.87 Hz by default on the quantised motor
@@ -23,6 +24,9 @@ from dataclasses import dataclass, replace
 from typing import Callable
 
 import numpy as np
+
+from indep_effects import (Plant, as_hidden, plant, rk4_step, spring_deflection,
+                           stepper_with_effects, truth_meta)
 
 from jointbench.bench.sim.controller import Gains, gains_rule
 from jointbench.identification.defaults import PAPER_RATE
@@ -61,6 +65,15 @@ class AxisFamily:
     motor_counts_per_turn: float = 2**17 * 100.0   # 17-bit motor encoder behind a 100:1 gear
     link_counts_per_turn: float = 2**20            # 20-bit absolute link encoder
     v_s: float = 1e-3
+    gear_ratio: float = 100.0    # only sets torque_ripple's default period
+
+    @property
+    def rest_angle(self) -> float:
+        """The stable link angle without torque [rad]: atan2(MY, MX) - pi/2, or 0 without a
+        link mass."""
+        if self.MX == 0.0 and self.MY == 0.0:
+            return 0.0
+        return math.atan2(self.MY, self.MX) - math.pi / 2
 
     @property
     def f1_hz(self) -> float:
@@ -107,23 +120,32 @@ def frictionless(family: AxisFamily) -> AxisFamily:
     return replace(family, FVm=0.0, FSm=0.0, FV=0.0, FS=0.0)
 
 
-def default_substeps(family: AxisFamily, sample_rate_hz: float = PAPER_RATE) -> int:
+def default_substeps(family: AxisFamily, sample_rate_hz: float = PAPER_RATE,
+                     effects: Plant = Plant()) -> int:
     """RK4 substeps per control period: w1 dt <= STEP_PHASE and the stiffest friction rate
-    ((FS / v_s + FV) / J, motor or link) times dt <= STEP_FRICTION."""
+    ((FS / v_s + FV) / J, motor or link) times dt <= STEP_FRICTION; the effects' extra
+    stiffness (hardening), damping and friction count in."""
     T = 1.0 / sample_rate_hz
-    rate = max((family.FSm / family.v_s + family.FVm) / family.Jm,
-               (family.FS / family.v_s + family.FV) / family.JL)
-    return max(1, math.ceil(TWO_PI * family.f1_hz * T / STEP_PHASE),
-               math.ceil(rate * T / STEP_FRICTION))
+    inv_j = 1.0 / family.Jm + 1.0 / family.JL
+    FSm = family.FSm * (1.0 + abs(effects.asymmetry))
+    rate = max((FSm / family.v_s + family.FVm) / family.Jm,
+               (family.FS + effects.link_coulomb) / family.v_s / family.JL + family.FV / family.JL,
+               effects.damping * inv_j)
+    w1 = math.sqrt((family.K + effects.hardening) * inv_j)
+    return max(1, math.ceil(w1 * T / STEP_PHASE), math.ceil(rate * T / STEP_FRICTION))
 
 
 State = tuple[float, float, float, float]   # (qm, q, qm', q') [rad, rad, rad/s, rad/s]
 
 
-def make_stepper(family: AxisFamily, gravity: float, T: float,
-                 substeps: int) -> Callable[[State, float], State]:
+def make_stepper(family: AxisFamily, gravity: float, T: float, substeps: int,
+                 effects: Plant = Plant(), tau_init: float = 0.0) -> Callable[[State, float], State]:
     """The plant over one control period: `step(x, tau)` integrates eqs. (5)-(6) from state x
-    by `substeps` RK4 steps with the torque tau held constant (zero-order hold)."""
+    by `substeps` RK4 steps with the torque tau held constant (zero-order hold). With
+    `effects`, their terms (tests/indep_effects.py); a torque lag keeps the rotor's torque,
+    starting at `tau_init`, inside the stepper."""
+    if effects != Plant():
+        return stepper_with_effects(family, gravity, T, substeps, effects, tau_init)
     Jm, JL, K = family.Jm, family.JL, family.K
     FVm, FSm, FV, FS, inv_vs = family.FVm, family.FSm, family.FV, family.FS, 1.0 / family.v_s
     gx, gy = family.MX * gravity, family.MY * gravity
@@ -140,20 +162,9 @@ def make_stepper(family: AxisFamily, gravity: float, T: float,
         return am, load / JL
 
     def step(x: State, tau: float) -> State:
-        qm, q, vm, v = x
         for _ in range(substeps):
-            a1m, a1 = accel(qm, q, vm, v, tau)
-            vm2, v2 = vm + 0.5 * h * a1m, v + 0.5 * h * a1
-            a2m, a2 = accel(qm + 0.5 * h * vm, q + 0.5 * h * v, vm2, v2, tau)
-            vm3, v3 = vm + 0.5 * h * a2m, v + 0.5 * h * a2
-            a3m, a3 = accel(qm + 0.5 * h * vm2, q + 0.5 * h * v2, vm3, v3, tau)
-            vm4, v4 = vm + h * a3m, v + h * a3
-            a4m, a4 = accel(qm + h * vm3, q + h * v3, vm4, v4, tau)
-            qm += h / 6.0 * (vm + 2.0 * vm2 + 2.0 * vm3 + vm4)
-            q += h / 6.0 * (v + 2.0 * v2 + 2.0 * v3 + v4)
-            vm += h / 6.0 * (a1m + 2.0 * a2m + 2.0 * a3m + a4m)
-            v += h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
-        return qm, q, vm, v
+            x = rk4_step(accel, x, h, tau, tau, tau)
+        return x
 
     return step
 
@@ -165,11 +176,14 @@ def energy(family: AxisFamily, x: State) -> float:
 
 
 def open_loop(family: AxisFamily, x0: State, tau: np.ndarray, sample_rate_hz: float = PAPER_RATE,
-              substeps: int | None = None, gravity: float = 9.81) -> np.ndarray:
+              substeps: int | None = None, gravity: float = 9.81, effects=None,
+              tau_init: float = 0.0) -> np.ndarray:
     """States at every tick (len(tau) + 1 rows: x0, then after each tick) under the held
-    torques `tau` [N m], loop open."""
-    n = default_substeps(family, sample_rate_hz) if substeps is None else substeps
-    step = make_stepper(family, gravity, 1.0 / sample_rate_hz, n)
+    torques `tau` [N m], loop open; `effects` as in `simulate` (a torque lag starts from
+    the rotor torque `tau_init`)."""
+    extra = plant(as_hidden(effects), family.K, family.gear_ratio, True)
+    n = default_substeps(family, sample_rate_hz, extra) if substeps is None else substeps
+    step = make_stepper(family, gravity, 1.0 / sample_rate_hz, n, extra, tau_init)
     out = np.empty((len(tau) + 1, 4))
     x = tuple(float(v) for v in x0)
     out[0] = x
@@ -265,11 +279,29 @@ def _fmt(x: float) -> str:
     return f"{x:.10g}"
 
 
+def default_reference(family: AxisFamily, duration: float, sweep: str = "linear",
+                      reductions: int = 0) -> Reference:
+    """`simulate`'s default reference, shrunk `reductions` times (as after that many
+    saturated runs; the log's `amplitude_reductions`)."""
+    reference = Reference(duration, sweep, taper=min(DEFAULT_TAPER, duration / 4),
+                          max_acceleration=ACCELERATION_SHARE * family.tau_max
+                          / (family.Jm + family.JL))
+    for _ in range(reductions):
+        reference = _reduced(reference)
+    return reference
+
+
+def _reduced(reference: Reference) -> Reference:
+    return replace(reference, amplitude=0.7 * reference.amplitude,
+                   max_acceleration=0.6 * reference.max_acceleration)
+
+
 def simulate(family: AxisFamily, seed: int = 1, duration: float = 60.0, sweep: str = "linear",
              feedforward: bool = True, *, sample_rate_hz: float = PAPER_RATE,
-             substeps: int | None = None, gravity: float = 9.81, center: float = 0.0,
+             substeps: int | None = None, gravity: float = 9.81, center: float | None = None,
              reference: Reference | None = None, gains: Gains | None = None,
-             ideal_sensors: bool = False) -> Log:
+             ideal_sensors: bool = False, effects=None,
+             torque_noise_std: float | None = None) -> Log:
     """One closed-loop chirp experiment on `family`, as a jointbench log (docs/log-format.md).
 
     The default reference is `Reference(duration, sweep)` (0.05-30 Hz, 0.1 rad, 2 s tapers,
@@ -277,34 +309,39 @@ def simulate(family: AxisFamily, seed: int = 1, duration: float = 60.0, sweep: s
     with its acceleration capped at ACCELERATION_SHARE tau_max / (Jm + JL); the default gains
     are `gains_rule(Jm, JL, K, tau_max, T)` (the bench's rule). The link rests at `center`
     [rad] in static equilibrium (the motor deflected by the gravity torque / K, the integrator
-    holding that torque). `ideal_sensors`: no quantisation and no torque noise.
+    holding that torque); `center` defaults to the rest angle (`AxisFamily.rest_angle`).
+    `ideal_sensors`: no quantisation and no torque noise; `torque_noise_std` [N m] replaces
+    the family's noise level. `effects`: hidden effects (tests/indep_effects.py: a Hidden,
+    a tuple of them, or simulate --effect's text such as "backlash=0.002,offset=1"); the
+    gravity effect moves the centre `strength` from the rest angle.
     """
     T = 1.0 / sample_rate_hz
-    n_sub = default_substeps(family, sample_rate_hz) if substeps is None else substeps
+    hidden = as_hidden(effects)
+    extra = plant(hidden, family.K, family.gear_ratio, family.MX != 0.0 or family.MY != 0.0)
+    center = (family.rest_angle if center is None else center) + extra.center_shift
+    n_sub = default_substeps(family, sample_rate_hz, extra) if substeps is None else substeps
     auto = reference is None
     if reference is None:
-        reference = Reference(duration, sweep, taper=min(DEFAULT_TAPER, duration / 4),
-                              max_acceleration=ACCELERATION_SHARE * family.tau_max
-                              / (family.Jm + family.JL))
+        reference = default_reference(family, duration, sweep)
     if gains is None:
         gains = gains_rule(family.Jm, family.JL, family.K, family.tau_max, T)
     gains = replace(gains, velocity_feedforward=feedforward)
     motor_counts = 0.0 if ideal_sensors else family.motor_counts_per_turn
     link_counts = 0.0 if ideal_sensors else family.link_counts_per_turn
-    noise_std = 0.0 if ideal_sensors else family.torque_noise_std
+    noise_std = 0.0 if ideal_sensors else family.torque_noise_std if torque_noise_std is None \
+        else torque_noise_std
 
     reductions = 0
     while True:
         run = _run(family, reference, gains, seed, sample_rate_hz, n_sub, gravity, center,
-                   motor_counts, link_counts, noise_std)
+                   motor_counts, link_counts, noise_std, extra)
         # The default reference shrinks until nothing saturates (the bench's rule): near the
         # antiresonance sqrt(K / JL) the motor needs more torque than the acceleration cap
         # foresees.
         if not auto or run["saturated"] == 0 or reductions >= MAX_REDUCTIONS:
             break
         reductions += 1
-        reference = replace(reference, amplitude=0.7 * reference.amplitude,
-                            max_acceleration=0.6 * reference.max_acceleration)
+        reference = _reduced(reference)
     meta = {"sample_rate_hz": _fmt(sample_rate_hz), "gravity": _fmt(gravity)}
     meta.update(gains.to_meta())
     meta.update({
@@ -322,26 +359,30 @@ def simulate(family: AxisFamily, seed: int = 1, duration: float = 60.0, sweep: s
     for key, value in family.truth().items():
         meta[f"truth_{key}"] = _fmt(value)
     meta["truth_center"] = _fmt(center)
-    meta["truth_effect"] = "none"
+    meta.update(truth_meta(hidden))
     return Log(t=run["t"], q_m=run["q_m"], tau_m=run["tau"], q=run["q"], q_ref=run["q_ref"],
                meta=meta)
 
 
 def _run(family: AxisFamily, reference: Reference, gains: Gains, seed: int,
          sample_rate_hz: float, substeps: int, gravity: float, center: float,
-         motor_counts: float, link_counts: float, noise_std: float) -> dict:
+         motor_counts: float, link_counts: float, noise_std: float,
+         effects: Plant = Plant()) -> dict:
     """The control loop of `simulate`: the sampled signals and the saturated sample count."""
     T = 1.0 / sample_rate_hz
     quant_m, quant_l = _quantiser(motor_counts), _quantiser(link_counts)
     n = int(round(reference.duration * sample_rate_hz)) + 1
     t = np.arange(n) * T
-    tau0 = gravity * (family.MX * math.cos(center) + family.MY * math.sin(center))
-    x: State = (center + tau0 / family.K, center, 0.0, 0.0)
+    tau_g = gravity * (family.MX * math.cos(center) + family.MY * math.sin(center))
+    # Static equilibrium: the spring holds the gravity torque, the integrator that plus the
+    # offset (the rotor gets tau - c).
+    tau0 = tau_g + effects.offset
+    x: State = (center + spring_deflection(family.K, effects, tau_g), center, 0.0, 0.0)
     # The reference starts at the measured motor angle: e[0] = 0 and tau_m[0] = tau0 = I[-1].
     q_ref = reference(t, quant_m(x[0]))
     rng = np.random.default_rng(seed)
     noise = rng.normal(0.0, noise_std, n) if noise_std > 0 else np.zeros(n)
-    step = make_stepper(family, gravity, T, substeps)
+    step = make_stepper(family, gravity, T, substeps, effects, tau0)
     ctrl = ContractController(gains, T, tau0)
     q_m, q, tau = np.empty(n), np.empty(n), np.empty(n)
     for k, (r, w) in enumerate(zip(q_ref.tolist(), noise.tolist())):

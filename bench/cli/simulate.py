@@ -44,7 +44,8 @@ def add_arguments(s: argparse.ArgumentParser) -> None:
     s.add_argument("--seed", type=seed, default=0, help="noise seed (default 0)")
     s.add_argument("--out", help="log file to write (default MODEL_JOINT_seedN.csv)")
     s.add_argument("--effect", help="hide an effect: NAME=STRENGTH[:OPTION=VALUE...], e.g. "
-                                    "backlash=0.002 (docs/effects.md)")
+                                    "backlash=0.002; several separated by commas, e.g. "
+                                    "backlash=0.002,offset=20 (docs/effects.md)")
     s.add_argument("--lock", choices=("rigid", "brake"), default="rigid",
                    help="how the other axes are held (default rigid)")
     s.add_argument("--config", help="locked angles of the other axes, e.g. axis2=-0.5,axis3=1.0; "
@@ -120,7 +121,7 @@ def run(args: argparse.Namespace) -> int:
     _check_numbers(args)
     if args.replay:
         return run_replay(args)
-    from jointbench.bench.effects import parse_effect
+    from jointbench.bench.effects import parse_effects
     from jointbench.bench.present.experiment import (experiment_json, experiment_text,
                                                       saturation_warnings)
     from jointbench.bench.sim.axes import build_experiment_model
@@ -131,7 +132,7 @@ def run(args: argparse.Namespace) -> int:
     from jointbench.identification.output import finite_json
 
     args.model = args.model or "prototype"
-    effect = parse_effect(args.effect) if args.effect else None
+    effect = parse_effects(args.effect) if args.effect else None
     out = _output_file(args)
     progress = None if args.quiet or not sys.stderr.isatty() else stderr_progress("simulate")
     if args.rate == "auto":  # twice the Fs of eq. (29) for the axis' first mode

@@ -1,10 +1,12 @@
 """What a user asks a virtual experiment to hide: `--effect backlash=0.002`, options after
-colons: `--effect hardening=1.0:deflection=0.004`."""
+colons: `--effect hardening=1.0:deflection=0.004`, several effects separated by commas:
+`--effect backlash=0.002,offset=20` (each name at most once)."""
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Sequence
 
 from jointbench.bench.options import key_numbers
 from jointbench.bench.effects.registry import BENCH_EFFECTS
@@ -49,6 +51,42 @@ class HiddenEffect:
         for key, value in self.options.items():
             meta[f"truth_effect_{key}"] = f"{value:.10g}"
         return meta
+
+
+def as_effects(effect: HiddenEffect | Sequence[HiddenEffect] | None) -> tuple[HiddenEffect, ...]:
+    """One effect, several or none as a tuple; ValueError when a name comes twice."""
+    effects = () if effect is None else (effect,) if isinstance(effect, HiddenEffect) \
+        else tuple(effect)
+    names = [e.name for e in effects]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise ValueError(f"effect '{twice[0]}' is given twice (each effect at most once)")
+    return effects
+
+
+def strength_of(effects: tuple[HiddenEffect, ...], name: str) -> float:
+    """The strength of effect `name` among `effects`, 0 when it is not hidden."""
+    return sum(e.strength for e in effects if e.name == name)
+
+
+def effects_meta(effects: tuple[HiddenEffect, ...]) -> dict[str, str]:
+    """The truth metadata of the hidden effects (docs/log-format.md): `truth_effect` lists
+    their names separated by commas (`none` without any), then each effect's parameter and
+    options as for one effect."""
+    meta = {"truth_effect": ",".join(e.name for e in effects) or "none"}
+    for e in effects:
+        meta.update({k: v for k, v in e.to_meta().items() if k != "truth_effect"})
+    return meta
+
+
+def parse_effects(text: str) -> tuple[HiddenEffect, ...]:
+    """`A=S1[:opt=v...],B=S2[:...]` -> the hidden effects, in the given order; ValueError says
+    what is wrong (an empty item, a name given twice, or `parse_effect`'s reasons)."""
+    items = [item.strip() for item in text.split(",")]
+    if any(not item for item in items):
+        raise ValueError(f"effect '{text}': an empty item between commas; expected "
+                         "NAME=STRENGTH[:OPTION=VALUE...][,NAME=STRENGTH...]")
+    return as_effects([parse_effect(item) for item in items])
 
 
 def parse_effect(text: str) -> HiddenEffect:

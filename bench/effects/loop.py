@@ -1,28 +1,32 @@
 """Effects acting in the bench loop: an extra torque on the rotor from the state at the tick
-(the effects' `loop` terms: offset, torque ripple, asymmetric friction)."""
+(the effects' `loop` terms: offset, torque ripple, asymmetric friction), summed over the
+hidden effects."""
 
 from __future__ import annotations
 
 import mujoco
 
+from typing import Sequence
+
 from jointbench.bench.effects.base import Term
-from jointbench.bench.effects.hidden import HiddenEffect
+from jointbench.bench.effects.hidden import HiddenEffect, as_effects
 from jointbench.bench.effects.registry import BENCH_EFFECTS
 
 
 class LoopEffects:
-    """The bench-loop torque of a hidden effect (its registry `loop` term); FVm, FSm are the
-    axis's motor friction, gear_ratio its gear (None for a direct drive)."""
+    """The bench-loop torque of the hidden effects (one, several or None; their registry
+    `loop` terms, summed); FVm, FSm are the axis's motor friction, gear_ratio its gear (None
+    for a direct drive)."""
 
     __slots__ = ("terms",)
 
-    def __init__(self, effect: HiddenEffect | None, FVm: float, FSm: float,
-                 gear_ratio: float | None, terms: tuple[Term, ...] = ()):
+    def __init__(self, effect: HiddenEffect | Sequence[HiddenEffect] | None, FVm: float,
+                 FSm: float, gear_ratio: float | None, terms: tuple[Term, ...] = ()):
         self.terms = terms
-        loop = BENCH_EFFECTS[effect.name].loop if effect is not None else None
-        if loop is not None:
-            term = loop(effect.strength, effect.all_options, gear_ratio, FVm, FSm)
-            self.terms = terms + ((term,) if term is not None else ())
+        for e in as_effects(effect):
+            loop = BENCH_EFFECTS[e.name].loop
+            term = loop(e.strength, e.all_options, gear_ratio, FVm, FSm) if loop else None
+            self.terms += (term,) if term is not None else ()
 
     @property
     def active(self) -> bool:

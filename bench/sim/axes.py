@@ -20,7 +20,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from jointbench.bench.effects import HiddenEffect, apply_to_spec
+from jointbench.bench.effects import HiddenEffect, apply_to_spec, as_effects, strength_of
 from jointbench.models import (Axis, ModelStructureError, find_axes, load_model, select_axis,
                                torque_limit)
 from jointbench.models.truth import AxisTruth, axis_truth
@@ -210,7 +210,8 @@ def _missing_axis(model: mujoco.MjModel, joint: str, path: Path, names: list[str
 
 def build_experiment_model(model: str | Path = "prototype", joint: str | None = None,
                            config: dict[str, float] | None = None, center: float | None = None,
-                           lock: str = "rigid", effect: HiddenEffect | None = None,
+                           lock: str = "rigid",
+                           effect: HiddenEffect | tuple[HiddenEffect, ...] | None = None,
                            substeps: int = 1, sample_rate_hz: float = PAPER_RATE,
                            tau_max: float | None = None) -> ExperimentModel:
     """Compile the experiment model of axis `joint` (default: the first axis).
@@ -221,6 +222,7 @@ def build_experiment_model(model: str | Path = "prototype", joint: str | None = 
     eq. 17, shifted by the hidden `gravity` effect's offset). Raises ModelStructureError for
     a model that does not follow the axis convention and ValueError for bad arguments.
     """
+    effects = as_effects(effect)   # one hidden effect, several, or none
     if lock not in LOCKS:
         raise ValueError(f"lock must be one of {', '.join(LOCKS)}, got {lock!r}")
     if substeps < 1:
@@ -249,7 +251,7 @@ def build_experiment_model(model: str | Path = "prototype", joint: str | None = 
     if center is None and joint in config:  # the moving axis' own entry centres the chirp
         center = config[joint]
     if center is None:
-        center = truth.q0 + (effect.strength if effect and effect.name == "gravity" else 0.0)
+        center = truth.q0 + strength_of(effects, "gravity")
     config[joint] = center
     qpos_full = full_qpos(full, axes, config)
 
@@ -260,9 +262,10 @@ def build_experiment_model(model: str | Path = "prototype", joint: str | None = 
     hold = {a.name: float(data.qfrc_bias[a.link_dof]) for a in axes}
 
     spec = mujoco.MjSpec.from_file(str(path))
-    if moving.rigid and effect is not None and effect.name in RIGID_AXIS_REFUSES:
+    refused = [e.name for e in effects if e.name in RIGID_AXIS_REFUSES]
+    if moving.rigid and refused:
         raise ModelStructureError(
-            f"{path}: effect '{effect.name}' needs a flexible axis (spring, link and motor "
+            f"{path}: effect '{refused[0]}' needs a flexible axis (spring, link and motor "
             f"friction); axis '{joint}' is rigid")
     for a in axes:
         if a.name == joint:
@@ -295,8 +298,8 @@ def build_experiment_model(model: str | Path = "prototype", joint: str | None = 
             K = float(full.tendon_stiffness[a.tendon])
             link.stiffness[0] = K
             link.springref = angle + hold[a.name] / K
-    if effect is not None:
-        apply_to_spec(spec, joint, effect,
+    for e in effects:
+        apply_to_spec(spec, joint, e,
                       math.inf if moving.rigid else float(full.tendon_stiffness[moving.tendon]))
     T = 1.0 / sample_rate_hz
     spec.option.timestep = T / substeps
@@ -311,7 +314,7 @@ def build_experiment_model(model: str | Path = "prototype", joint: str | None = 
         base = name[: -len("_motor")] if name.endswith("_motor") else name
         if base in config:
             qpos[reduced.jnt_qposadr[j]] = config[base]
-    offset = effect.strength if effect is not None and effect.name == "offset" else 0.0
+    offset = strength_of(effects, "offset")
     qpos, tau0 = _static_equilibrium(reduced, axis, qpos, offset)
     if tau_max is None:
         tau_max = torque_limit(full, moving)

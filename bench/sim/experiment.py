@@ -27,7 +27,8 @@ from jointbench.bench.sim.defaults import (ACCELERATION_SHARE, AMPLITUDE_REDUCTI
                                            MAX_REDUCTIONS)
 from jointbench.bench.sim.loop import (INSTABILITY_WARNINGS, LoopChecks, LoopTrace,
                                        first_warning, run_loop)
-from jointbench.bench.effects import HiddenEffect, LoopEffects, loop_effects_from_model
+from jointbench.bench.effects import (HiddenEffect, LoopEffects, as_effects, effects_meta,
+                                      loop_effects_from_model)
 from jointbench.bench.sim.reference import Chirp
 from jointbench.bench.sim.sensors import Sensors
 from jointbench.identification.log import Log, format_meta_number
@@ -87,13 +88,15 @@ class ExperimentResult:
 def run_experiment(model: str | Path = "prototype", joint: str | None = None, *,
                    duration: float = 60.0, seed: int = 0, chirp: Chirp | None = None,
                    amplitude: float | None = None, config: dict[str, float] | None = None,
-                   lock: str = "rigid", effect: HiddenEffect | None = None,
+                   lock: str = "rigid",
+                   effect: HiddenEffect | tuple[HiddenEffect, ...] | None = None,
                    sensors: Sensors | None = None, gains: Gains | None = None,
                    substeps: int = DEFAULT_SUBSTEPS, sample_rate_hz: float = SAMPLE_RATE_HZ,
                    tau_max: float | None = None,
                    progress: Callable[[float], None] | None = None) -> ExperimentResult:
     """Run one closed-loop chirp experiment and return its log (docs/log-format.md).
 
+    `effect`: one hidden effect, a tuple of several (each name once), or None.
     Same arguments and seed, same log, bit for bit. Raises SimulationError when the state
     diverges, ModelStructureError for a model off the axis convention, ValueError for bad
     arguments.
@@ -144,9 +147,7 @@ def run_experiment(model: str | Path = "prototype", joint: str | None = None, *,
         if key not in ("g", "gear_ratio"):
             meta[f"truth_{key}"] = format_meta_number(value)
     meta["truth_center"] = format_meta_number(exp.center)
-    meta["truth_effect"] = "none"
-    if effect is not None:
-        meta.update(effect.to_meta())
+    meta.update(effects_meta(as_effects(effect)))
     log = Log(t=t, q_m=trace.q_m, tau_m=trace.tau_m, q=trace.q, q_ref=q_ref, meta=meta)
     return ExperimentResult(log=log, q_m_true=trace.q_m_true, q_true=trace.q_true,
                             tau_applied=trace.tau_applied, saturated=trace.saturated,
@@ -154,7 +155,8 @@ def run_experiment(model: str | Path = "prototype", joint: str | None = None, *,
 
 
 def _simulate(exp: ExperimentModel, chirp: Chirp, sensors: Sensors, gains: Gains, seed: int,
-              substeps: int, sample_rate_hz: float, effect: HiddenEffect | None,
+              substeps: int, sample_rate_hz: float,
+              effect: HiddenEffect | tuple[HiddenEffect, ...] | None,
               progress: Callable[[float], None] | None) -> tuple[np.ndarray, np.ndarray, LoopTrace]:
     """The control loop of the module docstring (`bench.sim.loop.run_loop`); returns the
     sample times, the reference and the sampled signals."""
@@ -170,7 +172,7 @@ def _simulate(exp: ExperimentModel, chirp: Chirp, sensors: Sensors, gains: Gains
     d.qpos[:] = exp.qpos_init
     mujoco.mj_forward(m, d)
     loop = LoopEffects(effect, truth.FVm, truth.FSm, truth.gear_ratio)
-    if effect is None:
+    if not as_effects(effect):
         # An extended MJCF (jointbench diagnose) may carry bench-loop effects as numerics.
         loop = loop_effects_from_model(m, ax.name) or loop
     act = ax.actuator

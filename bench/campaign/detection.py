@@ -1,0 +1,119 @@
+"""What the battery by visibility shows about a detector: the confusion table, the detection
+curve per effect (share named right against in-band visibility) and the visibility above
+which an effect is found 95 % of the time (issue 14, item 3).
+
+A record is one case as benchmarks/battery.py writes it: a dict with `kind` ("clean",
+"single", "pair"), `effects` (hidden names), `visibilities` (each effect's, ratios), `named`
+(the causes diagnose named, in order) and `family`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from jointbench.identification.effects import EFFECTS, NONE
+
+BINS = (0.03, 0.05, 0.10, 0.20, 0.40)   # visibility bin edges (ratios); the last bin is open
+FOUND_SHARE = 0.95                      # "found 95 % of the time"
+MIN_CASES = 3                           # cases at or above a visibility to claim the share
+PAIR_VISIBLE = 0.10                     # a two-effect case counts when both effects reach it
+
+
+def first_named(record: dict) -> str:
+    return record["named"][0] if record["named"] else NONE
+
+
+def right(record: dict) -> bool:
+    """Clean: nothing named; single: the hidden effect named first; pair: both named."""
+    hidden, named = record["effects"], record["named"]
+    if record["kind"] == "clean":
+        return not named
+    if record["kind"] == "single":
+        return first_named(record) == hidden[0]
+    return set(hidden) <= set(named)
+
+
+def confusion(records: list[dict]) -> tuple[list[str], np.ndarray]:
+    """Clean and single-effect cases: rows the hidden effect (none for clean), columns the
+    first named cause."""
+    labels = [NONE, *EFFECTS]
+    M = np.zeros((len(labels), len(labels)), int)
+    for r in records:
+        if r["kind"] in ("clean", "single"):
+            hidden = r["effects"][0] if r["effects"] else NONE
+            M[labels.index(hidden), labels.index(first_named(r))] += 1
+    return labels, M
+
+
+def curve(records: list[dict], effect: str) -> list[tuple[float, float, int, int]]:
+    """The single-effect cases of `effect` by visibility bin: (low, high, named right, cases)
+    per bin of BINS (high inf for the last)."""
+    cases = [(r["visibilities"][0], right(r)) for r in records
+             if r["kind"] == "single" and r["effects"][0] == effect]
+    edges = list(BINS) + [np.inf]
+    out = []
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        inside = [ok for v, ok in cases if lo <= v < hi]
+        out.append((lo, hi, sum(inside), len(inside)))
+    below = [ok for v, ok in cases if v < BINS[0]]
+    if below:
+        out.insert(0, (0.0, BINS[0], sum(below), len(below)))
+    return out
+
+
+def found_above(records: list[dict], effect: str) -> float | None:
+    """The smallest visibility v of a single-effect case of `effect` such that the cases at
+    or above v are named right at least FOUND_SHARE of the time, with at least MIN_CASES of
+    them; None when no such v ("not reached")."""
+    cases = sorted((r["visibilities"][0], right(r)) for r in records
+                   if r["kind"] == "single" and r["effects"][0] == effect)
+    for k, (v, _) in enumerate(cases):
+        tail = [ok for _, ok in cases[k:]]
+        if len(tail) >= MIN_CASES and sum(tail) >= FOUND_SHARE * len(tail):
+            return v
+    return None
+
+
+def summary_lines(records: list[dict]) -> list[str]:
+    """The battery's findings as text lines: counts, confusion table, detection curve and
+    95 % visibility per effect, clean and two-effect results."""
+    lines = []
+    labels, M = confusion(records)
+    lines.append("confusion (rows: hidden, columns: first named; clean and single-effect cases)")
+    short = [lab[:8] for lab in labels]
+    lines.append(f"{'':20s}" + "".join(f"{s:>9s}" for s in short))
+    lines += [f"{lab:20s}" + "".join(f"{v:9d}" for v in row) for lab, row in zip(labels, M)]
+    singles = [r for r in records if r["kind"] == "single"]
+    effects = [e for e in EFFECTS if any(r["effects"][0] == e for r in singles)]
+    heads = [f"{lo * 100:g}-{hi * 100:g} %" if np.isfinite(hi) else f">= {lo * 100:g} %"
+             for lo, hi in zip([0.0, *BINS], [*BINS, np.inf])]
+    lines += ["", "detection curve: named right / cases, by in-band visibility",
+              f"{'effect':20s}" + "".join(f"{h:>11s}" for h in heads) + "   found 95 % above"]
+    for e in effects:
+        cells = {(lo, hi): f"{k}/{n}" for lo, hi, k, n in curve(records, e) if n}
+        row = "".join(f"{cells.get((lo, hi), '-'):>11s}"
+                      for lo, hi in zip([0.0, *BINS], [*BINS, np.inf]))
+        v = found_above(records, e)
+        lines.append(f"{e:20s}{row}   {'not reached' if v is None else f'{100 * v:.1f} %'}")
+    for kind, what in (("single", "single-effect cases named right"),
+                       ("clean", "clean logs with nothing named"),
+                       ("pair", "two-effect cases with both named")):
+        rs = [r for r in records if r["kind"] == kind]
+        if rs:
+            k = sum(right(r) for r in rs)
+            lines.append(f"{what}: {k}/{len(rs)} ({100 * k / len(rs):.0f} %)")
+    at5 = [r for r in singles if r["visibilities"][0] >= 0.05]
+    if at5:
+        k = sum(right(r) for r in at5)
+        lines.append(f"single-effect cases at visibility >= 5 % named right: {k}/{len(at5)} "
+                     f"({100 * k / len(at5):.0f} %)")
+    pairs = [r for r in records if r["kind"] == "pair"]
+    if pairs:
+        one = sum(bool(set(r["effects"]) & set(r["named"])) for r in pairs)
+        lines.append(f"two-effect cases with at least one named: {one}/{len(pairs)}")
+        visible = [r for r in pairs if min(r["visibilities"]) >= PAIR_VISIBLE]
+        k = sum(right(r) for r in visible)
+        lines.append(f"two-effect cases with both visibilities >= {100 * PAIR_VISIBLE:g} %: "
+                     f"{len(visible)}, both named in {k}, over "
+                     f"{len({r['family'] for r in visible})} axis families")
+    return lines
