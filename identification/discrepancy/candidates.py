@@ -7,7 +7,7 @@ BIC, the F-test and the practical size are reported beside it as information."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import Callable, Sequence
 
 import numpy as np
 from scipy import optimize, stats
@@ -194,3 +194,16 @@ def predict(nom: Nominal, c: Candidate | None) -> np.ndarray:
         return nom.residual
     y, W, _ = design_many(nom, c.base + ((c.effect, c.fixed),))
     return y - W @ np.asarray(c.X)
+
+
+def joint_parameters(nom: Nominal, causes: Sequence[Candidate]) -> list[tuple[str, dict]]:
+    """Every named cause with its parameters from one fit of the nominal extended by all of
+    them (the last cause's, whose design stacks the ones before it): a cause named earlier
+    was fitted without the later ones, and its own values would count twice what they share
+    (EMPS: an asymmetric friction fitted alone takes up part of the offset)."""
+    if not causes:
+        return []
+    last = causes[-1]
+    values = dict(zip(last.names, last.X))
+    return [(name, EFFECTS[name].params(values, fixed, nom))
+            for name, fixed in last.base + ((last.effect, last.fixed),)]

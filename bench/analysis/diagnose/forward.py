@@ -58,7 +58,8 @@ def build_spec(d: Diagnosis, extended: bool) -> mujoco.MjSpec:
                                        offset=0.0, **common)
         K = 0.0
     if causes:   # every named cause, in order: one (effect, parameters) pair each
-        write_effects(spec, name, [(c.effect, {**p, **c.parameters}) for c in causes], K)
+        # d.extended_parameters holds every cause's parameters from one joint fit
+        write_effects(spec, name, [(c.effect, p) for c in causes], K)
     return spec
 
 
@@ -134,7 +135,7 @@ def cross_validate(d: Diagnosis, other: Log, disturbance: np.ndarray | None = No
     log's own band (diagnosis_settings(other); d's band when None)."""
     rows = with_parameters(nominal_rows(other, settings or d.settings), d.inverse.nominal.X)
     out: dict = {"inverse": {}, "forward": {}}
-    models = {"nominal": None, "extended": d.named}
+    models = {"nominal": None, "extended": d.causes[-1] if d.causes else None}
     for label, c in models.items():
         if label == "extended" and c is None:
             continue

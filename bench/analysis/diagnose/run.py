@@ -23,6 +23,7 @@ from jointbench.bench.analysis.diagnose.types import Diagnosis
 from jointbench.bench.analysis.diagnose.verdict import gain_reason, nominal_reason
 from jointbench.identification.defaults import choose_filter
 from jointbench.identification.discrepancy import NUMERICS, Candidate, Nominal, diagnose_inverse
+from jointbench.identification.discrepancy.candidates import joint_parameters
 from jointbench.identification.effects import EFFECTS
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.log import Log, unit_warnings
@@ -86,9 +87,9 @@ def diagnose(log: Log, out_dir: Path | None = None, forward: bool = True,
                   nominal_parameters=nom_p, extended_parameters={},
                   warnings=tuple(unit_warnings(log) + clipping_warnings(log)))
     d = replace(d, overruled=nominal_reason(d))
-    ext: dict[str, float] = {}
-    for c in d.causes:   # each cause's own parameters; the last one's refit of the nominal
-        ext.update(extended_parameters(c, inv.nominal))
+    ext = extended_parameters(d.causes[-1] if d.causes else None, inv.nominal)
+    for _, params in joint_parameters(inv.nominal, d.causes):   # all causes, one fit
+        ext.update(params)
     d = replace(d, extended_parameters=ext)
     if forward:
         d = add_forward_view(d, say)
