@@ -22,10 +22,7 @@ Standard library only, no numerical import.
 
 from __future__ import annotations
 
-import hashlib
-import json
 import os
-import shutil
 import signal
 import stat
 import tempfile
@@ -53,6 +50,7 @@ def _kind(mode: int) -> str | None:
 
 
 def sha256(path: Path) -> str:
+    import hashlib   # imported here: `simulate` starts without it (README, start-up)
     h = hashlib.sha256()
     with open(path, "rb") as f:
         for block in iter(lambda: f.read(1 << 20), b""):
@@ -63,6 +61,7 @@ def sha256(path: Path) -> str:
 def read_manifest(folder: Path) -> dict[str, str]:
     """name (relative to `folder`) -> SHA-256 of the files jointbench wrote there; {} when
     there is no readable manifest."""
+    import json
     path = folder / MANIFEST
     try:
         if not stat.S_ISREG(os.lstat(path).st_mode):
@@ -75,6 +74,7 @@ def read_manifest(folder: Path) -> dict[str, str]:
 
 
 def _write_manifest(folder: Path, files: dict[str, str], complete: bool = True) -> None:
+    import json
     from jointbench.identification.log_write import atomic_write_text
 
     doc = {"written_by": "jointbench", "complete": complete, "files": dict(sorted(files.items()))}
@@ -213,6 +213,7 @@ class OutputFolder:
     @contextmanager
     def writing(self) -> Iterator[Path]:
         """Yields the folder to write into; all or nothing (class docstring)."""
+        import shutil
         p = self.path
         created = not p.exists()
         p.mkdir(exist_ok=True)
