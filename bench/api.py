@@ -33,7 +33,7 @@ from jointbench.bench.campaign.run import run_campaign
 from jointbench.bench.campaign.settings import CampaignError, RunSettings
 from jointbench.bench.campaign.spec import CampaignSpec
 from jointbench.bench.campaign.summary import summary_text as campaign_text
-from jointbench.bench.effects import HiddenEffect, parse_effect
+from jointbench.bench.effects import HiddenEffect, parse_effects
 from jointbench.bench.present.identify import identify_json, identify_text
 from jointbench.bench.sim.experiment import run_experiment
 from jointbench.identification.checks import estimate_flags
@@ -62,11 +62,12 @@ def simulate(model: str | os.PathLike = "prototype", joint: str | None = None, *
              **options) -> Log:
     """One virtual closed-loop chirp experiment on `model` (prototype, arm6 or an MJCF file
     following the axis convention), as a Log (docs/log-format.md; its truth in `log.truth()`).
-    `duration` [s]; `effect` a hidden effect, e.g. "backlash=0.002" (docs/effects.md);
+    `duration` [s]; `effect` a hidden effect, e.g. "backlash=0.002", or several, "offset=5,backlash=0.002"
+    (docs/effects.md);
     `options` go to `bench.sim.experiment.run_experiment` (amplitude, config, lock, sensors,
     sample_rate_hz, ...). Raises SimulationError, ModelStructureError, ValueError."""
     if isinstance(effect, str):
-        effect = parse_effect(effect)
+        effect = parse_effects(effect)   # one or several: "offset=5,backlash=0.002"
     return run_experiment(model, joint, duration=duration, seed=seed, effect=effect,
                           **options).log
 

@@ -13,6 +13,8 @@ import sys
 import textwrap
 from pathlib import Path
 
+import pytest
+
 import jointbench
 
 SNIPPET = textwrap.dedent("""
@@ -83,3 +85,15 @@ def test_help_loads_no_command_module():
                           text=True, timeout=60)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.splitlines()[-1] == "heavy:"
+
+
+def test_simulate_hides_several_effects():
+    """Issue 15 item 2 in the API as on the command line: "A=S1,B=S2" hides both; a name
+    given twice is a ValueError naming it."""
+    import jointbench as jb
+    log = jb.simulate(duration=6.0, seed=1, effect="offset=5,backlash=0.001")
+    assert log.meta["truth_effect"] == "offset,backlash"
+    assert float(log.meta["truth_offset"]) == 5
+    assert float(log.meta["truth_backlash_rad"]) == 0.001
+    with pytest.raises(ValueError, match="'offset' is given twice"):
+        jb.simulate(duration=6.0, seed=1, effect="offset=5,offset=3")

@@ -29,7 +29,7 @@ from jointbench.bench.campaign.spec import DEBIASED, PARAMS, TRUTH, CampaignSpec
 from jointbench.bench.campaign.summary import summarize
 from jointbench.bench.campaign.table import CampaignTable
 from jointbench.bench.campaign.times import read_times, times_path, write_times
-from jointbench.bench.effects import parse_effect
+from jointbench.bench.effects import parse_effects
 from jointbench.bench.sim.axes import build_experiment_model
 from jointbench.bench.sim.experiment import run_experiment
 from jointbench.bench.sim.sensors import Sensors
@@ -153,7 +153,7 @@ def run_task_with(methods: Sequence[Method], timeout_s: float, task: RunTask) ->
     times: dict[str, float] = {}
     try:
         t0 = time.perf_counter()
-        effect = parse_effect(s.effect) if s.effect else None
+        effect = parse_effects(s.effect) if s.effect else None
         with tempfile.TemporaryDirectory(prefix="jointbench-run-") as tmp:
             model_ref, joint = s.model, s.joint
             if s.scatter > 0:

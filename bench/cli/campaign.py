@@ -75,7 +75,8 @@ def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
     p.add_argument("--decimate", type=int, help="decimation factor Nd (default 26)")
     p.add_argument("--stencil", type=int, default=3, choices=(3, 5),
                    help="central-difference points: 3, the paper's eq. (22) (default), or 5")
-    p.add_argument("--effect", help="hidden effect NAME=STRENGTH[:OPTION=VALUE] in every run")
+    p.add_argument("--effect", help="hidden effect(s) in every run: "
+                                    "NAME=STRENGTH[:OPTION=VALUE][,NAME=STRENGTH...]")
     p.add_argument("--id-models", default="joint-motor,motor-only",
                    help="identification models, comma separated (default joint-motor,motor-only)")
     p.add_argument("--debias", type=int, default=0, metavar="B",
@@ -212,11 +213,11 @@ def run(args: argparse.Namespace) -> int:
     from jointbench.bench.campaign.spec import CampaignSpec
     from jointbench.bench.campaign.summary import summary_paths, summary_text
     from jointbench.bench.campaign.table import CampaignTable
-    from jointbench.bench.effects import parse_effect
+    from jointbench.bench.effects import parse_effects
     from jointbench.bench.output import write_text
     from jointbench.identification.output import finite_json
 
-    spec, methods, gates = plugins(args, CampaignSpec(**spec_arguments(args, parse_effect)))
+    spec, methods, gates = plugins(args, CampaignSpec(**spec_arguments(args, parse_effects)))
     out = Path(args.out)
     if out.suffix.lower() == ".xml" or (Path(str(args.model)).exists()
                                         and out.resolve() == Path(str(args.model)).resolve()):
