@@ -50,7 +50,7 @@ def _attack(log, name: str):
 
 # (attack, verdict, words of the reason): measured before this change: slice named gravity
 # with a forward torque error 3.97 % -> 6.42 %; swapped named torque_lag on a nominal
-# K = -7.0; sign: none, no reason; degrees: none with K 57 times off and no warning; clean: none.
+# K = -7.0 (now nothing passes on it); sign: none, no reason; degrees: none with K 57 times off and no warning; clean: none.
 @pytest.mark.parametrize("attack, verdict, says", [
     ("slice", "inconclusive", "worse in the forward view"),
     ("swapped", "inconclusive", "q and q_m look swapped"),
@@ -64,8 +64,12 @@ def test_diagnose_never_names_a_cause_that_cannot_be_true(base, attack, verdict,
     doc = d.to_json()
     assert doc["verdict"] == verdict and says in doc["reason"] and doc["named_cause"] == "none"
     assert doc["extended_parameters"] == {}
-    if attack in ("slice", "swapped"):
-        assert doc["rejected_cause"] == {"slice": "gravity", "swapped": "torque_lag"}[attack]
+    if attack == "slice":
+        assert doc["rejected_cause"] == "gravity"
+    if attack == "swapped":
+        # torque_lag was the rejected cause while its search lagged the measured torque, whose
+        # shrinking made any long lag fit; with the lag on the model's side nothing passes
+        assert "rejected_cause" not in doc
 
 
 # (attack, words each warning must hold; () = no warning). Before: none of them warned

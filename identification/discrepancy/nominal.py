@@ -55,6 +55,14 @@ def nominal_columns(sig: Signals, tau: np.ndarray | None = None,
     return y, np.column_stack(cols), names + NUMERICS
 
 
+def _led(sig: Signals, x: np.ndarray, lead: float) -> np.ndarray:
+    """x + lead x' (3-point central difference at the raw rate; where it is undefined, at
+    the ends which the decimation drops, x alone)."""
+    if not lead:
+        return x
+    return x + lead * np.nan_to_num(derivatives(x, sig.ts, 1, 3)[1])
+
+
 def _d4(sig: Signals, xdd: np.ndarray) -> np.ndarray:
     """The fourth derivative from the second by the same 3-point differences; 0 where
     undefined (the ends, which the decimation drops)."""
@@ -109,17 +117,27 @@ class Nominal:
                 self.names + tuple(name for name, _, _ in columns))
 
     def columns(self, tau: np.ndarray | None = None,
-                deflection: np.ndarray | None = None) -> Design:
-        """The nominal design rebuilt with another torque or spring deflection (only the
-        columns they change: y, or the stiffness column)."""
+                deflection: np.ndarray | None = None, lead: float = 0.0) -> Design:
+        """The nominal design rebuilt with another torque or spring deflection, or with the
+        motor equation's torque led by `lead` [s] (only the columns they change: y, the
+        stiffness column, the motor columns). `lead` = T: the command of a current loop that
+        lags it by T, tau = (1 + T d/dt) (the motor equation's right-hand side), so that the
+        residual stays in the measured torque whatever T (torque_lag)."""
+        s = self.sig
         y, W = self.y, self.W
-        if tau is not None or deflection is not None:
+        if tau is not None or deflection is not None or lead:
             W = W.copy()
         if tau is not None:
-            y = stack(self.sig, tau, None)
-        if deflection is not None:
-            dk = hat(deflection)
-            W[:, self.names.index("K")] = stack(self.sig, dk, -dk)
+            y = stack(s, tau, None)
+        if deflection is not None or lead:
+            dk = hat(s.qm - s.q if deflection is None else deflection) if s.has_link else None
+            if dk is not None:
+                W[:, self.names.index("K")] = stack(s, _led(s, dk, lead), -dk)
+        if lead:
+            names = ("J", "FV", "FS") if not s.has_link else ("Jm", "FVm", "FSm")
+            for name, x in zip(names, (_led(s, s.qmdd, lead), s.qmd + lead * s.qmdd,
+                                       _led(s, sign0(s.qmd), lead))):
+                W[:, self.names.index(name)] = stack(s, x, None)
         return y, W, self.names
 
     def fit(self, y: np.ndarray, W: np.ndarray) -> tuple[np.ndarray, float]:

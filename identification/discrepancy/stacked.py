@@ -31,15 +31,16 @@ class Stacked:
     effects: tuple[tuple[str, dict], ...] = ()
     tau: np.ndarray | None = None          # the torque the nominal columns are built with
     deflection: np.ndarray | None = None   # the spring deflection they are built with
+    lead: float = 0.0                      # the motor columns' lead [s] (torque lag)
     extra: tuple[tuple[str, np.ndarray], ...] = ()   # added columns, stacked rows
 
     def design(self) -> Design:
         """y, W and the column names: nominal columns, then the effects' columns."""
         nom = self.nom
-        if self.tau is None and self.deflection is None:
+        if self.tau is None and self.deflection is None and not self.lead:
             y, W, names = nom.y, nom.W, nom.names
         else:
-            y, W, names = nom.columns(self.tau, self.deflection)
+            y, W, names = nom.columns(self.tau, self.deflection, self.lead)
         if not self.extra:
             return y, W, names
         return (y, np.column_stack([W, *(c for _, c in self.extra)]),
@@ -64,11 +65,12 @@ class _Rows:
         return self.after.design()
 
     def columns(self, tau: np.ndarray | None = None,
-                deflection: np.ndarray | None = None) -> Design:
+                deflection: np.ndarray | None = None, lead: float | None = None) -> Design:
         b = self.base
         self.after = dataclasses.replace(
             b, tau=b.tau if tau is None else tau,
-            deflection=b.deflection if deflection is None else deflection)
+            deflection=b.deflection if deflection is None else deflection,
+            lead=b.lead if lead is None else lead)
         return self.after.design()
 
 

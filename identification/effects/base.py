@@ -27,8 +27,9 @@ class Rows(Protocol):
         """The nominal columns plus these raw-rate columns (motor and link equation rows)."""
 
     def columns(self, tau: np.ndarray | None = None,
-                deflection: np.ndarray | None = None) -> Design:
-        """The nominal columns rebuilt with another torque or spring deflection."""
+                deflection: np.ndarray | None = None, lead: float | None = None) -> Design:
+        """The nominal columns rebuilt with another torque or spring deflection, or with the
+        motor columns led by `lead` [s] (a lagging current loop's command)."""
 
 
 @dataclass(frozen=True)

@@ -28,11 +28,11 @@ def lagged(tau: np.ndarray, T: float, ts: float) -> np.ndarray:
 
 
 def design(rows: Rows, fixed: dict) -> Design:
-    # No extra column: the lagged torque replaces the measured one.
-    from jointbench.identification.filtering import zoh_align
-
-    sig = rows.sig
-    return rows.columns(tau=sig.lp(zoh_align(lagged(sig.tau_raw, fixed["lag_s"], sig.ts))))
+    # No extra column: the command of a current loop lagging by T is (1 + T d/dt) of the
+    # torque the motor equation needs, so its columns are led by T and the measured torque
+    # stays the left-hand side. (Lagging the measured torque instead, `lagged`, shrinks the
+    # left-hand side with T and the residual with it: the search ran to its longest lag.)
+    return rows.columns(lead=fixed["lag_s"])
 
 
 def grid(rows: Rows) -> np.ndarray:
