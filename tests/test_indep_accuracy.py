@@ -20,7 +20,8 @@ F1_OVER: dict[str, str] = {}   # the frequency response alone: heavy_link +11.3 
 # stiff_small +2.8 %; the identified model's f1 (reported) holds all within 1.5 %
 # (with the Coulomb reversals placed by the identified friction, identify._place_reversals:
 # heavy_link's Jm went from +1.65 to -0.02 %, soft's from +1.33 to +0.61 %, the rest of which
-# is the closed-loop torque noise: +0.18 % without it; stiff_small, f1 = 20 Hz at 17.5
+# is the closed-loop torque noise: +0.18 % without it, 1.3 corrected sigma, and seeds 2 and 3
+# give +0.16 and +0.03 %; stiff_small, f1 = 20 Hz at 17.5
 # samples a period, keeps +0.85 % without any motor Coulomb friction)
 JOINT_MOTOR_OVER = {"stiff_small": "K -0.66, Jm +2.99 %", "soft": "Jm +0.61 %"}
 MOTOR_ONLY_OVER = {"heavy_link": "K -15.9, JL -45.8 %", "stiff_small": "Jm +7.5 %",
