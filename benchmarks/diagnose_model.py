@@ -7,9 +7,13 @@ model (`jointbench simulate`, 350.87 Hz default rate, default sensors, seed 1), 
 against the true MJCF (nothing may be named) and against `--cases` copies with one or two of
 K, Jm, JL, FS, FVm off by 10-30 % (bench.analysis.diagnose.model_cases, drawn with
 numpy's default_rng(seed)). Printed per case: the true and reported errors, right or wrong
-(the named set is the set put off beyond the floor, each error within 2 points), the forward
-torque error of the wrong copy and of the corrected model. Then the share right, the false
-namings on the true models and the smallest and median forward gains. Nothing is asserted.
+(the named set is the set put off beyond the 5 % floor, each error within 2 points), the
+forward torque error of the wrong copy and of the corrected model, the replay's noise floor
+estimated from the log (bench.analysis.diagnose.model_floor) and each error's excess over it.
+Then the share right, how far the data values named lie from the truth in their sigma, the
+false namings on the true models, the forward gains (all, and those a perfect model could
+reach: wrong copy >= 2x the noise floor), the noise floor against the true MJCF's replay
+error, and the excess over the floor before and after. Nothing is asserted.
 """
 
 from __future__ import annotations
@@ -20,6 +24,7 @@ import tempfile
 import time
 from pathlib import Path
 
+import mujoco
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -28,35 +33,51 @@ sys.path.insert(0, str(ROOT))
 from jointbench.bench.analysis.diagnose.against_model import diagnose_against_model  # noqa: E402
 from jointbench.bench.analysis.diagnose.model_cases import (Case, draw_cases, score,  # noqa: E402
                                                             true_errors)
+from jointbench.bench.analysis.diagnose.model_edit import spec_truth  # noqa: E402
 from jointbench.bench.sim.experiment import run_experiment  # noqa: E402
+from jointbench.models import model_path  # noqa: E402
 
 AXES = [("prototype", "axis1")] + [("arm6", f"axis{i}") for i in range(1, 7)]
 
 
 def run(cases_per_axis: int, duration: float, seed: int) -> None:
     rng = np.random.default_rng(seed)
-    rows, false_named = [], []
+    rows, false_named, floors, z = [], [], [], []
     with tempfile.TemporaryDirectory() as tmp:
         for model, joint in AXES:
             t0 = time.time()
             log = run_experiment(model, joint, duration=duration, seed=1).log
             config = {k: float(v) for k, v in
                       (item.split("=") for item in log.meta["locked_config"].split())}
+            truth = spec_truth(mujoco.MjSpec.from_file(str(model_path(model))), joint,
+                               config)[0].as_dict()
             for case in [Case(model, joint, {})] + draw_cases(rng, model, joint,
                                                               cases_per_axis):
                 path = Path(tmp) / "wrong.xml"
                 expected = true_errors(case, config, path)
                 md = diagnose_against_model(log, path, joint)
                 s = score(md, expected)
+                z += [(md.errors[n].data - truth[n]) / md.errors[n].sigma for n in s.named
+                      if n in s.expected]
+                wrong, corr = s.excess
                 print(f"{case.label:45s} true {fmt(s.expected)} | named {fmt(s.named)} | "
                       f"{'right' if s.right else 'WRONG'} | torque {s.torque_before:.2f} % -> "
-                      f"{s.torque_after:.2f} % ({s.ratio:.2f}x) | causes "
+                      f"{s.torque_after:.2f} % ({s.ratio:.2f}x) | floor {s.floor:.2f} %, "
+                      f"excess {wrong:.2f} % -> {corr:.2f} % | causes "
                       f"{','.join(md.named_causes) or 'none'}", flush=True)
                 if case.factors:
                     rows.append(s)
-                elif s.named or md.named_causes:
-                    false_named.append(case.label)
-            print(f"  ({model}/{joint}: {time.time() - t0:.0f} s)", flush=True)
+                else:
+                    floors.append((s.floor, s.torque_before))
+                    if s.named or md.named_causes:
+                        false_named.append(case.label)
+            print(f"  ({model}/{joint}: {time.time() - t0:.0f} s; noise floor from the log "
+                  f"{floors[-1][0]:.2f} %, the true MJCF's replay error {floors[-1][1]:.2f} %)",
+                  flush=True)
+    summary(rows, false_named, floors, np.array(z))
+
+
+def summary(rows: list, false_named: list[str], floors: list, z: np.ndarray) -> None:
     right = sum(s.right for s in rows)
     ratios = np.array([s.ratio for s in rows])
     print(f"\nright: {right} of {len(rows)} ({100 * right / len(rows):.1f} %); the right "
@@ -68,11 +89,26 @@ def run(cases_per_axis: int, duration: float, seed: int) -> None:
                 off.setdefault(k, []).append(round(v - s.expected[k], 1))
     print("errors more than 2 points off (reported - true): "
           + ("; ".join(f"{k} {v}" for k, v in off.items()) or "none"))
+    if len(z):
+        print(f"data values of the parameters named, against the truth: |data - true| / sigma "
+              f"median {np.median(np.abs(z)):.2f}, max {np.max(np.abs(z)):.2f}; within 2 sigma "
+              f"in {int(np.sum(np.abs(z) <= 2))} of {len(z)}")
     print(f"true models with something named: {len(false_named)} of {len(AXES)} "
           f"{false_named or ''}")
     print(f"forward torque gain (wrong copy / corrected): min {ratios.min():.2f}x, "
           f"median {np.median(ratios):.2f}x; >= 2x in {int(np.sum(ratios >= 2))} of "
           f"{len(rows)}")
+    f = np.array(floors)
+    print(f"replay noise floor from the log / the true MJCF's replay error: "
+          f"{np.min(f[:, 0] / f[:, 1]):.3f} to {np.max(f[:, 0] / f[:, 1]):.3f}")
+    able = [s for s in rows if s.ceiling >= 2]
+    print(f"wrong copies under 2x the floor (no model can show a 2x gain): "
+          f"{len(rows) - len(able)}; of the other {len(able)}, >= 2x in "
+          f"{sum(s.ratio >= 2 for s in able)}")
+    ex = np.array([s.excess for s in rows])
+    print(f"excess over the noise floor, median: wrong copy {np.median(ex[:, 0]):.2f} %, "
+          f"corrected {np.median(ex[:, 1]):.2f} % (max {np.max(ex[:, 1]):.2f} %; a 5 % error of "
+          "the floor estimate is worth 0.32 x the floor of excess)")
 
 
 def fmt(errors: dict[str, float]) -> str:

@@ -9,13 +9,16 @@ least 20 cases is benchmarks/diagnose_model.py (README)."""
 from __future__ import annotations
 
 import json
-from pathlib import Path
+
+import dataclasses
+import types
 
 import mujoco
+import numpy as np
 import pytest
 
 from jointbench.bench.analysis.diagnose.against_model import (COMPARED, FLOOR_PCT, compare,
-                                                              diagnose_against_model,
+                                                              diagnose_against_model, refit,
                                                               significant)
 from jointbench.bench.analysis.diagnose.model_cases import Case, score, true_errors
 from jointbench.bench.analysis.diagnose.model_edit import corrected_spec, spec_truth
@@ -23,6 +26,7 @@ from jointbench.bench.cli import main
 from jointbench.bench.effects import HiddenEffect
 from jointbench.bench.sim.experiment import run_experiment
 from jointbench.bench.sim.nominal import write_xml
+from jointbench.identification.estimate import least_squares
 from jointbench.identification.log import read_log, write_log
 from jointbench.identification.parameters import TWO_MASS
 from jointbench.models import model_path
@@ -53,6 +57,26 @@ def test_rule_is_both_sigma_and_floor():
     e = compare({"MX": 0.0, "MY": -50.0}, {"MX": 4.0, "MY": -50.0}, {"MX": 0.1, "MY": 0.1})
     assert e["MX"].error_pct == pytest.approx(-100 * 4 / (50 ** 2 + 16) ** 0.5)
     assert e["MX"].significant and not e["MY"].significant
+
+
+def test_refit_with_white_covariance_is_the_regression_with_held_columns():
+    # conditioning the estimate on held values (`refit`) with the paper's covariance
+    # sigma^2 (W^T W)^-1 is exactly least squares on y - W_h X_h over the free columns
+    rng = np.random.default_rng(3)
+    names = ("Jm", "FVm", "FSm", "K")
+    W = rng.standard_normal((400, 4)) @ np.array([[1, .6, .2, 0], [0, 1, .5, .1],
+                                                  [0, 0, 1, .3], [0, 0, 0, 1.]])
+    y = W @ np.array([2.0, 1.0, 0.5, 3.0]) + 0.3 * rng.standard_normal(400)
+    ls = least_squares(W, y, names)
+    ident = types.SimpleNamespace(model="joint-motor",
+                                  ls=dataclasses.replace(ls, cov_corrected=ls.cov))
+    held = {"Jm": 2.1, "FSm": 0.45, "K": 2.9}
+    got = refit(ident, {**held, "FVm": 0.0}, ["FVm"])
+    direct = least_squares(W[:, [1]], y - W[:, [0, 2, 3]] @ [2.1, 0.45, 2.9], ("FVm",))
+    assert got == {"FVm": pytest.approx(direct.value("FVm"), rel=1e-9)}
+    # nothing held: the estimate itself; a rigid identification: nothing refitted
+    assert refit(ident, dict(zip(names, ls.X)), names) == pytest.approx(dict(zip(names, ls.X)))
+    assert refit(types.SimpleNamespace(model="rigid", ls=ls), held, ["FVm"]) == {}
 
 
 def test_corrected_spec_sets_each_parameter_and_keeps_the_rest():
@@ -90,6 +114,11 @@ def test_wrong_parameters_named_within_two_points(prototype, factors, tmp_path):
     else:
         assert md.wrong_parameters == () and md.named_causes == ()
         assert s.ratio == pytest.approx(1.0)
+        # the noise floor, from the log alone, against what it estimates: the declared torque
+        # noise and the true model's replay error (measured within 5 % at 60 s, README)
+        noise = md.forward["floor"]["torque_noise_std"]
+        assert noise == pytest.approx(float(log.meta["torque_noise_std"]), rel=0.1)
+        assert s.floor == pytest.approx(s.torque_before, rel=0.1)
 
 
 def test_arm_joint(tmp_path):

@@ -19,12 +19,13 @@ The user's MJCF (axis convention of models/__init__.py) is the nominal:
    the extended one: the torque error before and after, and the same on a `validate` log.
    The replay adds no torque noise: the log's noise realisation is unknown, and another one
    would add its own closed-loop response (measured on the prototype's true model: 2.13 %
-   torque error with noise, 1.49 % without) to every model alike.
+   torque error with noise, 1.49 % without) to every model alike. What even a perfect model
+   leaves, the closed-loop response to the log's own noise, is estimated from the log
+   (`model_floor`: the replay's noise floor) and each error's excess over it reported.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import tempfile
 from dataclasses import dataclass, field
@@ -34,21 +35,17 @@ from typing import Callable, Sequence
 import mujoco
 import numpy as np
 
-from jointbench.bench.analysis.diagnose.forward import replay_tau0
 from jointbench.bench.analysis.diagnose.model_edit import (EDITABLE, Corrected, corrected_spec,
                                                            spec_truth)
+from jointbench.bench.analysis.diagnose.model_floor import (excess, replay_floor, replay_model,
+                                                            torque_noise_std)
 from jointbench.bench.analysis.diagnose.run import diagnose, extended_parameters
-from jointbench.bench.effects import loop_effects_from_model, write_effects
-from jointbench.bench.sim.axes import build_experiment_model
+from jointbench.bench.effects import write_effects
 from jointbench.bench.sim.nominal import write_xml
-from jointbench.bench.sim.replay import ReplayError, forward_errors, replay
-from jointbench.bench.sim.sensors import Sensors
-from jointbench.identification import regressors
-from jointbench.identification.estimate import block_weighted
+from jointbench.bench.sim.replay import ReplayError, forward_errors
 from jointbench.identification.identify import Identification, identify
 from jointbench.identification.log import Log
 from jointbench.identification.parameters import FRICTIONS, STIFFNESS_AND_INERTIAS
-from jointbench.identification.saturation import exclude_clipped
 from jointbench.models import find_axes, model_path, select_axis
 
 GRAVITY = ("MX", "MY")
@@ -148,8 +145,10 @@ class ModelDiagnosis:
         return self.named_causes[0] if self.named_causes else "none"
 
     def gain(self, views: dict[str, dict] | None = None) -> dict:
-        """Forward torque error (% RMS) of each model and the ratio model / corrected and
-        model / extended."""
+        """Forward torque error (% RMS) of each model, the ratios model / corrected and
+        model / extended, and with the replay's noise floor (model_floor) the floor, each
+        model's excess over it and the largest gain a perfect model could show,
+        model / floor."""
         views = self.forward if views is None else views
         out: dict = {"metric": "forward view, torque error % RMS (closed-loop replay)"}
         for label in MODELS:
@@ -159,6 +158,14 @@ class ModelDiagnosis:
         for label in ("corrected", "extended"):
             if base is not None and out.get(label):
                 out[f"ratio_{label}"] = base / out[label]
+        floor = views.get("floor", {}).get("torque_rel_pct")
+        if floor is not None and base is not None:
+            out["floor"] = floor
+            out["noise_std"] = views["floor"].get("torque_noise_std")
+            for label in MODELS:
+                if label in out:
+                    out[f"excess_{label}"] = excess(out[label], floor)
+            out["ratio_ceiling"] = base / floor
         return out
 
 
@@ -177,26 +184,32 @@ def _config(log: Log, given: dict[str, float] | None, axes: Sequence[str]) -> di
     return out
 
 
-def refit(log: Log, ident: Identification, model: dict[str, float],
+def refit(ident: Identification, model: dict[str, float],
           free: Sequence[str]) -> dict[str, float]:
-    """The parameters `free` fitted again on the joint-motor regression of eq. (13) (the
-    identification's rows and filter, block-weighted least squares) with every other
-    parameter held at the model's value: {name: value}. Fewer free
-    columns: less of the correlation between them leaks into the wrong ones (measured on arm6
-    axis1, FVm alone: -2.0 % from the truth against -4.7 % free). {} when the identification
-    is not the joint-motor model or nothing is free."""
-    if ident.model != "joint-motor" or not free:
+    """The parameters `free` estimated again with every other parameter held at the model's
+    value: the identification's estimate X^ (eq. 13) conditioned on the held ones, with its
+    autocorrelation-corrected covariance C (identification.uncertainty):
+
+        X_f = X^_f + C_fh C_hh^-1 (X_model,h - X^_h)
+
+    (the minimum-distance estimate: the X closest to X^ in C^-1 metric with X_h fixed; for
+    white residuals, C the paper's, it is the same instrumental-variable regression with the
+    held columns moved to the left-hand side). Fewer free parameters: less of the log's noise
+    reaches them through their correlation with the held ones (arm6 axis1, FVm alone with
+    the others at the truth, seeds 1-8: standard deviation 1.4 % against 2.6 % free). {} when
+    the identification is not the joint-motor model, nothing is free, or the covariance is
+    not available."""
+    ls = ident.ls
+    names = [n for n in ls.names if n not in ls.unidentifiable]
+    f = [ls.names.index(n) for n in names if n in free]
+    h = [ls.names.index(n) for n in names if n not in free]
+    C = ls.cov_corrected
+    if (ident.model != "joint-motor" or not f or C is None or any(n not in model for n in names)
+            or not np.all(np.isfinite(C[np.ix_(f + h, f + h)]))):
         return {}
-    reg = exclude_clipped(regressors.joint_motor(log, ident.settings), log)
-    names = list(reg.names)
-    if any(n not in model for n in names):
-        return {}
-    held = [k for k, n in enumerate(names) if n not in free]
-    cols = [k for k, n in enumerate(names) if n in free]
-    y = reg.y - reg.W[:, held] @ np.array([model[names[k]] for k in held])
-    ls = block_weighted(reg.W[:, cols], y, tuple(names[k] for k in cols), reg.block,
-                        time=reg.index)
-    return {n: float(x) for n, x in zip(ls.names, ls.X)}
+    held = np.array([model[ls.names[k]] for k in h]) - ls.X[h]
+    x = ls.X[f] + (C[np.ix_(f, h)] @ np.linalg.solve(C[np.ix_(h, h)], held) if h else 0.0)
+    return {ls.names[k]: float(v) for k, v in zip(f, x)}
 
 
 def _refitted(errors: dict[str, ParameterError], values: dict[str, float],
@@ -244,26 +257,21 @@ def _structural(log: Log, errors: dict[str, ParameterError], model_fs: float,
     return effects, named, notes, d
 
 
-def _replay_errors(path: Path, joint: str, config: dict[str, float], log: Log) -> dict:
-    """Replay `log` on axis `joint` of the MJCF at `path` (locked at `config`) in closed loop
-    with the log's reference, gains and sensors; forward_errors of the result."""
-    exp = build_experiment_model(path, joint, config=config, sample_rate_hz=1.0 / log.ts,
-                                 tau_max=log.meta_float("tau_max"))
-    sensors = Sensors.from_log(log)
-    if sensors is not None:   # the encoders' resolutions, no noise (module docstring)
-        sensors = dataclasses.replace(sensors, torque_noise_std=0.0)
-    r = replay(exp.model, exp.axis, log, tau0=replay_tau0(log),
-               loop=loop_effects_from_model(exp.model, joint), sensors=sensors)
-    return forward_errors(log, r)
-
-
 def _forward(paths: dict[str, Path], joint: str, config: dict[str, float], log: Log,
-             say: Callable[[str], None]) -> dict[str, dict]:
+             noise_std: float, say: Callable[[str], None]) -> dict[str, dict]:
+    """forward_errors of each model's replay of `log`, and under "floor" the replay's noise
+    floor (model_floor.replay_floor, with the corrected model and torque noise `noise_std`)."""
     out: dict[str, dict] = {}
     for label, path in paths.items():
         say(f"forward view: {label} replay of {log.path or 'the log'}")
         try:
-            out[label] = _replay_errors(path, joint, config, log)
+            r = replay_model(path, joint, config, log)
+            out[label] = forward_errors(log, r)
+            if label == "corrected":
+                say("forward view: the replay's noise floor")
+                floor = replay_floor(path, joint, config, log, r, noise_std)
+                if math.isfinite(floor):
+                    out["floor"] = {"torque_rel_pct": floor, "torque_noise_std": noise_std}
         except (ReplayError, ValueError) as err:
             out[label] = {"error": str(err)}
     return out
@@ -300,7 +308,7 @@ def diagnose_against_model(log: Log, model: str | Path, joint: str | None = None
     ident, data, sigma = _identify(log)
     errors = compare(truth.as_dict(), data, sigma)
     wrong = [n for n, e in errors.items() if e.significant]
-    errors = _refitted(errors, refit(log, ident, truth.as_dict(), wrong), data)
+    errors = _refitted(errors, refit(ident, truth.as_dict(), wrong), data)
     corrections = {n: e.data for n, e in errors.items() if e.significant and n in EDITABLE}
     corrected = corrected_spec(source, joint, config, corrections)
     effects, named, notes, d = _structural(log, errors, truth.FS, say)
@@ -314,8 +322,10 @@ def diagnose_against_model(log: Log, model: str | Path, joint: str | None = None
             paths["extended"] = folder / "extended.xml"
             write_xml(_extended(source, joint, config, corrections, effects, K),
                       paths["extended"])
-        views = _forward(paths, joint, config, log, say) if forward else {}
-        checks = _forward(paths, joint, config, validate, say) if validate is not None else {}
+        noise = torque_noise_std(log, ident)
+        views = _forward(paths, joint, config, log, noise, say) if forward else {}
+        checks = (_forward(paths, joint, config, validate, noise, say)
+                  if validate is not None else {})
         xml = {p.name: p.read_text() for label, p in paths.items() if label != "model"}
     return ModelDiagnosis(log=log, source=source, joint=joint, config=config,
                           identification=ident, errors=errors, corrected=corrected,

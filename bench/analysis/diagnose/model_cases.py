@@ -16,6 +16,7 @@ import numpy as np
 from jointbench.bench.analysis.diagnose.against_model import (COMPARED, FLOOR_PCT,
                                                               ModelDiagnosis)
 from jointbench.bench.analysis.diagnose.model_edit import corrected_spec, spec_truth
+from jointbench.bench.analysis.diagnose.model_floor import excess
 from jointbench.bench.sim.nominal import write_xml
 from jointbench.models import model_path
 
@@ -79,10 +80,21 @@ class Score:
     named_right: bool               # the same names, whatever the errors reported
     torque_before: float            # forward torque error (% RMS), the wrong copy
     torque_after: float             # the corrected model
+    floor: float = np.nan           # the replay's noise floor estimated from the log (% RMS)
 
     @property
     def ratio(self) -> float:
         return self.torque_before / self.torque_after if self.torque_after > 0 else np.inf
+
+    @property
+    def ceiling(self) -> float:
+        """The largest gain a perfect model could show: wrong copy / floor."""
+        return self.torque_before / self.floor
+
+    @property
+    def excess(self) -> tuple[float, float]:
+        """(wrong copy, corrected): torque error above the floor, sqrt(err^2 - floor^2)."""
+        return excess(self.torque_before, self.floor), excess(self.torque_after, self.floor)
 
 
 def score(md: ModelDiagnosis, expected: dict[str, float]) -> Score:
@@ -95,4 +107,5 @@ def score(md: ModelDiagnosis, expected: dict[str, float]) -> Score:
     g = md.gain()
     return Score(expected=expected, named=named, right=right, named_right=same,
                  torque_before=float(g.get("model", np.nan)),
-                 torque_after=float(g.get("corrected", np.nan)))
+                 torque_after=float(g.get("corrected", np.nan)),
+                 floor=float(g.get("floor", np.nan)))

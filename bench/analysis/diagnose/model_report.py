@@ -11,7 +11,8 @@ import math
 from pathlib import Path
 from typing import Callable
 
-from jointbench.bench.analysis.diagnose.against_model import (FLOOR_PCT, SIGMAS, ModelDiagnosis)
+from jointbench.bench.analysis.diagnose.against_model import (FLOOR_PCT, MODELS, SIGMAS,
+                                                              ModelDiagnosis)
 from jointbench.bench.effects import axis_keys
 from jointbench.bench.output import OutputFolder
 from jointbench.identification.log import atomic_write_text
@@ -32,7 +33,7 @@ def output_folder(out: Path) -> OutputFolder:
 
 def _views_json(views: dict[str, dict]) -> dict:
     keep = ("torque_rel_pct", "torque_rms", "position_rms", "position_rel_pct",
-            "link_position_rms", "error")
+            "link_position_rms", "torque_noise_std", "error")
     return {label: {k: v[k] for k in keep if k in v} for label, v in views.items()}
 
 
@@ -79,14 +80,26 @@ def _error_lines(md: ModelDiagnosis) -> list[str]:
     return L
 
 
-def _gain_lines(label: str, g: dict) -> list[str]:
+def _unit(md: ModelDiagnosis) -> str:
+    return "N" if md.log.prismatic else "N m"
+
+
+def _gain_lines(label: str, g: dict, unit: str = "N m") -> list[str]:
     if "model" not in g:
         return []
     parts = [f"model {g['model']:.2f} %"]
     for key in ("corrected", "extended"):
         if key in g:
             parts.append(f"{key} {g[key]:.2f} % ({g.get(f'ratio_{key}', float('nan')):.2f}x)")
-    return [f"{label}: torque error " + ", ".join(parts)]
+    L = [f"{label}: torque error " + ", ".join(parts)]
+    if "floor" in g:
+        over = ", ".join(f"{key} {g[f'excess_{key}']:.2f} %" for key in MODELS
+                         if f"excess_{key}" in g)
+        L.append(f"  replay noise floor {g['floor']:.2f} % (the log's torque noise, "
+                 f"{g['noise_std']:.3g} {unit}, replayed on the corrected model); excess over "
+                 f"it: {over}; the largest gain a perfect model could show: "
+                 f"{g['ratio_ceiling']:.2f}x")
+    return L
 
 
 def summary_text(md: ModelDiagnosis) -> str:
@@ -106,7 +119,7 @@ def summary_text(md: ModelDiagnosis) -> str:
             if "error" in v:
                 L.append(f"{label}: {name} not replayed: {v['error']}")
         L += _gain_lines(label + (f" on {md.validate_path}" if label != "forward view" else ""),
-                         md.gain(views))
+                         md.gain(views), _unit(md))
     if md.files:
         L.append("wrote: " + ", ".join(Path(f).name for f in md.files))
     return "\n".join(L)
@@ -130,10 +143,10 @@ def report_markdown(md: ModelDiagnosis) -> str:
                                         f"{', '.join(n for n, _ in md.effects)}."
                                         if md.effects else "No structural effect to add."),
           "", "## 4. Gain (closed-loop replay of the logged experiment)", ""]
-    L += [f"- {line}" for line in _gain_lines("this log", md.gain())]
+    L += [f"- {line}" for line in _gain_lines("this log", md.gain(), _unit(md))]
     if md.validation:
         L += [f"- {line}" for line in _gain_lines(f"{md.validate_path}",
-                                                  md.gain(md.validation))]
+                                                  md.gain(md.validation), _unit(md))]
     return "\n".join(L) + "\n"
 
 
