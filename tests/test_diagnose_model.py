@@ -160,9 +160,14 @@ def test_cli_json_files_and_the_written_models_run(prototype, tmp_path):
     doc = json.loads((out / "diagnosis.json").read_text())
     assert doc["wrong_parameters"] == ["K"]
     assert set(doc["parameter_errors"]["K"]) == {"model", "data", "sigma", "error_pct",
-                                                 "significant", "identified"}
+                                                 "error_sigma_pct", "significant",
+                                                 "identified"}
     assert set(doc["parameter_errors"]["Jm"]) == {"model", "data", "sigma", "error_pct",
-                                                  "significant"}
+                                                  "error_sigma_pct", "significant"}
+    k = doc["parameter_errors"]["K"]   # error 100 (m - d) / d: sigma 100 m sigma_d / d^2
+    assert k["error_sigma_pct"] == pytest.approx(100 * k["model"] * k["sigma"] / k["data"] ** 2)
+    assert set(doc["gain"]) >= {"floor", "noise_std", "excess_model", "excess_corrected",
+                                "ratio_ceiling"}
     assert doc["parameter_errors"]["K"]["error_pct"] == pytest.approx(25.0, abs=2.0)
     assert doc["named_cause"] == "none" and doc["named_causes"] == []
     assert doc["gain"]["ratio_corrected"] >= 2.0

@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Callable
 
 from jointbench.bench.analysis.diagnose.against_model import (FLOOR_PCT, MODELS, SIGMAS,
-                                                              ModelDiagnosis)
+                                                              ModelDiagnosis, ParameterError)
 from jointbench.bench.effects import axis_keys
 from jointbench.bench.output import OutputFolder
 from jointbench.identification.log import atomic_write_text
@@ -102,6 +102,12 @@ def _gain_lines(label: str, g: dict, unit: str = "N m") -> list[str]:
     return L
 
 
+def _wrong(e: ParameterError) -> str:
+    """"K +23.0 +- 0.2 %": the error and the sigma the log's value carries into it."""
+    sd = f" +- {e.error_sigma_pct:.1f}" if math.isfinite(e.error_sigma_pct) else ""
+    return f"{e.name} {e.error_pct:+.1f}{sd} %"
+
+
 def summary_text(md: ModelDiagnosis) -> str:
     """What `jointbench diagnose LOG --model ROBOT.xml` prints."""
     L = [f"model: {md.source} axis {md.joint}"
@@ -110,8 +116,8 @@ def summary_text(md: ModelDiagnosis) -> str:
          f"data: {md.log.path or 'log'} ({md.identification.model} identification)", ""]
     L += _error_lines(md)
     L += [f"({RULE})", "",
-          "wrong parameters: " + (", ".join(
-              f"{n} {md.errors[n].error_pct:+.1f} %" for n in md.wrong_parameters) or "none"),
+          "wrong parameters: " + (", ".join(_wrong(md.errors[n]) for n in md.wrong_parameters)
+                                  or "none"),
           "named causes: " + (", ".join(md.named_causes) or "none")]
     L += [f"note: {n}" for n in md.notes]
     for label, views in (("forward view", md.forward), ("cross-validation", md.validation)):
@@ -133,7 +139,7 @@ def report_markdown(md: ModelDiagnosis) -> str:
          "corrected sigma.", "", "## 1. Parameters", "", "```"]
     L += _error_lines(md) + ["```", "", RULE + ".", "", "## 2. Causes", ""]
     L += [f"- wrong parameter {n}: model {md.errors[n].model:.5g}, data "
-          f"{md.errors[n].data:.5g} ({md.errors[n].error_pct:+.1f} %)"
+          f"{md.errors[n].data:.5g} ({_wrong(md.errors[n])[len(n) + 1:]})"
           for n in md.wrong_parameters]
     L += [f"- effect {n}" for n in md.named_causes] or ["- no structural effect"]
     L += [f"- note: {n}" for n in md.notes]
