@@ -131,6 +131,11 @@ def summary_text(md: ModelDiagnosis) -> str:
     return "\n".join(L)
 
 
+def _bullet(line: str) -> str:
+    """A text line as a markdown list item; an indented one (the noise floor) nested."""
+    return f"  - {line.strip()}" if line.startswith(" ") else f"- {line}"
+
+
 def report_markdown(md: ModelDiagnosis) -> str:
     """DIR/report.md."""
     L = [f"# Diagnosis of `{md.log.path or 'log'}` against `{md.source}`", "",
@@ -149,10 +154,10 @@ def report_markdown(md: ModelDiagnosis) -> str:
                                         f"{', '.join(n for n, _ in md.effects)}."
                                         if md.effects else "No structural effect to add."),
           "", "## 4. Gain (closed-loop replay of the logged experiment)", ""]
-    L += [f"- {line}" for line in _gain_lines("this log", md.gain(), _unit(md))]
+    L += [_bullet(line) for line in _gain_lines("this log", md.gain(), _unit(md))]
     if md.validation:
-        L += [f"- {line}" for line in _gain_lines(f"{md.validate_path}",
-                                                  md.gain(md.validation), _unit(md))]
+        L += [_bullet(line) for line in _gain_lines(f"{md.validate_path}",
+                                                    md.gain(md.validation), _unit(md))]
     return "\n".join(L) + "\n"
 
 
