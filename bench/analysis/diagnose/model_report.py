@@ -23,7 +23,7 @@ FILES = ("corrected.xml", "extended.xml", "report.md", "diagnosis.json")
 RULE = (f"significant: |model - data| > {SIGMAS:g} corrected sigma of the log's "
         f"identification AND |error| > {FLOOR_PCT:g} % of the data's value (MX, MY: of the "
         "gravity moment sqrt(MX^2 + MY^2)); a significant one's data value is then refitted "
-        "with the other parameters held at the model's")
+        f"with the parameters within {SIGMAS:g} sigma of the data held at the model's")
 
 
 def output_folder(out: Path) -> OutputFolder:
