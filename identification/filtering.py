@@ -208,7 +208,8 @@ def coulomb_integrals(v: np.ndarray, ts: float, rate: float = 0.0,
 
 
 def kink_corrected(v: np.ndarray, rate: float, s: FilterSettings, iterations: int = 3,
-                   held: np.ndarray | None = None, drive: Drive | None = None) -> np.ndarray:
+                   held: np.ndarray | None = None, drive: Drive | None = None,
+                   inside: bool = True) -> np.ndarray:
     """The band-limited velocity v = D(lowpass(q)) with its zero crossings put back where the
     unfiltered velocity has them, for a Coulomb friction of `rate` = FS / J [rad/s^2].
 
@@ -228,7 +229,8 @@ def kink_corrected(v: np.ndarray, rate: float, s: FilterSettings, iterations: in
     into the crossing too. Its share the chain misses, H1 - D(lowpass(H2)) (H1, H2 its first
     and second integrals), is added like the friction's (stiff_small's crossings: 0.05 ->
     0.00 sample late on average). `drive`: the friction's share taken with its stick phases
-    (`coulomb_integrals`)."""
+    (`coulomb_integrals`). `inside` False: the crossings placed linearly between samples (a
+    plant that switches its friction once a sample, `regressors.joint_motor`)."""
     v = np.asarray(v, dtype=float)
     base = np.nan_to_num(v)
     if held is not None:
@@ -239,7 +241,7 @@ def kink_corrected(v: np.ndarray, rate: float, s: FilterSettings, iterations: in
         base = base + np.nan_to_num(missed)
     u = base
     for _ in range(iterations):
-        S1, S2 = coulomb_integrals(u, s.ts, rate, drive)
+        S1, S2 = coulomb_integrals(u, s.ts, rate if inside else 0.0, drive)
         seen = _seen_velocity(S2, s)
         u = np.where(np.isfinite(seen), base + rate * (seen - S1), base)   # ends: as filtered
     u = u.copy()

@@ -53,17 +53,20 @@ def _filtered(x: np.ndarray, s: FilterSettings, nd: int) -> list[np.ndarray]:
 
 
 def _sign(x: np.ndarray, s: FilterSettings, rate: float = 0.0,
-          held: np.ndarray | None = None, drive: Drive | None = None) -> np.ndarray:
+          held: np.ndarray | None = None, drive: Drive | None = None,
+          inside: bool = True) -> np.ndarray:
     """sign(x) at the samples (the paper's chain), or as the 5-point stencil sees it
     (`stencil_sign`: each reversal placed between samples, weighted as its acceleration).
     `rate` = FS / J > 0: the reversals of the velocity x moved back to where the friction's
     kink has them (`kink_corrected`, with the held drive `held` = tau / J when given) and
     placed between samples with that kink (`crossing_share`); with `drive`, the friction's
-    state with its stick phases (`coulomb_integrals`) in place of sign(x)."""
+    state with its stick phases (`coulomb_integrals`) in place of sign(x). `inside` False:
+    the reversals placed linearly between samples (`_friction_models`)."""
     if rate > 0:
-        x = kink_corrected(x, rate, s, held=held, drive=drive)
+        x = kink_corrected(x, rate, s, held=held, drive=drive, inside=inside)
     if s.stencil == 5:
-        return stencil_view(coulomb_integrals(x, s.ts, rate, drive)[1], s.ts, 5)
+        return stencil_view(coulomb_integrals(x, s.ts, rate if inside else 0.0, drive)[1],
+                            s.ts, 5)
     out = np.sign(x)
     out[~np.isfinite(x)] = np.nan
     return out
@@ -119,23 +122,32 @@ def _as_seen(s: FilterSettings):
     return lambda x, order: as_acceleration_sees(x, s.ts, order, s.stencil)
 
 
+PLANT_STEPS_KEY = "substeps"   # log metadata: a simulator's integration steps per sample
+
+
 def _friction_models(log: Log, friction: tuple[float, float] | Mapping[str, float],
                      defl: np.ndarray) -> tuple[tuple, tuple]:
     """`_sign`'s arguments after the velocity for the motor and the link columns.
 
-    From rates (FSm / Jm, FS / JL): the reversals placed with the friction's kink. From
-    parameters p, the motor column also gets the held torque tau / Jm and its drive between
-    samples, (tau[k] - K defl) / Jm at the interval's start and end with the viscous rate
-    FVm / Jm, for its stick phases (`friction_state`): the closed loop holds the motor at
-    its reversals (stiff_small without feed-forward: a sixth of the time). The link, driven by
-    the spring alone, keeps its reversals slip-through (its stick phases, tried the same way,
-    moved K by +1.3 % on an axis without feed-forward: x_fast in tests/test_indep_accuracy.py).
-    Zero where a friction or inertia is missing or not positive."""
-    if not isinstance(friction, Mapping):
-        return (friction[0],), (friction[1],)
-    p = friction
-    rates = tuple(p[f] / p[j] if p.get(j, 0) > 0 and p.get(f, 0) > 0 else 0.0
-                  for f, j in (("FSm", "Jm"), ("FS", "JL")))
+    A plant integrated continuously (a real axis, or a simulator with several steps a
+    sample): from rates (FSm / Jm, FS / JL), the reversals placed inside the sample
+    interval with the friction's kink; from parameters p, the motor column also gets the held
+    torque tau / Jm and its drive between samples, (tau[k] - K defl) / Jm at the interval's
+    start and end with the viscous rate FVm / Jm, for its stick phases (`friction_state`):
+    the closed loop holds the motor at its reversals (stiff_small without feed-forward: a
+    sixth of the time). The link, driven by the spring alone, keeps its reversals
+    slip-through (its stick phases, tried the same way, moved K by +1.3 % on an axis without
+    feed-forward). A log whose metadata says the simulator took one step a sample
+    (`substeps: 1`, MuJoCo's arm6 at 350.87 Hz) cannot switch its friction inside a sample:
+    the reversals stay placed linearly between samples by the rates (the sub-sample model
+    there: arm6 axis2 Jm -0.01 -> -1.1 %). Zero where a friction or inertia is missing or
+    not positive."""
+    rates = friction if not isinstance(friction, Mapping) else tuple(
+        friction[f] / friction[j] if friction.get(j, 0) > 0 and friction.get(f, 0) > 0
+        else 0.0 for f, j in (("FSm", "Jm"), ("FS", "JL")))
+    if log.meta.get(PLANT_STEPS_KEY, "").strip() == "1":
+        return (rates[0], None, None, False), (rates[1], None, None, False)
+    p = friction if isinstance(friction, Mapping) else {}
     K, Jm = p.get("K", 0.0), p.get("Jm", 0.0)
     if not (rates[0] > 0 and K > 0):
         return (rates[0],), (rates[1],)
