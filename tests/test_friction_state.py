@@ -7,11 +7,15 @@ samples, in closed form per fine step; no MuJoCo, no identification."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
 from jointbench.identification.filtering import crossing_share, sign_integrals
 from jointbench.identification.friction_state import friction_integrals
+from jointbench.identification.log import Log
+from jointbench.identification.regressors import _friction_models
 
 TS = 1 / 350.87
 FINE = 2000
@@ -87,3 +91,17 @@ def test_friction_integrals_hold_a_drive_inside_the_band():
     drive = np.full(3, d)
     S1, _ = friction_integrals(v, drive, drive, 0.0, rate, TS)
     assert np.diff(S1) / TS == pytest.approx([d / rate, d / rate], abs=1e-12)
+
+
+def test_a_one_step_a_sample_simulator_keeps_the_linear_placement():
+    """A log whose metadata says the simulator took one step a sample (`substeps: 1`, the
+    bench's MuJoCo logs at 350.87 Hz) switches its friction at most once a sample: the
+    joint-motor columns keep the reversals placed linearly between samples (inside=False),
+    without stick phases; any other log (a real axis: no such key) gets the sub-sample model."""
+    t = np.arange(50) * TS
+    log = Log(t=t, q_m=np.sin(t), tau_m=np.cos(t), q=np.sin(t), meta={"substeps": "1"})
+    p = {"K": 100.0, "Jm": 1.0, "JL": 2.0, "FSm": 3.0, "FVm": 0.5, "FS": 1.0}
+    motor, link = _friction_models(log, p, np.zeros(50))
+    assert motor == (3.0, None, None, False) and link == (0.5, None, None, False)
+    motor, link = _friction_models(replace(log, meta={}), p, np.zeros(50))
+    assert motor[0] == 3.0 and len(motor) == 3 and motor[2][2] == 0.5 and link == (0.5,)
