@@ -55,8 +55,9 @@ def _filtered(x: np.ndarray, s: FilterSettings, nd: int) -> list[np.ndarray]:
 def _sign(x: np.ndarray, s: FilterSettings, rate: float = 0.0,
           held: np.ndarray | None = None, drive: Drive | None = None,
           inside: bool = True) -> np.ndarray:
-    """sign(x) at the samples (the paper's chain), or as the 5-point stencil sees it
-    (`stencil_sign`: each reversal placed between samples, weighted as its acceleration).
+    """sign(x) at the samples (the paper's chain), or as the 5-point stencil sees it (the
+    `stencil_view` of `coulomb_integrals`: each reversal placed between samples, weighted as
+    its acceleration).
     `rate` = FS / J > 0: the reversals of the velocity x moved back to where the friction's
     kink has them (`kink_corrected`, with the held drive `held` = tau / J when given) and
     placed between samples with that kink (`crossing_share`); with `drive`, the friction's
