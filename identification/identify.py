@@ -280,8 +280,8 @@ def _place_reversals(log: Log, settings: FilterSettings, reg: regressors.Regress
     (`filtering.crossing_share`), and the motor's stick phases, where the friction holds the
     drive instead of +-FSm (`friction_state`). The filtered velocity's own crossings come late
     by an amount that grows with FS / J, and Jm with them (stiff_small, f1 = 20 Hz at 17.5
-    samples a period: Jm +3.83 % with them, +2.99 % with the crossings alone, +0.34 % now;
-    +0.06 % with ideal sensors)."""
+    samples a period: Jm +3.83 % with them, +2.99 % with the crossings alone, +0.38 % now;
+    +0.00 % with ideal sensors)."""
     for _ in range(REVERSAL_PASSES):
         p = {n: ls.value(n) for n in ls.names if n not in ls.unidentifiable}
         rates = reversal_rates(p)

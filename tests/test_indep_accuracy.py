@@ -22,7 +22,7 @@ F1_OVER: dict[str, str] = {}   # the frequency response alone: heavy_link +11.3 
 # friction's kink, the held torque's steps and the motor's stick phases (identify.
 # _place_reversals, identification/friction_state.py), every family is within 0.1 % of the
 # truth with ideal sensors (no torque noise, no quantisation; test_joint_motor_without_noise
-# below), and stiff_small (f1 = 20 Hz at 17.5 samples a period) went from Jm +2.99 to +0.34 %.
+# below), and stiff_small (f1 = 20 Hz at 17.5 samples a period) went from Jm +2.99 to +0.38 %.
 # What is left over 0.5 % at seed 1 is the closed-loop torque noise, within 1.2 corrected
 # sigma: heavy_link Jm -0.70 % (sigma 0.7 %; seeds 2, 3: +0.15, -0.41 %; it read -0.02 % before,
 # a +1.2 % friction bias, measured without noise, cancelling this draw), soft Jm +0.56 %
