@@ -5,8 +5,10 @@ drive cannot overcome FS the axis sticks instead: the friction then balances the
 anywhere in [-FS, FS], for as long as the drive stays inside that band. Without velocity
 feed-forward, or near the antiresonance (the motor a node of the mode, the spring force
 sweeping through the friction band within a sample), such stick phases recur at every
-reversal: on a stiff axis at 17.5 samples a period, a sixth of the time, and the sign column
-then leaves Jm +2.2 % (tests/test_friction_state.py).
+reversal: on the independent simulator's stiff_small axis without feed-forward (17.5 samples
+a period) a sixth of the time, and a sign column with every reversal placed right still
+leaves Jm +2.2 % (ideal sensors, true parameters; +0.07 % with this state; the whole chain:
+tests/test_indep_accuracy.py::test_joint_motor_without_noise).
 
 `friction_integrals` integrates, within every sample interval independently, the one-mass
 equation J v' = J (drive(t) - visc v) - FS s(t) with s the friction state (Karnopp: s =
