@@ -6,7 +6,7 @@ anywhere in [-FS, FS], for as long as the drive stays inside that band. Without 
 feed-forward, or near the antiresonance (the motor a node of the mode, the spring force
 sweeping through the friction band within a sample), such stick phases recur at every
 reversal: on the independent simulator's stiff_small axis without feed-forward (17.5 samples
-a period) a sixth of the time, and a sign column with every reversal placed right still
+a period) a sixth of the time, and a sign column, every reversal taken as slip-through,
 leaves Jm +2.2 % (ideal sensors, true parameters; +0.07 % with this state; the whole chain:
 tests/test_indep_accuracy.py::test_joint_motor_without_noise).
 
