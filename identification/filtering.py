@@ -8,6 +8,11 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import signal
 
+from jointbench.identification.friction_state import friction_integrals
+
+# (drive at each interval's start, at its end [rad/s^2], viscous rate FV / J [1/s])
+Drive = tuple[np.ndarray, np.ndarray, float]
+
 @dataclass(frozen=True)
 class FilterSettings:
     """The bandpass chain: Butterworth order `m` and frequency `wn` [rad/s], decimation `Nd`,
@@ -137,16 +142,44 @@ def held_double_integral(tau: np.ndarray, ts: float) -> np.ndarray:
     return S2 + c * k ** 2 / 2
 
 
-def sign_integrals(v: np.ndarray, ts: float) -> tuple[np.ndarray, np.ndarray]:
-    """Samples of the first and second integrals of sign(v(t)), v taken linear between its
-    samples: a Coulomb friction FS sign(v) switches where v crosses zero, between samples.
-    The second is NaN where v is (the stencil spreads it over its span; the decimation drops
-    those rows)."""
+def crossing_share(v0: np.ndarray, v1: np.ndarray, ts: float, rate: float = 0.0) -> np.ndarray:
+    """Where in each sample interval a velocity going from v0 to v1 [rad/s] crosses zero, as
+    the share theta in [0, 1] of the interval before the crossing; 1 where the sign does not
+    change or a value is not finite.
+
+    rate = 0: v taken linear between its samples. rate = FS / J > 0 [rad/s^2]: the
+    acceleration, constant within the interval before the crossing (the torque is held),
+    jumps by 2 rate sign(v0) at it, since the Coulomb friction turns over: v0 + a theta T = 0
+    and v1 = (a + 2 rate sign(v0)) (1 - theta) T give c theta^2 + (v1 - v0 - c) theta + v0 = 0
+    with c = 2 rate sign(v0) T, whose one root in [0, 1] this is (the quadratic is v0 at 0 and
+    v1 at 1). At 17.5 samples a period (20 Hz at 350.87 Hz) the linear guess comes 0.2 sample
+    late on average, and that alone leaves Jm +2.6 % (tests/test_filtering.py)."""
+    v0, v1 = np.asarray(v0, dtype=float), np.asarray(v1, dtype=float)
+    a = np.sign(v0)
+    flip = (a != np.sign(v1)) & np.isfinite(v0) & np.isfinite(v1)
+    theta = np.ones(len(v0))
+    d0, d1 = v0[flip], v1[flip]
+    lin = d0 / (d0 - d1)
+    c = 2.0 * rate * a[flip] * ts
+    B = d1 - d0 - c
+    disc = np.sqrt(np.maximum(B * B - 4.0 * c * d0, 0.0))
+    # the root that is lin when c -> 0, in the form without cancellation: 2 v0 / (-B +- disc)
+    den = -B + np.sign(-B) * disc
+    with np.errstate(invalid="ignore", divide="ignore"):
+        root = np.where(den != 0, 2.0 * d0 / den, lin)
+    theta[flip] = np.where(c != 0, root, lin)
+    return np.clip(np.nan_to_num(theta, nan=1.0), 0.0, 1.0)
+
+
+def sign_integrals(v: np.ndarray, ts: float, rate: float = 0.0
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """Samples of the first and second integrals of sign(v(t)): a Coulomb friction FS sign(v)
+    switches where v crosses zero, between samples (`crossing_share`: v linear between its
+    samples, or with the friction's kink of `rate` = FS / J). The second is NaN where v is
+    (the stencil spreads it over its span; the decimation drops those rows)."""
     v = np.asarray(v, dtype=float)
     a, b = np.sign(v[:-1]), np.sign(v[1:])
-    with np.errstate(invalid="ignore", divide="ignore"):
-        theta = np.where(a != b, v[:-1] / (v[:-1] - v[1:]), 1.0)   # share of the step at sign a
-    theta = np.clip(np.nan_to_num(theta, nan=1.0), 0.0, 1.0)
+    theta = crossing_share(v[:-1], v[1:], ts, rate)   # share of the step at sign a
     b = np.where(a != b, b, a)
     step1 = (a * theta + b * (1 - theta)) * ts
     step2 = (a * theta ** 2 / 2 + a * theta * (1 - theta) + b * (1 - theta) ** 2 / 2) * ts ** 2
@@ -158,13 +191,25 @@ def sign_integrals(v: np.ndarray, ts: float) -> tuple[np.ndarray, np.ndarray]:
     return S1, S2
 
 
-def sign_double_integral(v: np.ndarray, ts: float) -> np.ndarray:
+def sign_double_integral(v: np.ndarray, ts: float, rate: float = 0.0) -> np.ndarray:
     """The second of `sign_integrals`: the position a unit Coulomb acceleration sign(v) gives."""
-    return sign_integrals(v, ts)[1]
+    return sign_integrals(v, ts, rate)[1]
 
 
-def kink_corrected(v: np.ndarray, rate: float, s: FilterSettings,
-                   iterations: int = 3) -> np.ndarray:
+def coulomb_integrals(v: np.ndarray, ts: float, rate: float = 0.0,
+                      drive: Drive | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The first and second integrals of the Coulomb friction's state at the samples:
+    `sign_integrals` (reversals between samples, with the kink of `rate`), or with `drive`
+    (drive at the start and end of each interval [rad/s^2], viscous rate [1/s]) and
+    rate > 0 the stick-slip state of `friction_state.friction_integrals`."""
+    if drive is None or not rate > 0:
+        return sign_integrals(v, ts, rate)
+    return friction_integrals(v, drive[0], drive[1], drive[2], rate, ts)
+
+
+def kink_corrected(v: np.ndarray, rate: float, s: FilterSettings, iterations: int = 3,
+                   held: np.ndarray | None = None, drive: Drive | None = None,
+                   inside: bool = True) -> np.ndarray:
     """The band-limited velocity v = D(lowpass(q)) with its zero crossings put back where the
     unfiltered velocity has them, for a Coulomb friction of `rate` = FS / J [rad/s^2].
 
@@ -175,24 +220,46 @@ def kink_corrected(v: np.ndarray, rate: float, s: FilterSettings,
     Jm comes out high (+1.7 % on a heavy link, +0.6 % on arm6 axis 2 at the paper rate).
     With S = integral of sign(v), the friction's share of the velocity is -rate S, which the
     chain sees as -rate D(lowpass(integral S)); so v_true = v + rate (D(lowpass(int S)) - S),
-    solved by fixed-point iteration from sign(v). NaN where v is."""
+    solved by fixed-point iteration from sign(v), the crossings placed with the kink
+    (`sign_integrals` with `rate`). NaN where v is.
+
+    `held` [rad/s^2]: the held torque over the inertia, tau[k] / J on [t_k, t_k+1) (a
+    zero-order-hold drive). Its steps at every sample are the velocity's other kinks: a stiff
+    velocity loop answers a reversal within a sample, and the filter averages that answer
+    into the crossing too. Its share the chain misses, H1 - D(lowpass(H2)) (H1, H2 its first
+    and second integrals), is added like the friction's (stiff_small's crossings: 0.05 ->
+    0.00 sample late on average). `drive`: the friction's share taken with its stick phases
+    (`coulomb_integrals`). `inside` False: the crossings placed linearly between samples (a
+    plant that switches its friction once a sample, `regressors.joint_motor`)."""
     v = np.asarray(v, dtype=float)
     base = np.nan_to_num(v)
+    if held is not None:
+        h = np.asarray(held, dtype=float)
+        h = h - np.mean(h)   # a constant's share passes the chain whole; its t^2 trips filtfilt
+        H1 = np.concatenate([[0.0], np.cumsum(h[:-1] * s.ts)])
+        missed = H1 - _seen_velocity(held_double_integral(h, s.ts), s)
+        base = base + np.nan_to_num(missed)
     u = base
     for _ in range(iterations):
-        S1, S2 = sign_integrals(u, s.ts)
-        seen = derivatives(lowpass(S2, s.wn, s.ts, s.m), s.ts, 1, s.stencil)[1]
+        S1, S2 = coulomb_integrals(u, s.ts, rate if inside else 0.0, drive)
+        seen = _seen_velocity(S2, s)
         u = np.where(np.isfinite(seen), base + rate * (seen - S1), base)   # ends: as filtered
     u = u.copy()
     u[~np.isfinite(v)] = np.nan
     return u
 
 
-def stencil_sign(v: np.ndarray, ts: float, stencil: int = 5) -> np.ndarray:
+def _seen_velocity(P: np.ndarray, s: FilterSettings) -> np.ndarray:
+    """D(lowpass(P)): the chain's velocity of positions P (NaN at the stencil's ends)."""
+    return derivatives(lowpass(np.nan_to_num(P), s.wn, s.ts, s.m), s.ts, 1, s.stencil)[1]
+
+
+def stencil_sign(v: np.ndarray, ts: float, stencil: int = 5, rate: float = 0.0) -> np.ndarray:
     """sign(v) as the stencil's second derivative sees it (`stencil_view` of
-    `sign_double_integral`): each reversal placed where v crosses zero between samples and
-    weighted as the acceleration it causes is. Where v is NaN the result is NaN."""
-    return stencil_view(sign_double_integral(v, ts), ts, stencil)
+    `sign_double_integral`): each reversal placed where v crosses zero between samples (with
+    the friction's kink of `rate` = FS / J, `crossing_share`) and weighted as the acceleration
+    it causes is. Where v is NaN the result is NaN."""
+    return stencil_view(sign_double_integral(v, ts, rate), ts, stencil)
 
 
 def decimate_parallel(y: np.ndarray, W: np.ndarray, settings: FilterSettings
@@ -217,3 +284,31 @@ def decimate_parallel(y: np.ndarray, W: np.ndarray, settings: FilterSettings
     yd, Wd, index = yd[keep], Wd[keep], index[keep]
     ok = np.all(np.isfinite(Wd), axis=1) & np.isfinite(yd)
     return yd[ok], Wd[ok], index[ok]
+
+
+def stencil_gain(w_ts: np.ndarray, stencil: int = 5) -> np.ndarray:
+    """The gain of the stencil's first derivative relative to the true one at w Ts:
+    sin(x) / x (eq. 22) or (8 sin x - sin 2x) / (6 x) (5 points); 1 at 0."""
+    x = np.asarray(w_ts, dtype=float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        g = np.sin(x) / x if stencil == 3 else (8 * np.sin(x) - np.sin(2 * x)) / (6 * x)
+    return np.where(x == 0, 1.0, g)
+
+
+def as_acceleration_sees(x: np.ndarray, ts: float, order: int, stencil: int = 5) -> np.ndarray:
+    """A column that holds derivative `order` (0 or 1) of a sampled signal x as the second
+    stencil derivative sees the acceleration: the stencil's second derivative of samples is the
+    acceleration weighted over its span, the gain G = g(w Ts)^2 (g = `stencil_gain`), so an
+    equation Jm qm'' = tau - K (qm - q) - FV qm' holds between samples only with the other
+    terms weighted alike: x times g^(2 - order) (order 1: x is already a stencil derivative,
+    gain g). At 20 Hz and 350.87 Hz, 1 - G is 0.1 % (0.4 % at 28 Hz), the size of the Jm
+    excess it leaves. Zero phase (FFT of the mirrored record); NaN where x is."""
+    x = np.asarray(x, dtype=float)
+    bad = ~np.isfinite(x)
+    y = np.where(bad, 0.0, x)
+    ext = np.concatenate([y, y[::-1]])
+    w = 2 * np.pi * np.fft.rfftfreq(len(ext), ts)
+    out = np.fft.irfft(np.fft.rfft(ext) * stencil_gain(w * ts, stencil) ** (2 - order),
+                       len(ext))[:len(x)]
+    out[bad] = np.nan
+    return out

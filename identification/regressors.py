@@ -16,12 +16,15 @@ linear relation survives the filtering (section 3.2).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
-from jointbench.identification.filtering import (FilterSettings, decimate_parallel, derivatives,
-                                                 kink_corrected, lowpass, stencil_sign, zoh_align)
+from jointbench.identification.filtering import (Drive, FilterSettings, as_acceleration_sees,
+                                                 coulomb_integrals,
+                                                 decimate_parallel, derivatives, kink_corrected,
+                                                 lowpass, stencil_view, zoh_align)
 from jointbench.identification.log import Log, LogError
 from jointbench.identification.parameters import JOINT_MOTOR, MOTOR_ONLY, MOTOR_ONLY_CORRECTED, RIGID
 
@@ -49,15 +52,22 @@ def _filtered(x: np.ndarray, s: FilterSettings, nd: int) -> list[np.ndarray]:
     return derivatives(lowpass(x, s.wn, s.ts, s.m), s.ts, nd, s.stencil)
 
 
-def _sign(x: np.ndarray, s: FilterSettings, rate: float = 0.0) -> np.ndarray:
-    """sign(x) at the samples (the paper's chain), or as the 5-point stencil sees it
-    (`stencil_sign`: each reversal placed between samples, weighted as its acceleration).
+def _sign(x: np.ndarray, s: FilterSettings, rate: float = 0.0,
+          held: np.ndarray | None = None, drive: Drive | None = None,
+          inside: bool = True) -> np.ndarray:
+    """sign(x) at the samples (the paper's chain), or as the 5-point stencil sees it (the
+    `stencil_view` of `coulomb_integrals`: each reversal placed between samples, weighted as
+    its acceleration).
     `rate` = FS / J > 0: the reversals of the velocity x moved back to where the friction's
-    kink has them (`kink_corrected`)."""
+    kink has them (`kink_corrected`, with the held drive `held` = tau / J when given) and
+    placed between samples with that kink (`crossing_share`); with `drive`, the friction's
+    state with its stick phases (`coulomb_integrals`) in place of sign(x). `inside` False:
+    the reversals placed linearly between samples (`_friction_models`)."""
     if rate > 0:
-        x = kink_corrected(x, rate, s)
+        x = kink_corrected(x, rate, s, held=held, drive=drive, inside=inside)
     if s.stencil == 5:
-        return stencil_sign(x, s.ts, 5)
+        return stencil_view(coulomb_integrals(x, s.ts, rate if inside else 0.0, drive)[1],
+                            s.ts, 5)
     out = np.sign(x)
     out[~np.isfinite(x)] = np.nan
     return out
@@ -75,10 +85,13 @@ def _torque(log: Log, s: FilterSettings, filtered: bool = True) -> np.ndarray:
 
 
 def joint_motor(log: Log, s: FilterSettings,
-                friction_rates: tuple[float, float] = (0.0, 0.0)) -> Regressor:
+                friction: tuple[float, float] | Mapping[str, float] = (0.0, 0.0)
+                ) -> Regressor:
     """Eq. (13): y = (tau_m, 0), rows of eq. (10); gravity g cos q, g sin q from the log's g.
-    `friction_rates` = (FSm / Jm, FS / JL) of an earlier estimate place the Coulomb
-    reversals of the sign columns (`_sign`); zero keeps the filtered velocity's."""
+    `friction` places the Coulomb reversals of the sign columns (`_sign`): the rates
+    (FSm / Jm, FS / JL), or the parameters of an earlier estimate (names of eq. 13), which
+    add the held torque's kinks and the stick phases (`_friction_models`); zero keeps the
+    filtered velocity's."""
     if log.q is None:
         raise LogError("the joint-motor model needs the link position column 'q'", log.path,
                        column="q")
@@ -89,15 +102,60 @@ def joint_motor(log: Log, s: FilterSettings,
     n = len(log.t)
     zero = np.zeros(n)
     defl = qm[0] - q[0]
-    rm, rl = friction_rates
-    W1 = np.column_stack([qm[2], qm[1], _sign(qm[1], s, rm), defl, zero, zero, zero, zero,
-                          zero])
-    W2 = np.column_stack([zero, zero, zero, -defl, q[2], g * np.cos(q[0]), g * np.sin(q[0]),
-                          q[1], _sign(q[1], s, rl)])
+    motor, link = _friction_models(log, friction, defl)
+    seen = _as_seen(s)
+    W1 = np.column_stack([qm[2], seen(qm[1], 1), _sign(qm[1], s, *motor), seen(defl, 0), zero,
+                          zero, zero, zero, zero])
+    W2 = np.column_stack([zero, zero, zero, -seen(defl, 0), q[2], seen(g * np.cos(q[0]), 0),
+                          seen(g * np.sin(q[0]), 0), seen(q[1], 1), _sign(q[1], s, *link)])
     y1, W1, i1 = decimate_parallel(tau, W1, s)
     y2, W2, i2 = decimate_parallel(zero, W2, s)
     return Regressor("joint-motor", JOINT_MOTOR, np.concatenate([y1, y2]), np.vstack([W1, W2]),
                      np.r_[np.zeros(len(y1), int), np.ones(len(y2), int)], np.r_[i1, i2], s)
+
+
+def _as_seen(s: FilterSettings):
+    """The 5-point chain's pairing of the columns that are not second derivatives with the
+    acceleration (`as_acceleration_sees`), or as they are with eq. (22)'s chain (the paper's,
+    kept as printed)."""
+    if s.stencil != 5:
+        return lambda x, order: x
+    return lambda x, order: as_acceleration_sees(x, s.ts, order, s.stencil)
+
+
+PLANT_STEPS_KEY = "substeps"   # log metadata: a simulator's integration steps per sample
+
+
+def _friction_models(log: Log, friction: tuple[float, float] | Mapping[str, float],
+                     defl: np.ndarray) -> tuple[tuple, tuple]:
+    """`_sign`'s arguments after the velocity for the motor and the link columns.
+
+    A plant integrated continuously (a real axis, or a simulator with several steps a
+    sample): from rates (FSm / Jm, FS / JL), the reversals placed inside the sample
+    interval with the friction's kink; from parameters p, the motor column also gets the held
+    torque tau / Jm and its drive between samples, (tau[k] - K defl) / Jm at the interval's
+    start and end with the viscous rate FVm / Jm, for its stick phases (`friction_state`):
+    the closed loop holds the motor at its reversals (stiff_small without feed-forward: a
+    sixth of the time). The link, driven by the spring alone, keeps its reversals
+    slip-through (its stick phases, tried the same way, moved K by +1.3 % on an axis without
+    feed-forward). A log whose metadata says the simulator took one step a sample
+    (`substeps: 1`, MuJoCo's arm6 at 350.87 Hz) cannot switch its friction inside a sample:
+    the reversals stay placed linearly between samples by the rates (the sub-sample model
+    there: arm6 axis2 Jm -0.01 -> -1.1 %). Zero where a friction or inertia is missing or
+    not positive."""
+    rates = friction if not isinstance(friction, Mapping) else tuple(
+        friction[f] / friction[j] if friction.get(j, 0) > 0 and friction.get(f, 0) > 0
+        else 0.0 for f, j in (("FSm", "Jm"), ("FS", "JL")))
+    if log.meta.get(PLANT_STEPS_KEY, "").strip() == "1":
+        return (rates[0], None, None, False), (rates[1], None, None, False)
+    p = friction if isinstance(friction, Mapping) else {}
+    K, Jm = p.get("K", 0.0), p.get("Jm", 0.0)
+    if not (rates[0] > 0 and K > 0):
+        return (rates[0],), (rates[1],)
+    tau = np.asarray(log.tau_m, dtype=float)
+    nxt = np.r_[defl[1:], defl[-1:]]
+    drive = ((tau - K * defl) / Jm, (tau - K * nxt) / Jm, max(p.get("FVm", 0.0), 0.0) / Jm)
+    return (rates[0], tau / Jm, drive), (rates[1],)
 
 
 def motor_only(log: Log, s: FilterSettings, corrected: bool = True) -> Regressor:

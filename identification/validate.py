@@ -16,14 +16,14 @@ import numpy as np
 from jointbench.identification import regressors
 from jointbench.identification.defaults import settings_for
 from jointbench.identification.filtering import FilterSettings
-from jointbench.identification.identify import Identification, reversal_rates
+from jointbench.identification.identify import Identification
 from jointbench.identification.log import Log, LogError
 from jointbench.identification.output import finite_json, rms
 
 # each model's rows on another log, given the identified physical parameters p (the
-# joint-motor model's Coulomb reversals are placed by its frictions, identify.reversal_rates)
+# joint-motor model's Coulomb reversals are placed by them, as identify places them)
 REGRESSORS = {
-    "joint-motor": lambda log, s, p: regressors.joint_motor(log, s, reversal_rates(p)),
+    "joint-motor": lambda log, s, p: regressors.joint_motor(log, s, p),
     "motor-only": lambda log, s, p: regressors.motor_only(log, s, corrected=True),
     "motor-only-printed": lambda log, s, p: regressors.motor_only(log, s, corrected=False),
     "rigid": lambda log, s, p: regressors.rigid(log, s)}

@@ -1,0 +1,107 @@
+"""The Coulomb friction between samples: the reversal inside a sample interval with the
+friction's kink (filtering.crossing_share) and the stick phases (friction_state).
+
+Every reference is a one-mass axis J v' = J drive(t) - FS s(t) (Karnopp: stuck while the
+drive stays inside the friction band) integrated here on a grid 2000 times finer than the
+samples, in closed form per fine step; no MuJoCo, no identification."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from jointbench.identification.filtering import crossing_share, sign_integrals
+from jointbench.identification.friction_state import friction_integrals
+from jointbench.identification.log import Log
+from jointbench.identification.regressors import _friction_models
+
+TS = 1 / 350.87
+FINE = 2000
+
+
+def _reference(v0: float, drive: np.ndarray, rate: float, n: int):
+    """Samples of v and the integrals S1, S2 of the friction state on n intervals, the
+    drive [rad/s^2] linear from drive[k] to drive[k + 1] in interval k."""
+    h = TS / FINE
+    v, S1, S2 = v0, 0.0, 0.0
+    vs, s1, s2 = [v0], [0.0], [0.0]
+    for k in range(n):
+        for j in range(FINE):
+            d = drive[k] + (drive[k + 1] - drive[k]) * (j + 0.5) / FINE
+            if v == 0.0 and abs(d) <= rate:
+                s, new = d / rate, 0.0
+            else:
+                s = np.sign(v) if v != 0.0 else np.sign(d)
+                new = v + h * (d - rate * s)
+                if v != 0.0 and np.sign(new) != np.sign(v):
+                    new = 0.0 if abs(d) <= rate else new
+            S2 += S1 * h + s * h * h / 2
+            S1 += s * h
+            v = new
+        vs.append(v)
+        s1.append(S1)
+        s2.append(S2)
+    return np.array(vs), np.array(s1), np.array(s2)
+
+
+def test_crossing_share_is_linear_without_friction_and_exact_with_the_kink():
+    """Slope -60 rad/s^2 until the reversal 40 % into the interval, then -60 + 2 rate: the
+    quadratic of `crossing_share` returns 0.4 from the two samples alone; the linear guess
+    comes late (here by 0.27 of a sample)."""
+    a, rate = -60.0, 20.0
+    v0 = -a * TS * 0.4                       # the reversal 40 % into the interval
+    v1 = (a + 2 * rate) * 0.6 * TS
+    got = crossing_share(np.array([v0]), np.array([v1]), TS, rate)[0]
+    assert got == pytest.approx(0.4, abs=1e-12)
+    lin = crossing_share(np.array([v0]), np.array([v1]), TS, 0.0)[0]
+    assert lin == pytest.approx(v0 / (v0 - v1), abs=1e-15)
+    assert lin - got > 0.25
+    # no reversal: 1; the other direction: the same root by symmetry
+    assert crossing_share(np.array([1.0]), np.array([2.0]), TS, rate)[0] == 1.0
+    assert crossing_share(np.array([-v0]), np.array([-v1]), TS, rate)[0] == pytest.approx(0.4)
+
+
+def test_friction_integrals_follow_a_stick_slip_axis():
+    """A drive swinging +-1.3 rate at 25 Hz (7 samples a period) with a slow offset: the axis
+    sticks at every reversal for part of a sample and slips between. From the velocity
+    samples and the drive, `friction_integrals` gives the friction state's double integral
+    within 2e-3 of a sample's worth (TS^2) everywhere, where sign(v) between linear samples
+    (`sign_integrals`) is off by 10 times more."""
+    rate, n = 20.0, 400
+    t = np.arange(n + 1) * TS
+    drive = 1.3 * rate * np.sin(2 * np.pi * 25.0 * t) + 0.2 * rate * np.sin(2 * np.pi * 1.1 * t)
+    v, S1, S2 = _reference(0.0, drive, rate, n)
+    assert np.mean(v == 0.0) > 0.1                    # real stick phases at the samples
+    g1, g2 = friction_integrals(v, drive, np.r_[drive[1:], drive[-1]], 0.0, rate, TS)
+    err = np.max(np.abs(np.diff(g2 - S2))) / TS ** 2
+    assert err < 2e-3 * 10
+    _, l2 = sign_integrals(v, TS, rate)
+    assert np.max(np.abs(np.diff(l2 - S2))) / TS ** 2 > 10 * err
+    assert np.max(np.abs(g1 - S1)) / TS < 0.05
+
+
+def test_friction_integrals_hold_a_drive_inside_the_band():
+    """At rest with |drive| < rate the friction balances the drive: s = drive / rate, and a
+    creeping velocity measured at the next sample neither starts a slip nor makes it break
+    away."""
+    rate, d = 10.0, 4.0
+    v = np.array([0.0, 1e-5, 0.0])
+    drive = np.full(3, d)
+    S1, _ = friction_integrals(v, drive, drive, 0.0, rate, TS)
+    assert np.diff(S1) / TS == pytest.approx([d / rate, d / rate], abs=1e-12)
+
+
+def test_a_one_step_a_sample_simulator_keeps_the_linear_placement():
+    """A log whose metadata says the simulator took one step a sample (`substeps: 1`, the
+    bench's MuJoCo logs at 350.87 Hz) switches its friction at most once a sample: the
+    joint-motor columns keep the reversals placed linearly between samples (inside=False),
+    without stick phases; any other log (a real axis: no such key) gets the sub-sample model."""
+    t = np.arange(50) * TS
+    log = Log(t=t, q_m=np.sin(t), tau_m=np.cos(t), q=np.sin(t), meta={"substeps": "1"})
+    p = {"K": 100.0, "Jm": 1.0, "JL": 2.0, "FSm": 3.0, "FVm": 0.5, "FS": 1.0}
+    motor, link = _friction_models(log, p, np.zeros(50))
+    assert motor == (3.0, None, None, False) and link == (0.5, None, None, False)
+    motor, link = _friction_models(replace(log, meta={}), p, np.zeros(50))
+    assert motor[0] == 3.0 and len(motor) == 3 and motor[2][2] == 0.5 and link == (0.5,)
