@@ -1,7 +1,7 @@
 """One effect of the registry (identification.effects) against a reference model (the
 nominal, or the nominal extended by the causes already named): its nonlinear values searched,
 its extended regression fitted, and the evidence for it. The decision is out of sample
-(identification.discrepancy.heldout: held-out folds, Student's t, a Bonferroni level); delta
+(identification.discrepancy.heldout: held-out folds, a t of segment log-ratios, a Bonferroni level); delta
 BIC, the F-test and the practical size are reported beside it as information."""
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ class Candidate:
     rss: float = float("nan")
     explained_pct: float = 0.0       # in sample: share of the reference weighted RSS it removes
     heldout_pct: float = 0.0         # out of sample: share of the held-out RSS it removes
-    t_stat: float = 0.0              # Student's t: held-out share above MATERIAL (heldout)
+    t_stat: float = 0.0              # t: held-out share above MATERIAL (heldout)
     p_heldout: float = 1.0           # its one-sided p-value
     alpha: float = 0.0               # the bar p_heldout must pass (Bonferroni level)
     delta_bic: float = 0.0           # BIC(reference) - BIC(extended): > 0 favours the effect
@@ -154,9 +154,24 @@ def _evaluate(nom: Nominal, ref: Reference, e: Effect, fixed: dict,
                      heldout_pct=ev.explained_pct, t_stat=ev.t, p_heldout=ev.p,
                      alpha=ref.alpha, delta_bic=float(bic0 - bic1), p_value=p, size_pct=size,
                      before_pct=nom.relative_error_pct(res_before, block),
-                     after_pct=nom.relative_error_pct(res_after, block), block=block,
+                     after_pct=_own_error_pct(nom, res_after, block, W, X, names), block=block,
                      X=tuple(float(x) for x in X), names=tuple(names), fixed=fixed,
                      base=ref.base.effects)
+
+
+def _own_error_pct(nom: Nominal, residual: np.ndarray, block: int, W: np.ndarray,
+                   X: np.ndarray, names: Sequence[str]) -> float:
+    """The inverse view's error of `block` for an extended model: the link equation's residual
+    over the model's own spring torque (its K times its stiffness column), as the nominal's is
+    over the nominal's. (Over the nominal's, a nominal that shrinks the homogeneous link
+    equation towards 0 = 0, K = 779 where the spring has 2.0e4 under a large spring damping,
+    makes every model that restores K look worse.)"""
+    if block != 1 or "K" not in names:
+        return nom.relative_error_pct(residual, block)
+    rows = nom.block == 1
+    k = list(names).index("K")
+    spring = float(np.sqrt(np.mean((W[rows, k] * X[k]) ** 2)))
+    return 100.0 * nom.block_rms(residual, 1) / spring if spring > 0 else float("nan")
 
 
 def candidate(nom: Nominal, effect: str, ref: Reference | None = None) -> Candidate:
