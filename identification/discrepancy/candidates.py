@@ -48,6 +48,8 @@ class Candidate:
     names: tuple[str, ...] = ()
     unphysical: str = ""             # why the best fit is not a physical instance of it
     residual: np.ndarray | None = field(default=None, repr=False, compare=False)
+    # each row's weighted held-out error (its fold's fit): comparisons between candidates
+    heldout_errors: np.ndarray | None = field(default=None, repr=False, compare=False)
     fixed: dict = field(default_factory=dict)   # values the effect's columns are built with
     base: tuple[tuple[str, dict], ...] = ()     # causes named before it (its reference)
 
@@ -145,12 +147,14 @@ def _evaluate(nom: Nominal, ref: Reference, e: Effect, fixed: dict,
     rows = nom.block == block
     pred_change = (res_before - res_after)[rows]
     size = 100 * float(np.sqrt(np.mean(pred_change ** 2))) / nom.reference_rms[block]
-    ev = evidence(ref.scores.errors, held_out(records, ref.folds), len(nom.sig.index))
+    errors = held_out(records, ref.folds)
+    ev = evidence(ref.scores.errors, errors, len(nom.sig.index))
     values = dict(zip(names, X))
     why = e.check({**fixed, **values}, nom) if e.check else ""   # fitted and searched values
     return Candidate(effect=e.name, testable=True, parameters=e.params(values, fixed, nom),
                      k=k, rss=rss, unphysical=why,
-                     residual=res_after, explained_pct=100 * (rss0 - rss) / rss0,
+                     residual=res_after, heldout_errors=errors,
+                     explained_pct=100 * (rss0 - rss) / rss0,
                      heldout_pct=ev.explained_pct, t_stat=ev.t, p_heldout=ev.p,
                      alpha=ref.alpha, delta_bic=float(bic0 - bic1), p_value=p, size_pct=size,
                      before_pct=nom.relative_error_pct(res_before, block),
@@ -198,7 +202,27 @@ def candidate(nom: Nominal, effect: str, ref: Reference | None = None) -> Candid
         fixed = {**fixed, e.search: float(trials[best])}
     else:
         cost(None)
+        if e.reference:
+            # the values it is built with (asymmetric friction: the friction it scales) from
+            # the fit with it, not from the nominal that lacked it: once more (a fixed point
+            # in one step on the bench; the nominal's FSm absorbs part of an asymmetry)
+            names = apply(ref.base, e.name, fixed)[1][2]
+            fixed = e.reference(_Fitted(nom, names, records[-1].X))
+            records.clear()
+            cost(None)
     return _evaluate(nom, ref, e, fixed, records)
+
+
+class _Fitted:
+    """`nom`'s rows with the parameter values of another fit (names, X): what an effect's
+    `reference` reads."""
+
+    def __init__(self, nom: Nominal, names: Sequence[str], X: np.ndarray):
+        self.sig, self._nom = nom.sig, nom
+        self._values = dict(zip(names, (float(x) for x in X)))
+
+    def value(self, name: str) -> float:
+        return self._values[name] if name in self._values else self._nom.value(name)
 
 
 def predict(nom: Nominal, c: Candidate | None) -> np.ndarray:

@@ -18,7 +18,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from jointbench.identification.discrepancy.candidates import Candidate, candidate, reference
+from jointbench.identification.discrepancy.heldout import segment_sums, segment_t
 from jointbench.identification.discrepancy.nominal import Nominal, nominal
 from jointbench.identification.effects import EFFECTS, NONE
 from jointbench.identification.filtering import FilterSettings
@@ -72,7 +75,28 @@ def _rank(cands: list[Candidate]) -> list[Candidate]:
 def _round(nom: Nominal, names: list[str], causes: tuple[Candidate, ...],
            m: int) -> list[Candidate]:
     ref = reference(nom, tuple((c.effect, c.fixed) for c in causes), m=m)
-    return _rank([candidate(nom, name, ref) for name in names])
+    return _simplest_first(_rank([candidate(nom, name, ref) for name in names]), nom)
+
+
+def _simplest_first(ranked: list[Candidate], nom: Nominal) -> list[Candidate]:
+    """Parsimony among the significant: the best is named over a significant candidate with
+    fewer parameters only if it predicts the held-out rows significantly better than that one
+    (the segment test without margin, at the round's level); otherwise the simpler one that
+    explains the most goes first. A dead band fitted as a hardening whose base stiffness is a
+    thirtieth of its engaged one explains 60.5 % where the backlash explains 58.8 %
+    (seed-7 development battery): the same mismatch, with one parameter more."""
+    if not ranked or not ranked[0].significant:
+        return ranked
+    best, n = ranked[0], len(nom.sig.index)
+    for c in ranked[1:]:
+        if not (c.significant and c.k < best.k):
+            continue
+        h0 = segment_sums((c.heldout_errors ** 2).reshape(-1, n).sum(axis=0))
+        h1 = segment_sums((best.heldout_errors ** 2).reshape(-1, n).sum(axis=0))
+        ok = (h0 > 0) & (h1 > 0)
+        if segment_t(np.log(h0[ok] / h1[ok]))[1] >= best.alpha:
+            best = c
+    return [best] + [c for c in ranked if c is not best]
 
 
 def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...] | None = None,
