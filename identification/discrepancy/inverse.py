@@ -3,18 +3,25 @@ ranked; then, once a cause is named, the others tested again against the nominal
 it (issue 15 item 2), and every one that passes named in turn.
 
 A round tests every remaining effect against its reference (identification.discrepancy.
-heldout: held-out folds, a one-sided Diebold-Mariano test at ALPHA / m, m the number of tests
-run so far, this round's included: Bonferroni over the whole diagnosis, so that the chance of
-naming any effect the log does not carry stays under ALPHA); the named cause of a round is,
-among the significant ones, the one that explains the most of the held-out residual. The
-rounds stop when none is significant.
+heldout: held-out folds, a one-sided segment test at ALPHA / m, m the number of effects left
+to test: Holm's step-down Bonferroni, so that the chance of naming any effect the log does not
+carry stays under about ALPHA. The effects the log does not carry are all among those left
+until one of them is named, so the round where that would first happen tests each at ALPHA / m
+or less, m at least their number. (A bar of ALPHA / (every test run so far), 15 tests in the
+second round of a log with q, 7 of one without, asked EMPS's offset for t > 4.18 where it has
+3.93; Holm asks 3.86.) The named cause of a round is, among the significant
+ones, the one that explains the most of the held-out residual. The rounds stop when none is
+significant.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from jointbench.identification.discrepancy.candidates import Candidate, candidate, reference
+from jointbench.identification.discrepancy.heldout import segment_sums, segment_t
 from jointbench.identification.discrepancy.nominal import Nominal, nominal
 from jointbench.identification.effects import EFFECTS, NONE
 from jointbench.identification.filtering import FilterSettings
@@ -68,7 +75,28 @@ def _rank(cands: list[Candidate]) -> list[Candidate]:
 def _round(nom: Nominal, names: list[str], causes: tuple[Candidate, ...],
            m: int) -> list[Candidate]:
     ref = reference(nom, tuple((c.effect, c.fixed) for c in causes), m=m)
-    return _rank([candidate(nom, name, ref) for name in names])
+    return _simplest_first(_rank([candidate(nom, name, ref) for name in names]), nom)
+
+
+def _simplest_first(ranked: list[Candidate], nom: Nominal) -> list[Candidate]:
+    """Parsimony among the significant: the best is named over a significant candidate with
+    fewer parameters only if it predicts the held-out rows significantly better than that one
+    (the segment test without margin, at the round's level); otherwise the simpler one that
+    explains the most goes first. A dead band fitted as a hardening whose base stiffness is a
+    thirtieth of its engaged one explains 60.5 % where the backlash explains 58.8 %
+    (seed-7 development battery): the same mismatch, with one parameter more."""
+    if not ranked or not ranked[0].significant:
+        return ranked
+    best, n = ranked[0], len(nom.sig.index)
+    for c in ranked[1:]:
+        if not (c.significant and c.k < best.k):
+            continue
+        h0 = segment_sums((c.heldout_errors ** 2).reshape(-1, n).sum(axis=0))
+        h1 = segment_sums((best.heldout_errors ** 2).reshape(-1, n).sum(axis=0))
+        ok = (h0 > 0) & (h1 > 0)
+        if segment_t(np.log(h0[ok] / h1[ok]))[1] >= best.alpha:
+            best = c
+    return [best] + [c for c in ranked if c is not best]
 
 
 def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...] | None = None,
@@ -93,6 +121,5 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
     while round_ and round_[0].significant:
         causes += (round_[0],)
         rest = [c.effect for c in round_[1:]]
-        m += len(rest)   # Bonferroni over every test the diagnosis has run
-        round_ = _round(nom, rest, causes, m) if rest else []
+        round_ = _round(nom, rest, causes, len(rest)) if rest else []   # Holm: alpha / rest
     return InverseDiagnosis(nominal=nom, candidates=tuple(_rank(ranked + first)), causes=causes)

@@ -17,9 +17,12 @@ def params(v: dict, fixed: dict, rows: Rows) -> dict[str, float]:
     # P g sin(x) + Q g cos(x) vanishes at x = -atan(Q / P): the rest lies that far away.
     offset = float(np.arctan(v["Q"] / v["P"])) if v["P"] != 0 else 0.0
     phi = rows.sig.qs - offset
+    # MX g cos q + MY g sin q is P g sin(q - qs) + Q g cos(q - qs) expanded about q = 0 (the
+    # nominal's MX = -P sin qs, MY = P cos qs with Q = 0): the expansion is about qs, not the rest.
+    qs = rows.sig.qs
     return {"gravity_offset_rad": offset,
-            "MX": -v["P"] * np.sin(phi) + v["Q"] * np.cos(phi),
-            "MY": v["P"] * np.cos(phi) + v["Q"] * np.sin(phi), "rest_rad": phi}
+            "MX": -v["P"] * np.sin(qs) + v["Q"] * np.cos(qs),
+            "MY": v["P"] * np.cos(qs) + v["Q"] * np.sin(qs), "rest_rad": phi}
 
 
 EFFECT = Effect(

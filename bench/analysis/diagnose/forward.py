@@ -15,6 +15,7 @@ loop applies (bench.effects.loop_effects_from_model), in the replay and in `join
 from __future__ import annotations
 
 import dataclasses
+import math
 from pathlib import Path
 from typing import Callable
 
@@ -35,16 +36,17 @@ def _axis_name(d: Diagnosis) -> str:
     return d.log.meta.get("joint") or "axis1"
 
 
-def build_spec(d: Diagnosis, extended: bool) -> mujoco.MjSpec:
-    """The nominal (extended=False) or extended MjSpec of the diagnosed axis."""
+def build_spec(d: Diagnosis, extended: bool, substeps: int = 1) -> mujoco.MjSpec:
+    """The nominal (extended=False) or extended MjSpec of the diagnosed axis, with MuJoCo's
+    timestep the log's period over `substeps`."""
     log = d.log
     name = _axis_name(d)
     p = dict(d.nominal_parameters)
     causes = d.causes if extended else ()
     if causes:
         p.update(d.extended_parameters)
-    common = dict(timestep=log.ts, tau_max=log.meta_float("tau_max"), gravity=log.gravity,
-                  prismatic=log.prismatic, name=name)
+    common = dict(timestep=log.ts / substeps, tau_max=log.meta_float("tau_max"),
+                  gravity=log.gravity, prismatic=log.prismatic, name=name)
     if "K" in d.nominal_parameters:
         # FS: the nominal's link Coulomb friction (eq. 13); the extended model's is refitted.
         FS = _pos(p, "FS")
@@ -63,6 +65,18 @@ def build_spec(d: Diagnosis, extended: bool) -> mujoco.MjSpec:
     return spec
 
 
+def replay_substeps(d: Diagnosis, extended: bool) -> int:
+    """MuJoCo steps per log sample for the model's replay: 1, or for a named torque lag as short
+    as the log's half period, enough that the filter written half a step shorter
+    (bench.effects.torque_lag.extend) keeps a positive time constant of at least half a step,
+    where RK4 on it is stable; otherwise a lag under ts / 2 (a bench lag run with substeps, a
+    drive's fast current loop) would be written as no lag at all."""
+    lag = d.extended_parameters.get("lag_s", 0.0) if extended else 0.0
+    if not (lag > 0 and any(c.effect == "torque_lag" for c in d.causes)):
+        return 1
+    return max(1, math.ceil(d.log.ts / lag))
+
+
 def replay_tau0(log: Log) -> float | None:
     """The integrator's initial state of a replay of `log` (None: the logged tau_m[0])."""
     # With ki = 0 there is no integrator: docs/controller.md's I[-1] = tau_m[0] would hold the first
@@ -72,12 +86,12 @@ def replay_tau0(log: Log) -> float | None:
 
 
 def _view(d: Diagnosis, spec: mujoco.MjSpec, disturbance: np.ndarray | None = None,
-          disturbance_at: str = "link") -> ForwardView:
+          disturbance_at: str = "link", substeps: int = 1) -> ForwardView:
     log = d.log
     model, axis = nominal_axes.compile_axis(spec, "<diagnosis>")
     loop = loop_effects_from_model(model, axis.name)
     r = replay(model, axis, log, disturbance=disturbance, disturbance_at=disturbance_at,
-               tau0=replay_tau0(log), loop=loop)
+               tau0=replay_tau0(log), loop=loop, substeps=substeps)
     e_qm = float(np.sqrt(np.mean((r.q_m - log.q_m) ** 2)))
     motion = float(np.sqrt(np.mean((log.q_m - np.mean(log.q_m)) ** 2)))
     e_tau = 100 * float(np.linalg.norm(r.tau_m - log.tau_m) / np.linalg.norm(log.tau_m))
@@ -105,7 +119,8 @@ def add_forward_view(d: Diagnosis, say: Callable[[str], None]) -> Diagnosis:
     if d.named is not None:
         say(f"forward view: extended replay ({d.named_cause})")
         try:
-            fe = _view(d, build_spec(d, extended=True))
+            n = replay_substeps(d, extended=True)
+            fe = _view(d, build_spec(d, extended=True, substeps=n), substeps=n)
         except (ReplayError, ValueError) as err:
             note = f"extended model not replayed: {err}"
     return dataclasses.replace(d, forward_nominal=fn, forward_extended=fe, forward_note=note)
@@ -146,7 +161,8 @@ def cross_validate(d: Diagnosis, other: Log, disturbance: np.ndarray | None = No
     for label, ext in (("nominal", False), ("extended", True)):
         if ext and d.named is None:
             continue
-        f = _view(dv, build_spec(dv, extended=ext), disturbance, disturbance_at)
+        n = replay_substeps(dv, ext)
+        f = _view(dv, build_spec(dv, extended=ext, substeps=n), disturbance, disturbance_at, n)
         out["forward"][label] = {"tau_rel_pct": f.tau_rel_pct, "q_m_rms": f.q_m_rms,
                                  "q_m_rel_pct": f.q_m_rel_pct}
     return out

@@ -118,8 +118,9 @@ RULE = ("Every effect of docs/effects.md added to the nominal model and fitted o
         f"one of {FOLDS} folds (each made of contiguous segments spread over the experiment), "
         "which it then predicts. An effect is significant when, segment by segment, its "
         f"held-out errors are smaller than the nominal's by more than {100 * MATERIAL:g} % "
-        f"(Student's t of the log-ratios over {SEGMENTS} segments, one-sided, at {ALPHA:g} "
-        "divided by the number of tests: Bonferroni) and its fit is physical. The named cause "
+        f"(t of the log-ratios over {SEGMENTS} segments, their spread from successive "
+        f"differences, one-sided, at {ALPHA:g} divided by the number of effects the round "
+        "tests: Holm's step-down Bonferroni) and its fit is physical. The named cause "
         "is the significant one that explains the most of the held-out residual; the others "
         "are then tested again on top of it. Delta BIC and size are information.")
 

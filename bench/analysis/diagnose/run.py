@@ -86,11 +86,11 @@ def diagnose(log: Log, out_dir: Path | None = None, forward: bool = True,
     d = Diagnosis(log=log, settings=settings, settings_note=how, inverse=inv,
                   nominal_parameters=nom_p, extended_parameters={},
                   warnings=tuple(unit_warnings(log) + clipping_warnings(log)))
-    d = replace(d, overruled=nominal_reason(d))
-    ext = extended_parameters(d.causes[-1] if d.causes else None, inv.nominal)
-    for _, params in joint_parameters(inv.nominal, d.causes):   # all causes, one fit
+    ext = extended_parameters(inv.causes[-1] if inv.causes else None, inv.nominal)
+    for _, params in joint_parameters(inv.nominal, inv.causes):   # all causes, one fit
         ext.update(params)
-    d = replace(d, extended_parameters=ext)
+    d = replace(d, overruled=nominal_reason(d, ext))
+    d = replace(d, extended_parameters={} if d.overruled else ext)
     if forward:
         d = add_forward_view(d, say)
     if not d.overruled:
