@@ -9,7 +9,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from jointbench.identification import regressors
+from jointbench.identification import link_fit, regressors
 from jointbench.identification.checks import check_excitation, check_signals
 from jointbench.identification.estimate import LSResult, NotIdentifiable, block_weighted, least_squares
 from jointbench.identification.band_checks import band_warnings
@@ -239,9 +239,20 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
             notes.append(f"Table 3 not computed: {err}")
         except KeyError:
             t3 = {}
-        phys = invert_motor_only(ls, g=log.gravity, qc=float(np.mean(log.q_m)))
-        physical, sigma = phys.as_dict(), {n: phys.std(n) for n in phys.names}
-        sigma_corr = _motor_only_sigma_corrected(ls, log)
+        try:
+            phys = invert_motor_only(ls, g=log.gravity, qc=float(np.mean(log.q_m)))
+        except InversionError as err:
+            if model != "motor-only":
+                raise
+            notes.append(f"eqs. (18)-(20) give no starting point ({err}): started from the "
+                         "best link antiresonance in the band")
+            physical, sigma, sigma_corr = {}, {}, {}
+        else:
+            physical, sigma = phys.as_dict(), {n: phys.std(n) for n in phys.names}
+            sigma_corr = _motor_only_sigma_corrected(ls, log)
+        if model == "motor-only":
+            physical, sigma, sigma_corr = _link_reconstructed(log, settings, physical, f1_hz,
+                                                              notes)
     else:
         for n in ls.names:
             if n not in ls.unidentifiable:
@@ -312,6 +323,25 @@ def _instruments(log: Log, reg: regressors.Regressor, f1_hz: float | None,
         return None
     notes.append("instrumental variables: the regressor rebuilt from q_ref's predictions")
     return Z.W[pick]
+
+
+def _link_reconstructed(log: Log, settings: FilterSettings, start: dict[str, float],
+                        f1_hz: float | None, notes: list[str]
+                        ) -> tuple[dict[str, float], dict[str, float], dict[str, float]]:
+    """The physical parameters of the motor-only model from the link reconstructed out of q_m
+    (identification/link_fit.py), started from the eqs. (18)-(20) inversion `start`: those
+    columns hold the torque's derivatives, which the closed loop's torque noise biases."""
+    if not (start.get("K", 0) > 0 and start.get("JL", 0) > 0):
+        try:
+            start = link_fit.start_from_band(log, settings)
+        except ValueError as err:
+            raise InversionError(str(err)) from err
+    try:
+        result = link_fit.fit(log, settings, start, f1_hz)
+    except ValueError as err:
+        raise InversionError(str(err)) from err
+    notes.extend(result.notes)
+    return result.physical, result.sigma, result.sigma_corrected
 
 
 def _motor_only_sigma_corrected(ls: LSResult, log: Log) -> dict[str, float]:
