@@ -131,9 +131,19 @@ def _solve(rows: _Rows, log: Log, p: dict[str, float], Z: tuple | None = None,
         pick = [where.get(k) for k in idx.tolist()]
         inst = None if any(i is None for i in pick) else Z[0][pick]
     if linear_only:
-        return least_squares(J[:, :LINEAR], y, NAMES[:LINEAR], corrected=False), y, reg.W
+        return _lstsq(J[:, :LINEAR], y), y, reg.W
     ls = least_squares(J, ylin, NAMES, time=idx, corrected=corrected, instruments=inst)
     return ls, y, J, idx
+
+
+def _lstsq(W: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Least squares with unit-norm columns; a zero column (no gravity, no link friction)
+    gets 0."""
+    norms = np.linalg.norm(W, axis=0)
+    live = norms > 0
+    x = np.zeros(W.shape[1])
+    x[live] = np.linalg.lstsq(W[:, live] / norms[live], y, rcond=None)[0] / norms[live]
+    return x
 
 
 def _linear(rows: _Rows, log: Log, p: dict[str, float]) -> tuple[dict[str, float], np.ndarray,
@@ -142,9 +152,9 @@ def _linear(rows: _Rows, log: Log, p: dict[str, float]) -> tuple[dict[str, float
     columns (profiles as they are), the residual, and its Jacobian with respect to
     (log a, log b) at those linear parameters projected off the linear columns (variable
     projection, Kaufman's form)."""
-    ls, y, C = _solve(rows, log, p, linear_only=True)
+    x, y, C = _solve(rows, log, p, linear_only=True)
     new = dict(p)
-    new.update({n: float(v) if np.isfinite(v) else 0.0 for n, v in zip(NAMES, ls.X)})
+    new.update({n: float(v) for n, v in zip(NAMES, x)})
     J = _design(C, new)
     W = J[:, :LINEAR]
     r = y - _model(J, new)
