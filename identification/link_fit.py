@@ -73,7 +73,9 @@ class _Rows:
         """The link friction phi and gravity (link_sim with p's a, b, c, gx, gy) and the motor
         reversals (placed with p's FSm / Jm), kept until the next call."""
         a, b, K = p["a"], p["b"], p["K"]
-        c, gx, gy = (max(p["Kc"] / K, 0.0), p["Kgx"] / K, p["Kgy"] / K) if K > 0 else (0, 0, 0)
+        # the columns are H(g cos q), H(g sin q): Kgx = K MX / JL, so g MX / JL = g Kgx / K
+        c, gx, gy = ((max(p["Kc"] / K, 0.0), self.g * p["Kgx"] / K, self.g * p["Kgy"] / K)
+                     if K > 0 else (0.0, 0.0, 0.0))
         q, phi = simulate_link(self.log.q_m, self.s.ts, a, b, c, gx, gy)
         self.phi = zoh_align(phi)            # the step means at the samples
         self.cos, self.sin = self.g * np.cos(q), self.g * np.sin(q)
@@ -176,7 +178,7 @@ def fit(log: Log, s: FilterSettings, start: dict[str, float], f1_hz: float | Non
     a = K / JL
     p = {"Jm": start.get("Jm", 0.0), "FVm": start.get("FVm", 0.0),
          "FSm": start.get("FSm", 0.0), "K": K, "Kc": a * start.get("FS", 0.0),
-         "Kgx": a * g * start.get("MX", 0.0), "Kgy": a * g * start.get("MY", 0.0), "a": a,
+         "Kgx": a * start.get("MX", 0.0), "Kgy": a * start.get("MY", 0.0), "a": a,
          "b": max(start.get("FV", 0.0) / JL, B_FLOOR)}
     rows = _Rows(log, s)
     notes: list[str] = []
@@ -255,15 +257,14 @@ def _instruments(log: Log, s: FilterSettings, f1_hz: float | None, p: dict[str, 
 
 
 def _physical(ls: LSResult, g: float) -> tuple[dict[str, float], ...]:
-    """(JL = K / a, FV = b JL, FS = Kc / a, MX = Kgx / (a g), MY = Kgy / (a g)) and the rest,
+    """(JL = K / a, FV = b JL, FS = Kc / a, MX = Kgx / a, MY = Kgy / a) and the rest,
     with standard deviations by the delta method from the paper's and the corrected
     covariances."""
     x = {n: ls.value(n) for n in NAMES}
     a, b, K = x["a"], x["b"], x["K"]
-    gg = g if g != 0 else 1.0
     values = {"Jm": x["Jm"], "K": K, "JL": K / a, "FVm": x["FVm"], "FSm": x["FSm"],
-              "FV": b * K / a, "FS": x["Kc"] / a, "MX": x["Kgx"] / (a * gg),
-              "MY": x["Kgy"] / (a * gg)}
+              "FV": b * K / a, "FS": x["Kc"] / a, "MX": x["Kgx"] / a,
+              "MY": x["Kgy"] / a}
     n = len(NAMES)
     G = {k: np.zeros(n) for k in values}
     i = {k: NAMES.index(k) for k in NAMES}
@@ -271,8 +272,8 @@ def _physical(ls: LSResult, g: float) -> tuple[dict[str, float], ...]:
         G[k][i[k]] = 1.0
     G["JL"][i["K"]], G["JL"][i["a"]] = 1 / a, -K / a ** 2
     G["FV"][i["K"]], G["FV"][i["b"]], G["FV"][i["a"]] = b / a, K / a, -b * K / a ** 2
-    for name, col, scale in (("FS", "Kc", 1.0), ("MX", "Kgx", gg), ("MY", "Kgy", gg)):
-        G[name][i[col]], G[name][i["a"]] = 1 / (a * scale), -x[col] / (a ** 2 * scale)
+    for name, col in (("FS", "Kc"), ("MX", "Kgx"), ("MY", "Kgy")):
+        G[name][i[col]], G[name][i["a"]] = 1 / a, -x[col] / a ** 2
 
     def sd(cov: np.ndarray | None) -> dict[str, float]:
         if cov is None:
