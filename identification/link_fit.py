@@ -39,6 +39,8 @@ from jointbench.identification.saturation import exclude_clipped
 NAMES = ("Jm", "FVm", "FSm", "K", "Kc", "Kgx", "Kgy", "a", "b")
 LINEAR = 7            # the first seven enter linearly
 ROUNDS = 4            # profile updates (link friction, gravity, reversals), each with (a, b)
+ROUNDS_AGAIN = 2      # the same after the gravity is left out (from the converged point)
+GRAVITY_Z = 3.0       # MX or MY this many corrected sigma from zero keeps the gravity columns
 IV_PASSES = 2         # then passes with instruments
 B_FLOOR = 1e-6        # FV / JL kept positive (the link's response needs some damping)
 
@@ -68,17 +70,20 @@ class _Rows:
         self.tau = regressors._torque(log, s)
         self.g = log.gravity
         self.bad = ~np.isfinite(self.qm[2])
+        self.gravity = self.g != 0    # False: the gravity columns are zero (not identified)
 
     def profiles(self, p: dict[str, float]) -> None:
         """The link friction phi and gravity (link_sim with p's a, b, c, gx, gy) and the motor
         reversals (placed with p's FSm / Jm), kept until the next call."""
         a, b, K = p["a"], p["b"], p["K"]
         # the columns are H(g cos q), H(g sin q): Kgx = K MX / JL, so g MX / JL = g Kgx / K
-        c, gx, gy = ((max(p["Kc"] / K, 0.0), self.g * p["Kgx"] / K, self.g * p["Kgy"] / K)
-                     if K > 0 else (0.0, 0.0, 0.0))
+        c = max(p["Kc"] / K, 0.0) if K > 0 else 0.0
+        gx, gy = ((self.g * p["Kgx"] / K, self.g * p["Kgy"] / K) if K > 0 and self.gravity
+                  else (0.0, 0.0))
         q, phi = simulate_link(self.log.q_m, self.s.ts, a, b, c, gx, gy)
         self.phi = zoh_align(phi)            # the step means at the samples
-        self.cos, self.sin = self.g * np.cos(q), self.g * np.sin(q)
+        g = self.g if self.gravity else 0.0
+        self.cos, self.sin = g * np.cos(q), g * np.sin(q)
         rate = p["FSm"] / p["Jm"] if p["Jm"] > 0 and p["FSm"] > 0 else 0.0
         self.sign = regressors._sign(self.qm[1], self.s, rate)
 
@@ -165,6 +170,40 @@ def _linear(rows: _Rows, log: Log, p: dict[str, float]) -> tuple[dict[str, float
     return new, r, -(Jab - Q @ (Q.T @ Jab))
 
 
+def _converge(rows: _Rows, log: Log, p: dict[str, float], rounds: int) -> dict[str, float]:
+    """`rounds` of: profiles from `p`, then (a, b) by variable projection (trust region on
+    log a, log b; the linear parameters solved at every point)."""
+    for _ in range(rounds):
+        rows.profiles(p)      # friction, gravity and reversals of the previous round
+        cache: dict[tuple[float, float], tuple] = {}
+
+        def evaluate(x: np.ndarray) -> tuple:
+            key = (float(x[0]), float(x[1]))
+            if key not in cache:
+                cache.clear()
+                cache[key] = _linear(rows, log, {**p, "a": np.exp(x[0]), "b": np.exp(x[1])})
+            return cache[key]
+
+        sol = optimize.least_squares(lambda x: evaluate(x)[1], np.log([p["a"], p["b"]]),
+                                     jac=lambda x: evaluate(x)[2], method="trf", x_scale=1.0)
+        p = evaluate(sol.x)[0]
+    return p
+
+
+def _final(rows: _Rows, log: Log, p: dict[str, float], Z) -> tuple:
+    """IV_PASSES Gauss-Newton passes with the instruments `Z` (a function of the parameters,
+    or None: none), then the last linearised solve with the corrected covariance."""
+    if Z is not None:
+        for _ in range(IV_PASSES):
+            rows.profiles(p)
+            ls, *_ = _solve(rows, log, p, Z=Z(p))
+            p = {n: float(v) if np.isfinite(v) else 0.0 for n, v in zip(NAMES, ls.X)}
+            p["b"] = max(p["b"], B_FLOOR)
+    rows.profiles(p)
+    ls, y, J, idx = _solve(rows, log, p, Z=None if Z is None else Z(p), corrected=True)
+    return p, ls, y, J, idx
+
+
 def fit(log: Log, s: FilterSettings, start: dict[str, float], f1_hz: float | None = None
         ) -> LinkFit:
     """The motor-only estimate from a starting point `start` (physical names: K, JL, Jm, FV,
@@ -181,33 +220,20 @@ def fit(log: Log, s: FilterSettings, start: dict[str, float], f1_hz: float | Non
          "Kgx": a * start.get("MX", 0.0), "Kgy": a * start.get("MY", 0.0), "a": a,
          "b": max(start.get("FV", 0.0) / JL, B_FLOOR)}
     rows = _Rows(log, s)
-    notes: list[str] = []
-    for _ in range(ROUNDS):
-        rows.profiles(p)      # friction, gravity and reversals of the previous round
-        cache: dict[tuple[float, float], tuple] = {}
-
-        def evaluate(x: np.ndarray) -> tuple:
-            key = (float(x[0]), float(x[1]))
-            if key not in cache:
-                cache.clear()
-                cache[key] = _linear(rows, log, {**p, "a": np.exp(x[0]), "b": np.exp(x[1])})
-            return cache[key]
-
-        sol = optimize.least_squares(lambda x: evaluate(x)[1], np.log([p["a"], p["b"]]),
-                                     jac=lambda x: evaluate(x)[2], method="trf", x_scale=1.0)
-        p = evaluate(sol.x)[0]
+    p = _converge(rows, log, p, ROUNDS)
     Z, why = _instruments(log, s, f1_hz, p)
-    if Z is not None:
-        for _ in range(IV_PASSES):
-            rows.profiles(p)
-            ls, *_ = _solve(rows, log, p, Z=Z(p))
-            p = {n: float(v) for n, v in zip(NAMES, ls.X)}
-            p["b"] = max(p["b"], B_FLOOR)
-    rows.profiles(p)
-    ls, y, J, idx = _solve(rows, log, p, Z=None if Z is None else Z(p), corrected=True)
-    notes.append(f"motor-only: link reconstructed from q_m through eq. (5) (stick-slip link "
-                 f"friction), variable projection from the eqs. (18)-(20) estimate, {ROUNDS} "
-                 "rounds; " + why)
+    p, ls, y, J, idx = _final(rows, log, p, Z)
+    notes = [f"motor-only: link reconstructed from q_m through eq. (5) (stick-slip link "
+             f"friction), variable projection from the eqs. (18)-(20) estimate, {ROUNDS} "
+             "rounds; " + why]
+    if rows.gravity and not _significant(ls, ("Kgx", "Kgy")):
+        # a gravity stiffness the data cannot tell from zero still trades with K (both stiffen
+        # the link's response): left out, the estimate of K keeps its variance
+        rows.gravity = False
+        p = _converge(rows, log, {**p, "Kgx": 0.0, "Kgy": 0.0}, ROUNDS_AGAIN)
+        p, ls, y, J, idx = _final(rows, log, p, Z)
+        notes.append(f"the link's gravity (MX, MY) is within {GRAVITY_Z:g} sigma of zero: left "
+                     "out of the model (a horizontal axis, or one at rest near its balance)")
     physical, sigma, sigma_c = _physical(ls, g)
     return LinkFit(physical, sigma, sigma_c, ls, y, _model(J, p), idx, tuple(notes))
 
@@ -256,6 +282,17 @@ def _instruments(log: Log, s: FilterSettings, f1_hz: float | None, p: dict[str, 
     return Z, "instrumental variables from q_ref's predictions for the last passes"
 
 
+def _significant(ls: LSResult, names: tuple[str, ...]) -> bool:
+    """Any of `names` farther than GRAVITY_Z corrected sigma from zero (the paper's sigma when
+    the corrected one is missing)."""
+    for n in names:
+        x, sd = ls.value(n), ls.std_corrected(n)
+        sd = sd if np.isfinite(sd) and sd > 0 else ls.std(n)
+        if np.isfinite(x) and np.isfinite(sd) and abs(x) > GRAVITY_Z * sd:
+            return True
+    return False
+
+
 def _physical(ls: LSResult, g: float) -> tuple[dict[str, float], ...]:
     """(JL = K / a, FV = b JL, FS = Kc / a, MX = Kgx / a, MY = Kgy / a) and the rest,
     with standard deviations by the delta method from the paper's and the corrected
@@ -281,8 +318,8 @@ def _physical(ls: LSResult, g: float) -> tuple[dict[str, float], ...]:
         C = np.nan_to_num(cov)
         return {k: float(np.sqrt(max(G[k] @ C @ G[k], 0.0))) for k in values}
 
-    if g == 0:
-        for k in ("MX", "MY"):
+    for k in ("MX", "MY"):
+        if g == 0 or not np.isfinite(values[k]):
             values.pop(k)
     return values, {k: v for k, v in sd(ls.cov).items() if k in values}, \
         {k: v for k, v in sd(ls.cov_corrected).items() if k in values}
