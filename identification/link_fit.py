@@ -32,7 +32,7 @@ from jointbench.identification import regressors
 from jointbench.identification.estimate import LSResult, least_squares
 from jointbench.identification.filtering import FilterSettings, decimate_parallel, zoh_align
 from jointbench.identification.instruments import instrument_log
-from jointbench.identification.link_sim import link_response, simulate_link
+from jointbench.identification.link_sim import inverse, simulate_link, spectra
 from jointbench.identification.log import Log
 from jointbench.identification.saturation import exclude_clipped
 
@@ -84,6 +84,8 @@ class _Rows:
         self.phi = zoh_align(phi)            # the step means at the samples
         g = self.g if self.gravity else 0.0
         self.cos, self.sin = g * np.cos(q), g * np.sin(q)
+        self.spectra = spectra([self.qm[2], self.qm[1], self.phi, self.cos, self.sin],
+                               self.s.ts)
         rate = p["FSm"] / p["Jm"] if p["Jm"] > 0 and p["FSm"] > 0 else 0.0
         self.sign = regressors._sign(self.qm[1], self.s, rate)
 
@@ -91,15 +93,17 @@ class _Rows:
         """The columns before decimation: (qm'', qm', sign, H u_i for the link inputs
         u = (qm'' + b qm', phi, g cos q, g sin q), H^2 u_i, s H^2 u_i, H qm'); `_design`
         combines the last nine into dm/da and dm/db, which are linear in the parameters."""
-        a, b, ts = p["a"], p["b"], self.s.ts
-        qm1, qm2 = np.nan_to_num(self.qm[1]), np.nan_to_num(self.qm[2])
-        ins = (qm2 + b * qm1, self.phi, self.cos, self.sin)
-        cols = [self.qm[2], self.qm[1], self.sign]
-        cols += [link_response(u, a, b, ts) for u in ins]
-        cols += [link_response(u, a, b, ts, order=2) for u in ins]
-        cols += [link_response(u, a, b, ts, order=2, times_s=True) for u in ins]
-        cols.append(link_response(qm1, a, b, ts))
-        W = np.column_stack(cols)
+        a, b = p["a"], p["b"]
+        s, U, u0 = self.spectra     # of qm'', qm', phi, g cos q, g sin q
+        ins = np.vstack([U[0] + b * U[1], U[2:]])
+        i0 = np.r_[u0[0] + b * u0[1], u0[2:]]
+        H = 1.0 / (s * s + b * s + a)
+        n = len(self.tau)
+        resp = inverse(np.vstack([H * ins, H * H * ins, s * H * H * ins, H * U[1]]), s, n)
+        resp[:4] += (i0 / a)[:, None]
+        resp[4:8] += (i0 / a ** 2)[:, None]
+        resp[12] += u0[1] / a
+        W = np.column_stack([self.qm[2], self.qm[1], self.sign, resp.T])
         W[self.bad] = np.nan
         return W
 
@@ -121,36 +125,38 @@ def _model(W: np.ndarray, p: dict[str, float]) -> np.ndarray:
     return W[:, :LINEAR] @ np.array([p[n] for n in NAMES[:LINEAR]])
 
 
-def _solve(rows: _Rows, log: Log, p: dict[str, float], Z: tuple | None = None,
-           corrected: bool = False, linear_only: bool = False):
-    """One Gauss-Newton pass: the linearised rows y - m(p) + J p = J X solved for X (rows near
-    a clipped torque left out, as for every model); `Z` = (instrument rows, their index);
-    `linear_only`: y on the first LINEAR columns (a and b fixed)."""
+def _kept(rows: _Rows, log: Log, p: dict[str, float]) -> tuple[np.ndarray, ...]:
+    """The decimated rows (y, the columns of `_Rows.columns`, raw sample index) without those
+    near a clipped torque, as for every model."""
     y, C, idx = rows.decimated(p)
     reg = exclude_clipped(regressors.Regressor("motor-only", NAMES, y, C, np.zeros(len(y), int),
                                                idx, rows.s), log)
-    y, J, idx = reg.y, _design(reg.W, p), reg.index
-    x = np.array([p[n] for n in NAMES])
-    ylin = y - _model(J, p) + J @ x
+    return reg.y, reg.W, reg.index
+
+
+def _solve(rows: _Rows, log: Log, p: dict[str, float], Z: tuple | None = None,
+           corrected: bool = False):
+    """One Gauss-Newton pass: the linearised rows y - m(p) + J p = J X solved for X, with the
+    instruments `Z` = (instrument rows, their index) when given and covering the rows."""
+    y, C, idx = _kept(rows, log, p)
+    J = _design(C, p)
+    ylin = y - _model(J, p) + J @ np.array([p[n] for n in NAMES])
     inst = None
     if Z is not None:
         where = {k: i for i, k in enumerate(Z[1].tolist())}
         pick = [where.get(k) for k in idx.tolist()]
         inst = None if any(i is None for i in pick) else Z[0][pick]
-    if linear_only:
-        return _lstsq(J[:, :LINEAR], y), y, reg.W
     ls = least_squares(J, ylin, NAMES, time=idx, corrected=corrected, instruments=inst)
     return ls, y, J, idx
 
 
-def _lstsq(W: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Least squares with unit-norm columns; a zero column (no gravity, no link friction)
-    gets 0."""
+def _orthonormal(W: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """QR of the nonzero columns of W scaled to unit norm: (Q, R, the columns' norms with 0
+    for the zero columns: no gravity, no link friction)."""
     norms = np.linalg.norm(W, axis=0)
     live = norms > 0
-    x = np.zeros(W.shape[1])
-    x[live] = np.linalg.lstsq(W[:, live] / norms[live], y, rcond=None)[0] / norms[live]
-    return x
+    Q, R = np.linalg.qr(W[:, live] / norms[live])
+    return Q, R, norms
 
 
 def _linear(rows: _Rows, log: Log, p: dict[str, float]) -> tuple[dict[str, float], np.ndarray,
@@ -159,14 +165,15 @@ def _linear(rows: _Rows, log: Log, p: dict[str, float]) -> tuple[dict[str, float
     columns (profiles as they are), the residual, and its Jacobian with respect to
     (log a, log b) at those linear parameters projected off the linear columns (variable
     projection, Kaufman's form)."""
-    x, y, C = _solve(rows, log, p, linear_only=True)
+    y, C, _ = _kept(rows, log, p)
+    Q, R, norms = _orthonormal(C[:, :LINEAR])
+    x = np.zeros(LINEAR)
+    x[norms > 0] = np.linalg.solve(R, Q.T @ y) / norms[norms > 0]
     new = dict(p)
     new.update({n: float(v) for n, v in zip(NAMES, x)})
     J = _design(C, new)
-    W = J[:, :LINEAR]
     r = y - _model(J, new)
     Jab = J[:, LINEAR:] * np.array([new["a"], new["b"]])
-    Q, _ = np.linalg.qr(W)
     return new, r, -(Jab - Q @ (Q.T @ Jab))
 
 

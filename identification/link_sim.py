@@ -107,11 +107,20 @@ def simulate_link(qm: np.ndarray, ts: float, a: float, b: float, c: float = 0.0,
     return out_q, phi
 
 
-def _spectrum(n: int, ts: float) -> tuple[int, np.ndarray]:
-    """FFT length (zero padded to twice the record: the link's response does not wrap) and the
-    Laplace variable s = j w on its bins."""
+def spectra(signals: list[np.ndarray], ts: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The Laplace variable s = j w on the FFT bins (the record zero padded to at least twice
+    its length, so that the link's response does not wrap), the spectra of the signals less
+    their first sample (rows), and those first samples. NaN counts as 0."""
+    u = np.nan_to_num(np.asarray(signals, dtype=float))
+    n = u.shape[-1]
     L = 1 << int(math.ceil(math.log2(2 * max(n, 2))))
-    return L, 2j * np.pi * np.fft.rfftfreq(L, ts)
+    u0 = u[:, 0].copy()
+    return 2j * np.pi * np.fft.rfftfreq(L, ts), np.fft.rfft(u - u0[:, None], L), u0
+
+
+def inverse(X: np.ndarray, s: np.ndarray, n: int) -> np.ndarray:
+    """The first n samples of the signals whose spectra are the rows of X (bins of s)."""
+    return np.fft.irfft(X, 2 * (len(s) - 1))[..., :n]
 
 
 def link_response(u: np.ndarray, a: float, b: float, ts: float, order: int = 1,
@@ -119,11 +128,9 @@ def link_response(u: np.ndarray, a: float, b: float, ts: float, order: int = 1,
     """(H^order u) with H = 1 / (s^2 + b s + a), or (s H^order u) when `times_s`, from rest at
     the first sample: the response to u - u[0] plus the static one to u[0] (u[0] / a^order,
     none with the factor s). NaN in u counts as 0."""
-    u = np.nan_to_num(np.asarray(u, dtype=float))
-    n = len(u)
-    L, s = _spectrum(n, ts)
+    s, U, u0 = spectra([u], ts)
     H = (1.0 / (s * s + b * s + a)) ** order
     if times_s:
         H = H * s
-    out = np.fft.irfft(H * np.fft.rfft(u - u[0], L), L)[:n]
-    return out if times_s else out + u[0] / a ** order
+    out = inverse(H * U, s, len(u))[0]
+    return out if times_s else out + u0[0] / a ** order
