@@ -5,20 +5,21 @@ tau' in the regressor. In closed loop those carry the current loop's torque nois
 controller answers: the columns are correlated with the equation error, and least squares is
 biased by a factor growing with JL / Jm (the noise term X1 w'' is JL / Jm + 1 times the noise at
 the first mode; heavy link, JL / Jm = 10: K -16 %, JL -46 %). The paper's assumption that the
-link Coulomb friction FS is not excited leaves it out as well.
+link Coulomb friction FS is not excited leaves it out as well (JL +2.7 % on a soft axis).
 
 Here q is not eliminated but computed from the motor angle through the link's own equation (5)
 (identification/link_sim.py): with a = K / JL, b = FV / JL, the deflection qm - q is
     d = H (qm'' + b qm' + c phi + gx cos q + gy sin q),   H = 1 / (s^2 + b s + a),
-phi the link friction (stick-slip) and the rest as in link_sim. The motor equation (6),
+phi the link friction (stick-slip) and c, gx, gy as in link_sim. The motor equation (6),
     tau = Jm qm'' + FVm qm' + FSm sign(qm') + K d,
-is linear in X = (Jm, FVm, FSm, K, K c, K gx, K gy) once a and b are fixed, and every column is
-a filtered motor position (no torque), as in the joint-motor model. a and b are found by
-Gauss-Newton on the same rows (their columns dm/da = -H^2 U, dm/db = K H qm' - s H^2 U with U
-the input of d times K), from the eq. (18)-(20) estimate; the friction phi, the gravity terms
-and the motor reversals (the joint-motor model's placement) are taken from the previous pass.
-Then the reference's instruments (identification/instruments.py) replace least squares for the
-final passes. JL = K / a, FV = b JL, FS = c JL, MX = gx JL / g, MY = gy JL / g.
+is linear in X = (Jm, FVm, FSm, K, K c, K MX / JL, K MY / JL) once a and b are fixed, and every
+column is a filtered motor position (no torque), as in the joint-motor model. a and b are found
+by variable projection on the same rows (trust region on log a, log b; their columns
+dm/da = -H^2 U, dm/db = K H qm' - s H^2 U, U the input of d times K), from the eqs. (18)-(20)
+estimate; the link friction phi, the gravity terms and the motor reversals (placed as the
+joint-motor model places them) come from the previous round. The reference's instruments
+(identification/instruments.py) then replace least squares for the last passes. A gravity the
+data cannot tell from zero is left out (it trades with K). JL = K / a, FV = b JL, FS = c JL.
 """
 
 from __future__ import annotations
@@ -228,7 +229,7 @@ def fit(log: Log, s: FilterSettings, start: dict[str, float], f1_hz: float | Non
          "b": max(start.get("FV", 0.0) / JL, B_FLOOR)}
     rows = _Rows(log, s)
     p = _converge(rows, log, p, ROUNDS)
-    Z, why = _instruments(log, s, f1_hz, p)
+    Z, why = _instruments(log, s, f1_hz)
     p, ls, y, J, idx = _final(rows, log, p, Z)
     notes = [f"motor-only: link reconstructed from q_m through eq. (5) (stick-slip link "
              f"friction), variable projection from the eqs. (18)-(20) estimate, {ROUNDS} "
@@ -273,7 +274,7 @@ def start_from_band(log: Log, s: FilterSettings) -> dict[str, float]:
             "FV": p["b"] * JL}
 
 
-def _instruments(log: Log, s: FilterSettings, f1_hz: float | None, p: dict[str, float]):
+def _instruments(log: Log, s: FilterSettings, f1_hz: float | None):
     """A function of the parameters giving the instruments (the same columns from the
     reference's predicted motor angle), or None; and a note."""
     inst = instrument_log(log, f1_hz)
