@@ -51,6 +51,9 @@ class Identification:
     # auto's fallback to rigid: why the flexible model was rejected, and its estimate if any
     # (identification.sanity reads both: a mislabelled log, data too short)
     rejected: tuple[str, dict[str, float]] | None = None
+    # motor-only: the weighted inversion of eqs. (18)-(20)'s X's, from which the link
+    # reconstruction (identification/link_fit.py, `physical`) starts; {} when it fails
+    physical_eqs18_20: dict[str, float] = field(default_factory=dict)
 
     @property
     def relative_error_pct(self) -> float:
@@ -231,6 +234,7 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
     physical: dict[str, float] = {}
     sigma: dict[str, float] = {}
     t3: dict[str, float] = {}
+    eqs18_20: dict[str, float] = {}
     if model.startswith("motor-only"):
         X = {n: ls.value(n) for n in ls.names if n not in ls.unidentifiable}
         try:
@@ -249,6 +253,7 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
         else:
             physical, sigma = phys.as_dict(), {n: phys.std(n) for n in phys.names}
             sigma_corr = _motor_only_sigma_corrected(ls, log)
+        eqs18_20 = dict(physical)
         if model == "motor-only":
             physical, sigma, sigma_corr = _link_reconstructed(log, settings, physical, f1_hz,
                                                               notes)
@@ -269,7 +274,8 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
     return Identification(model=reg.model, ls=ls, physical=physical, physical_sigma=sigma,
                           settings=settings, y=reg.y, y_pred=y_pred, t=log.t[reg.index],
                           block=reg.block, notes=tuple(notes), table3=t3,
-                          prismatic=log.prismatic, physical_sigma_corrected=sigma_corr)
+                          prismatic=log.prismatic, physical_sigma_corrected=sigma_corr,
+                          physical_eqs18_20=eqs18_20)
 
 
 def reversal_rates(p: dict[str, float]) -> tuple[float, float]:

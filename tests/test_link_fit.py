@@ -75,6 +75,7 @@ def test_motor_only_exact_without_coulomb_friction():
     for name in ("K", "Jm", "JL", "FV"):
         assert abs(pct(result.physical[name], truth[name])) < 0.01, name
     assert any("link reconstructed from q_m" in n for n in result.notes)
+    assert result.physical_eqs18_20["K"] > 0     # the start, kept for comparison
 
 
 def test_gravity_kept_when_identified_left_out_otherwise():
