@@ -25,8 +25,9 @@ F1_OVER: dict[str, str] = {}   # the frequency response alone: heavy_link +11.3 
 # samples a period, keeps +0.85 % without any motor Coulomb friction)
 JOINT_MOTOR_OVER = {"stiff_small": "K -0.66, Jm +2.99 %", "soft": "Jm +0.61 %"}
 # motor-only: the link reconstructed from q_m (identification/link_fit.py) took heavy_link from
-# K -15.9 / Jm -5.2 / JL -45.8 % to +0.45 / +0.75 / +0.85, stiff_small's Jm from +7.5 to +2.3 %,
-# soft's from +3.25 to +2.7 % (K +2.5, JL +4.9: the closed-loop torque noise, about 2 sigma)
+# K -15.9 / Jm -5.2 / JL -45.8 % to -0.02 / -0.08 / +0.01, stiff_small's Jm from +7.5 to +2.3 %
+# (the joint-motor model's +3.0 % there is the same motor-side residue), soft's from +3.25 to
+# +0.62 % (K +0.10, JL +0.15); wrist and balanced within 0.22 %
 MOTOR_ONLY_OVER: dict[str, str] = {}
 
 
