@@ -234,15 +234,25 @@ def fit(log: Log, s: FilterSettings, start: dict[str, float], f1_hz: float | Non
     notes = [f"motor-only: link reconstructed from q_m through eq. (5) (stick-slip link "
              f"friction), variable projection from the eqs. (18)-(20) estimate, {ROUNDS} "
              "rounds; " + why]
+    left_out = None
     if rows.gravity and not _significant(ls, ("Kgx", "Kgy")):
         # a gravity stiffness the data cannot tell from zero still trades with K (both stiffen
-        # the link's response): left out, the estimate of K keeps its variance
+        # the link's response): left out, the estimate of K keeps its variance; MX = MY = 0
+        # are reported with the standard deviations the data gave them
+        left_out = _physical(ls, g)
         rows.gravity = False
         p = _converge(rows, log, {**p, "Kgx": 0.0, "Kgy": 0.0}, ROUNDS_AGAIN)
         p, ls, y, J, idx = _final(rows, log, p, Z)
         notes.append(f"the link's gravity (MX, MY) is within {GRAVITY_Z:g} sigma of zero: left "
-                     "out of the model (a horizontal axis, or one at rest near its balance)")
+                     "out of the model (a horizontal axis, or one at rest near its balance) "
+                     "and reported as 0 with the standard deviation it had")
     physical, sigma, sigma_c = _physical(ls, g)
+    if left_out is not None:
+        for k in ("MX", "MY"):
+            if k in left_out[0]:
+                physical[k], sigma[k] = 0.0, left_out[1][k]
+                if k in left_out[2]:
+                    sigma_c[k] = left_out[2][k]
     return LinkFit(physical, sigma, sigma_c, ls, y, _model(J, p), idx, tuple(notes))
 
 

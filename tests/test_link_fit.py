@@ -80,10 +80,12 @@ def test_motor_only_exact_without_coulomb_friction():
 
 def test_gravity_kept_when_identified_left_out_otherwise():
     """An axis with a link mass keeps MX, MY (measured: MY -1.0 %, K -0.03 %); a horizontal
-    one leaves them out with a note (measured on the heavy link: K +0.14 %, Jm +1.3 %)."""
+    one leaves them out with a note, reported as 0 with the standard deviation the data gave
+    them (measured on the heavy link: K +0.14 %, Jm +1.3 %)."""
     heavy = simulate(FAMILIES["heavy_link"], 1, 20.0, "linear", True, ideal_sensors=True)
     flat = identify(heavy, "motor-only")
-    assert "MY" not in flat.physical and any("left out" in n for n in flat.notes)
+    assert flat.physical["MY"] == 0.0 and any("left out" in n for n in flat.notes)
+    assert flat.physical_sigma_corrected["MY"] > 0
     tilted = simulate(replace(FAMILIES["balanced"], MY=0.3), 1, 20.0, "linear", True,
                       ideal_sensors=True)
     result, truth = identify(tilted, "motor-only"), tilted.truth()
