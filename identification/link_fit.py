@@ -39,8 +39,8 @@ from jointbench.identification.saturation import exclude_clipped
 
 NAMES = ("Jm", "FVm", "FSm", "K", "Kc", "Kgx", "Kgy", "a", "b")
 LINEAR = 7            # the first seven enter linearly
-ROUNDS = 4            # profile updates (link friction, gravity, reversals), each with (a, b)
-ROUNDS_AGAIN = 2      # the same after the gravity is left out (from the converged point)
+ROUNDS = 3            # profile updates (link friction, gravity, reversals), each with (a, b)
+ROUNDS_AGAIN = 1      # the same after the gravity is left out (from the converged point)
 GRAVITY_Z = 3.0       # MX or MY this many corrected sigma from zero keeps the gravity columns
 IV_PASSES = 2         # then passes with instruments
 B_FLOOR = 1e-6        # FV / JL kept positive (the link's response needs some damping)
