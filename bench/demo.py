@@ -77,7 +77,8 @@ def run_demo(out: Path, duration: float = 60.0, seed: int = 1) -> int:
     say(physical_table(printed, truth, "## Table 3: physical parameters, model as printed"))
     say()
     say(physical_table(corrected, truth, "## Table 3 (corrected): physical parameters with "
-                                         "standard deviations (weighted NLS on all X)"))
+                                         "standard deviations (the link reconstructed from "
+                                         "q_m, from the weighted NLS on all X)"))
     say()
     say("## Why the corrected motor-only model")
     for name in ("K", "Jm", "JL"):

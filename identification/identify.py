@@ -9,7 +9,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from jointbench.identification import regressors
+from jointbench.identification import link_fit, regressors
 from jointbench.identification.checks import check_excitation, check_signals
 from jointbench.identification.estimate import LSResult, NotIdentifiable, block_weighted, least_squares
 from jointbench.identification.band_checks import band_warnings
@@ -51,6 +51,9 @@ class Identification:
     # auto's fallback to rigid: why the flexible model was rejected, and its estimate if any
     # (identification.sanity reads both: a mislabelled log, data too short)
     rejected: tuple[str, dict[str, float]] | None = None
+    # motor-only: the weighted inversion of eqs. (18)-(20)'s X's, from which the link
+    # reconstruction (identification/link_fit.py, `physical`) starts; {} when it fails
+    physical_eqs18_20: dict[str, float] = field(default_factory=dict)
 
     @property
     def relative_error_pct(self) -> float:
@@ -231,6 +234,7 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
     physical: dict[str, float] = {}
     sigma: dict[str, float] = {}
     t3: dict[str, float] = {}
+    eqs18_20: dict[str, float] = {}
     if model.startswith("motor-only"):
         X = {n: ls.value(n) for n in ls.names if n not in ls.unidentifiable}
         try:
@@ -239,9 +243,20 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
             notes.append(f"Table 3 not computed: {err}")
         except KeyError:
             t3 = {}
-        phys = invert_motor_only(ls, g=log.gravity, qc=float(np.mean(log.q_m)))
-        physical, sigma = phys.as_dict(), {n: phys.std(n) for n in phys.names}
-        sigma_corr = _motor_only_sigma_corrected(ls, log)
+        try:
+            phys = invert_motor_only(ls, g=log.gravity, qc=float(np.mean(log.q_m)))
+        except InversionError as err:
+            if model != "motor-only":
+                raise
+            notes.append(f"eqs. (18)-(20) do not invert ({err})")
+            physical, sigma, sigma_corr = {}, {}, {}
+        else:
+            physical, sigma = phys.as_dict(), {n: phys.std(n) for n in phys.names}
+            sigma_corr = _motor_only_sigma_corrected(ls, log)
+        eqs18_20 = dict(physical)
+        if model == "motor-only":
+            physical, sigma, sigma_corr = _link_reconstructed(log, settings, physical, f1_hz,
+                                                              notes)
     else:
         for n in ls.names:
             if n not in ls.unidentifiable:
@@ -259,7 +274,8 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
     return Identification(model=reg.model, ls=ls, physical=physical, physical_sigma=sigma,
                           settings=settings, y=reg.y, y_pred=y_pred, t=log.t[reg.index],
                           block=reg.block, notes=tuple(notes), table3=t3,
-                          prismatic=log.prismatic, physical_sigma_corrected=sigma_corr)
+                          prismatic=log.prismatic, physical_sigma_corrected=sigma_corr,
+                          physical_eqs18_20=eqs18_20)
 
 
 def reversal_rates(p: dict[str, float]) -> tuple[float, float]:
@@ -318,6 +334,30 @@ def _instruments(log: Log, reg: regressors.Regressor, f1_hz: float | None,
         return None
     notes.append("instrumental variables: the regressor rebuilt from q_ref's predictions")
     return Z.W[pick]
+
+
+def _link_reconstructed(log: Log, settings: FilterSettings, start: dict[str, float],
+                        f1_hz: float | None, notes: list[str]
+                        ) -> tuple[dict[str, float], dict[str, float], dict[str, float]]:
+    """The physical parameters of the motor-only model from the link reconstructed out of q_m
+    (identification/link_fit.py), started from the eqs. (18)-(20) inversion `start` (or, when
+    it gives no positive K and JL, from the best link antiresonance in the band): those
+    columns hold the torque's derivatives, which the closed loop's torque noise biases. The
+    X's, Table 3 and the direct validation stay those of eqs. (18)-(20). Raises
+    InversionError when neither start gives a positive stiffness."""
+    if not (start.get("K", 0) > 0 and start.get("JL", 0) > 0):
+        try:
+            start = link_fit.start_from_band(log, settings)
+        except ValueError as err:
+            raise InversionError(str(err)) from err
+        notes.append("the link reconstruction started from the best link antiresonance in "
+                     "the band")
+    try:
+        result = link_fit.fit(log, settings, start, f1_hz)
+    except ValueError as err:
+        raise InversionError(str(err)) from err
+    notes.extend(result.notes)
+    return result.physical, result.sigma, result.sigma_corrected
 
 
 def _motor_only_sigma_corrected(ls: LSResult, log: Log) -> dict[str, float]:

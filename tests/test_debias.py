@@ -107,16 +107,17 @@ def test_debias_is_deterministic_and_seeded():
 
 
 def test_debias_motor_only():
-    """The motor-only model's larger LS bias (K -0.85 %, JL -0.95 % mean over 6 seeds,
-    README "Refinement") is a property of its regressor too: on seed 5 the correction brings
-    K and JL from about 1 % to within 0.5 %."""
+    """The motor-only model through the replicas: on seed 5 the estimate (the link
+    reconstructed from q_m: K -0.25, Jm +0.18, JL -0.24 %; eqs. 18-20 alone had about 1 %) has
+    little bias left, and the correction keeps K, Jm, JL within 0.5 % (measured: within
+    0.26 %) and moves them by less than 0.3 %."""
     log = run_experiment("prototype", seed=5).log
     ident = identify(log, "motor-only")
     d = debias(log, ident, replicas=4)
     truth = log.truth()
     for n in ("K", "Jm", "JL"):
         assert abs(d.estimate[n] / truth[n] - 1) < 5e-3, (n, d.estimate[n], ident.physical[n])
-        assert abs(d.estimate[n] / truth[n] - 1) < abs(ident.physical[n] / truth[n] - 1)
+        assert abs(d.estimate[n] / ident.physical[n] - 1) < 3e-3, (n, d.estimate[n])
 
 
 def test_debias_errors():

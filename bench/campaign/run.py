@@ -105,6 +105,8 @@ def corrected_sigmas(ident, log) -> dict[str, float]:
     if cov is None:
         return {}
     cov = np.asarray(cov, dtype=float)
+    if ident.model == "motor-only":   # the link reconstruction's, not the X's (link_fit)
+        return dict(ident.physical_sigma_corrected)
     if ident.model.startswith("motor-only"):
         swapped = replace(ls, cov=cov, sigma=np.sqrt(np.abs(np.diag(cov))))
         phys = invert_motor_only(swapped, g=log.gravity, qc=float(np.mean(log.q_m)))

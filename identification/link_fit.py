@@ -1,0 +1,343 @@
+"""The motor-only model solved with the link reconstructed from the motor angle.
+
+Eqs. (18)-(20) eliminate q through eq. (14), which puts the torque's own derivatives tau'' and
+tau' in the regressor. In closed loop those carry the current loop's torque noise, which the
+controller answers: the columns are correlated with the equation error, and least squares is
+biased by a factor growing with JL / Jm (the noise term X1 w'' is JL / Jm + 1 times the noise at
+the first mode; heavy link, JL / Jm = 10: K -16 %, JL -46 %). The paper's assumption that the
+link Coulomb friction FS is not excited leaves it out as well (JL +2.7 % on a soft axis).
+
+Here q is not eliminated but computed from the motor angle through the link's own equation (5)
+(identification/link_sim.py): with a = K / JL, b = FV / JL, the deflection qm - q is
+    d = H (qm'' + b qm' + c phi + gx cos q + gy sin q),   H = 1 / (s^2 + b s + a),
+phi the link friction (stick-slip) and c, gx, gy as in link_sim. The motor equation (6),
+    tau = Jm qm'' + FVm qm' + FSm sign(qm') + K d,
+is linear in X = (Jm, FVm, FSm, K, K c, K MX / JL, K MY / JL) once a and b are fixed, and every
+column is a filtered motor position (no torque), as in the joint-motor model. a and b are found
+by variable projection on the same rows (trust region on log a, log b; their columns
+dm/da = -H^2 U, dm/db = K H qm' - s H^2 U, U the input of d times K), from the eqs. (18)-(20)
+estimate; the link friction phi, the gravity terms and the motor reversals (placed as the
+joint-motor model places them) come from the previous round. The reference's instruments
+(identification/instruments.py) then replace least squares for the last passes. A gravity the
+data cannot tell from zero is left out (it trades with K). JL = K / a, FV = b JL, FS = c JL.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import optimize
+
+from jointbench.identification import regressors
+from jointbench.identification.estimate import LSResult, least_squares
+from jointbench.identification.filtering import FilterSettings, decimate_parallel, zoh_align
+from jointbench.identification.instruments import instrument_log
+from jointbench.identification.link_sim import inverse, simulate_link, spectra
+from jointbench.identification.log import Log
+from jointbench.identification.saturation import exclude_clipped
+
+NAMES = ("Jm", "FVm", "FSm", "K", "Kc", "Kgx", "Kgy", "a", "b")
+LINEAR = 7            # the first seven enter linearly
+ROUNDS = 3            # profile updates (link friction, gravity, reversals), each with (a, b)
+ROUNDS_AGAIN = 1      # the same after the gravity is left out (from the converged point)
+GRAVITY_Z = 3.0       # MX or MY this many corrected sigma from zero keeps the gravity columns
+IV_PASSES = 2         # then passes with instruments
+B_FLOOR = 1e-6        # FV / JL kept positive (the link's response needs some damping)
+
+
+@dataclass(frozen=True)
+class LinkFit:
+    """The estimate: physical parameters with standard deviations (paper's and corrected),
+    the linearised LS result on NAMES, the rows (y, prediction, sample index) and notes."""
+
+    physical: dict[str, float]
+    sigma: dict[str, float]
+    sigma_corrected: dict[str, float]
+    ls: LSResult
+    y: np.ndarray
+    y_pred: np.ndarray
+    index: np.ndarray
+    notes: tuple[str, ...]
+
+
+class _Rows:
+    """The motor rows of one log for given (a, b) and given profiles (phi, gravity, reversal
+    rate): the filtered motor derivatives are computed once."""
+
+    def __init__(self, log: Log, s: FilterSettings):
+        self.log, self.s = log, s
+        self.qm = regressors._filtered(log.q_m, s, 2)
+        self.tau = regressors._torque(log, s)
+        self.g = log.gravity
+        self.bad = ~np.isfinite(self.qm[2])
+        self.gravity = self.g != 0    # False: the gravity columns are zero (not identified)
+
+    def profiles(self, p: dict[str, float]) -> None:
+        """The link friction phi and gravity (link_sim with p's a, b, c, gx, gy) and the motor
+        reversals (placed with p's FSm / Jm), kept until the next call."""
+        a, b, K = p["a"], p["b"], p["K"]
+        # the columns are H(g cos q), H(g sin q): Kgx = K MX / JL, so g MX / JL = g Kgx / K
+        c = max(p["Kc"] / K, 0.0) if K > 0 else 0.0
+        gx, gy = ((self.g * p["Kgx"] / K, self.g * p["Kgy"] / K) if K > 0 and self.gravity
+                  else (0.0, 0.0))
+        q, phi = simulate_link(self.log.q_m, self.s.ts, a, b, c, gx, gy)
+        self.phi = zoh_align(phi)            # the step means at the samples
+        g = self.g if self.gravity else 0.0
+        self.cos, self.sin = g * np.cos(q), g * np.sin(q)
+        self.spectra = spectra([self.qm[2], self.qm[1], self.phi, self.cos, self.sin],
+                               self.s.ts)
+        rate = p["FSm"] / p["Jm"] if p["Jm"] > 0 and p["FSm"] > 0 else 0.0
+        self.sign = regressors._sign(self.qm[1], self.s, rate)
+
+    def columns(self, p: dict[str, float]) -> np.ndarray:
+        """The columns before decimation: (qm'', qm', sign, H u_i for the link inputs
+        u = (qm'' + b qm', phi, g cos q, g sin q), H^2 u_i, s H^2 u_i, H qm'); `_design`
+        combines the last nine into dm/da and dm/db, which are linear in the parameters."""
+        a, b = p["a"], p["b"]
+        s, U, u0 = self.spectra     # of qm'', qm', phi, g cos q, g sin q
+        ins = np.vstack([U[0] + b * U[1], U[2:]])
+        i0 = np.r_[u0[0] + b * u0[1], u0[2:]]
+        H = 1.0 / (s * s + b * s + a)
+        n = len(self.tau)
+        resp = inverse(np.vstack([H * ins, H * H * ins, s * H * H * ins, H * U[1]]), s, n)
+        resp[:4] += (i0 / a)[:, None]
+        resp[4:8] += (i0 / a ** 2)[:, None]
+        resp[12] += u0[1] / a
+        W = np.column_stack([self.qm[2], self.qm[1], self.sign, resp.T])
+        W[self.bad] = np.nan
+        return W
+
+    def decimated(self, p: dict[str, float]):
+        return decimate_parallel(self.tau, self.columns(p), self.s)
+
+
+def _design(C: np.ndarray, p: dict[str, float]) -> np.ndarray:
+    """The rows' Jacobian J = (the LINEAR columns, dm/da, dm/db) from `Rows.columns`' C:
+    m = Jm qm'' + FVm qm' + FSm sign + sum beta_i H u_i (beta = K, Kc, Kgx, Kgy), so
+    dm/da = -sum beta_i H^2 u_i and dm/db = K H qm' - sum beta_i s H^2 u_i."""
+    beta = np.array([p["K"], p["Kc"], p["Kgx"], p["Kgy"]])
+    da = -C[:, 7:11] @ beta
+    db = p["K"] * C[:, 15] - C[:, 11:15] @ beta
+    return np.column_stack([C[:, :LINEAR], da, db])
+
+
+def _model(W: np.ndarray, p: dict[str, float]) -> np.ndarray:
+    return W[:, :LINEAR] @ np.array([p[n] for n in NAMES[:LINEAR]])
+
+
+def _kept(rows: _Rows, log: Log, p: dict[str, float]) -> tuple[np.ndarray, ...]:
+    """The decimated rows (y, the columns of `_Rows.columns`, raw sample index) without those
+    near a clipped torque, as for every model."""
+    y, C, idx = rows.decimated(p)
+    reg = exclude_clipped(regressors.Regressor("motor-only", NAMES, y, C, np.zeros(len(y), int),
+                                               idx, rows.s), log)
+    return reg.y, reg.W, reg.index
+
+
+def _solve(rows: _Rows, log: Log, p: dict[str, float], Z: tuple | None = None,
+           corrected: bool = False):
+    """One Gauss-Newton pass: the linearised rows y - m(p) + J p = J X solved for X, with the
+    instruments `Z` = (instrument rows, their index) when given and covering the rows."""
+    y, C, idx = _kept(rows, log, p)
+    J = _design(C, p)
+    ylin = y - _model(J, p) + J @ np.array([p[n] for n in NAMES])
+    inst = None
+    if Z is not None:
+        where = {k: i for i, k in enumerate(Z[1].tolist())}
+        pick = [where.get(k) for k in idx.tolist()]
+        inst = None if any(i is None for i in pick) else Z[0][pick]
+    ls = least_squares(J, ylin, NAMES, time=idx, corrected=corrected, instruments=inst)
+    return ls, y, J, idx
+
+
+def _orthonormal(W: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """QR of the nonzero columns of W scaled to unit norm: (Q, R, the columns' norms with 0
+    for the zero columns: no gravity, no link friction)."""
+    norms = np.linalg.norm(W, axis=0)
+    live = norms > 0
+    Q, R = np.linalg.qr(W[:, live] / norms[live])
+    return Q, R, norms
+
+
+def _linear(rows: _Rows, log: Log, p: dict[str, float]) -> tuple[dict[str, float], np.ndarray,
+                                                              np.ndarray]:
+    """The linear parameters for the (a, b) of `p` by least squares on the first LINEAR
+    columns (profiles as they are), the residual, and its Jacobian with respect to
+    (log a, log b) at those linear parameters projected off the linear columns (variable
+    projection, Kaufman's form)."""
+    y, C, _ = _kept(rows, log, p)
+    Q, R, norms = _orthonormal(C[:, :LINEAR])
+    x = np.zeros(LINEAR)
+    x[norms > 0] = np.linalg.solve(R, Q.T @ y) / norms[norms > 0]
+    new = dict(p)
+    new.update({n: float(v) for n, v in zip(NAMES, x)})
+    J = _design(C, new)
+    r = y - _model(J, new)
+    Jab = J[:, LINEAR:] * np.array([new["a"], new["b"]])
+    return new, r, -(Jab - Q @ (Q.T @ Jab))
+
+
+def _converge(rows: _Rows, log: Log, p: dict[str, float], rounds: int) -> dict[str, float]:
+    """`rounds` of: profiles from `p`, then (a, b) by variable projection (trust region on
+    log a, log b; the linear parameters solved at every point)."""
+    for _ in range(rounds):
+        rows.profiles(p)      # friction, gravity and reversals of the previous round
+        cache: dict[tuple[float, float], tuple] = {}
+
+        def evaluate(x: np.ndarray) -> tuple:
+            key = (float(x[0]), float(x[1]))
+            if key not in cache:
+                cache.clear()
+                cache[key] = _linear(rows, log, {**p, "a": np.exp(x[0]), "b": np.exp(x[1])})
+            return cache[key]
+
+        sol = optimize.least_squares(lambda x: evaluate(x)[1], np.log([p["a"], p["b"]]),
+                                     jac=lambda x: evaluate(x)[2], method="trf", x_scale=1.0)
+        p = evaluate(sol.x)[0]
+    return p
+
+
+def _final(rows: _Rows, log: Log, p: dict[str, float], Z) -> tuple:
+    """IV_PASSES Gauss-Newton passes with the instruments `Z` (a function of the parameters,
+    or None: none), then the last linearised solve with the corrected covariance."""
+    if Z is not None:
+        for _ in range(IV_PASSES):
+            rows.profiles(p)
+            ls, *_ = _solve(rows, log, p, Z=Z(p))
+            p = {n: float(v) if np.isfinite(v) else 0.0 for n, v in zip(NAMES, ls.X)}
+            p["b"] = max(p["b"], B_FLOOR)
+    rows.profiles(p)
+    ls, y, J, idx = _solve(rows, log, p, Z=None if Z is None else Z(p), corrected=True)
+    return p, ls, y, J, idx
+
+
+def fit(log: Log, s: FilterSettings, start: dict[str, float], f1_hz: float | None = None
+        ) -> LinkFit:
+    """The motor-only estimate from a starting point `start` (physical names: K, JL, Jm, FV,
+    FVm, FSm and optionally FS, MX, MY). Raises ValueError when the start has no positive
+    K and JL."""
+    K, JL = start.get("K", 0.0), start.get("JL", 0.0)
+    if not (K > 0 and JL > 0):
+        raise ValueError(f"the link reconstruction needs a positive K and JL to start from "
+                         f"(K = {K:.4g}, JL = {JL:.4g})")
+    g = log.gravity
+    a = K / JL
+    p = {"Jm": start.get("Jm", 0.0), "FVm": start.get("FVm", 0.0),
+         "FSm": start.get("FSm", 0.0), "K": K, "Kc": a * start.get("FS", 0.0),
+         "Kgx": a * start.get("MX", 0.0), "Kgy": a * start.get("MY", 0.0), "a": a,
+         "b": max(start.get("FV", 0.0) / JL, B_FLOOR)}
+    rows = _Rows(log, s)
+    p = _converge(rows, log, p, ROUNDS)
+    Z, why = _instruments(log, s, f1_hz)
+    p, ls, y, J, idx = _final(rows, log, p, Z)
+    notes = [f"motor-only: link reconstructed from q_m through eq. (5) (stick-slip link "
+             f"friction), variable projection from the eqs. (18)-(20) estimate, {ROUNDS} "
+             "rounds; " + why]
+    left_out = None
+    if rows.gravity and not _significant(ls, ("Kgx", "Kgy")):
+        # a gravity stiffness the data cannot tell from zero still trades with K (both stiffen
+        # the link's response): left out, the estimate of K keeps its variance; MX = MY = 0
+        # are reported with the standard deviations the data gave them
+        left_out = _physical(ls, g)
+        rows.gravity = False
+        p = _converge(rows, log, {**p, "Kgx": 0.0, "Kgy": 0.0}, ROUNDS_AGAIN)
+        p, ls, y, J, idx = _final(rows, log, p, Z)
+        notes.append(f"the link's gravity (MX, MY) is within {GRAVITY_Z:g} sigma of zero: left "
+                     "out of the model (a horizontal axis, or one at rest near its balance) "
+                     "and reported as 0 with the standard deviation it had")
+    physical, sigma, sigma_c = _physical(ls, g)
+    if left_out is not None:
+        for k in ("MX", "MY"):
+            if k in left_out[0]:
+                physical[k], sigma[k] = 0.0, left_out[1][k]
+                if k in left_out[2]:
+                    sigma_c[k] = left_out[2][k]
+    return LinkFit(physical, sigma, sigma_c, ls, y, _model(J, p), idx, tuple(notes))
+
+
+START_POINTS = 12     # antiresonances tried by `start_from_band`
+START_SPAN = 30.0     # from the decimated cutoff down to this fraction of it
+
+
+def start_from_band(log: Log, s: FilterSettings) -> dict[str, float]:
+    """A starting point when eqs. (18)-(20) give none: the link's antiresonance sqrt(a) / 2 pi
+    tried on START_POINTS geometric steps from the decimated cutoff / START_SPAN up to the
+    cutoff (damping ratio 0.05), the linear parameters by least squares for each; the one of
+    least residual with K > 0. Raises ValueError when none has."""
+    rows = _Rows(log, s)
+    top = 2 * np.pi * s.decimated_cutoff_hz
+    best: tuple[float, dict[str, float]] | None = None
+    for w in np.geomspace(top / START_SPAN, top, START_POINTS):
+        p = {n: 0.0 for n in NAMES}
+        p.update(a=w * w, b=0.1 * w)
+        rows.profiles(p)
+        p, r, _ = _linear(rows, log, p)
+        rss = float(r @ r)
+        if p["K"] > 0 and (best is None or rss < best[0]):
+            best = (rss, p)
+    if best is None:
+        raise ValueError("no link antiresonance in the band gives a positive stiffness")
+    p = best[1]
+    JL = p["K"] / p["a"]
+    return {"Jm": p["Jm"], "K": p["K"], "JL": JL, "FVm": p["FVm"], "FSm": max(p["FSm"], 0.0),
+            "FV": p["b"] * JL}
+
+
+def _instruments(log: Log, s: FilterSettings, f1_hz: float | None):
+    """A function of the parameters giving the instruments (the same columns from the
+    reference's predicted motor angle), or None; and a note."""
+    inst = instrument_log(log, f1_hz)
+    if inst is None:
+        return None, "least squares (no instruments: no q_ref, or the log is too short)"
+    rows = _Rows(inst, s)
+
+    def Z(p: dict[str, float]) -> np.ndarray:
+        rows.profiles(p)
+        _, C, idx = rows.decimated(p)
+        return _design(C, p), idx
+
+    return Z, "instrumental variables from q_ref's predictions for the last passes"
+
+
+def _significant(ls: LSResult, names: tuple[str, ...]) -> bool:
+    """Any of `names` farther than GRAVITY_Z corrected sigma from zero (the paper's sigma when
+    the corrected one is missing)."""
+    for n in names:
+        x, sd = ls.value(n), ls.std_corrected(n)
+        sd = sd if np.isfinite(sd) and sd > 0 else ls.std(n)
+        if np.isfinite(x) and np.isfinite(sd) and abs(x) > GRAVITY_Z * sd:
+            return True
+    return False
+
+
+def _physical(ls: LSResult, g: float) -> tuple[dict[str, float], ...]:
+    """(JL = K / a, FV = b JL, FS = Kc / a, MX = Kgx / a, MY = Kgy / a) and the rest,
+    with standard deviations by the delta method from the paper's and the corrected
+    covariances."""
+    x = {n: ls.value(n) for n in NAMES}
+    a, b, K = x["a"], x["b"], x["K"]
+    values = {"Jm": x["Jm"], "K": K, "JL": K / a, "FVm": x["FVm"], "FSm": x["FSm"],
+              "FV": b * K / a, "FS": x["Kc"] / a, "MX": x["Kgx"] / a,
+              "MY": x["Kgy"] / a}
+    n = len(NAMES)
+    G = {k: np.zeros(n) for k in values}
+    i = {k: NAMES.index(k) for k in NAMES}
+    for k in ("Jm", "FVm", "FSm", "K"):
+        G[k][i[k]] = 1.0
+    G["JL"][i["K"]], G["JL"][i["a"]] = 1 / a, -K / a ** 2
+    G["FV"][i["K"]], G["FV"][i["b"]], G["FV"][i["a"]] = b / a, K / a, -b * K / a ** 2
+    for name, col in (("FS", "Kc"), ("MX", "Kgx"), ("MY", "Kgy")):
+        G[name][i[col]], G[name][i["a"]] = 1 / a, -x[col] / a ** 2
+
+    def sd(cov: np.ndarray | None) -> dict[str, float]:
+        if cov is None:
+            return {}
+        C = np.nan_to_num(cov)
+        return {k: float(np.sqrt(max(G[k] @ C @ G[k], 0.0))) for k in values}
+
+    for k in ("MX", "MY"):
+        if g == 0 or not np.isfinite(values[k]):
+            values.pop(k)
+    return values, {k: v for k, v in sd(ls.cov).items() if k in values}, \
+        {k: v for k, v in sd(ls.cov_corrected).items() if k in values}

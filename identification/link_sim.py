@@ -1,0 +1,136 @@
+"""The link of eq. (5) driven by the measured motor angle: what the motor-only model needs in
+place of the link encoder (identification/link_fit.py).
+
+    q'' = a (qm - q) - b q' - c phi - gx cos q - gy sin q,   phi in sign(q')
+
+with a = K / JL, b = FV / JL, c = FS / JL, gx = g MX / JL, gy = g MY / JL (per unit link
+inertia). The link Coulomb friction sticks and slips: phi = sign(q') while the link moves, and
+the force that holds it (|phi| <= 1) while the spring cannot overcome FS (on a heavy link at the
+chirp's low frequencies the link is held about half the time). A smoothed sign(q') would need
+steps far below the sample period; this stepper is exact between events instead.
+
+Two pieces:
+- `simulate_link`: one pass over the samples (the motor angle linear between samples, the
+  linear part propagated exactly, the reversal or sticking instant placed inside the step by
+  linear interpolation of the velocity), returning q and the friction phi averaged over each
+  step;
+- `link_response`: the linear part, d = H u with H = 1 / (s^2 + b s + a), applied in the
+  frequency domain (exact for band-limited samples; the filtered derivatives the regressors
+  use are), with its derivatives with respect to a and b for Gauss-Newton.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.linalg import expm
+
+
+def _transition(a: float, b: float, ts: float) -> tuple[list[float], ...]:
+    """Exact one-step maps of x = (q, q') for x' = A x + (0, a u + f): the state's, the motor
+    angle's value and slope at the step start (u linear over the step), a constant
+    acceleration f's."""
+    M = np.zeros((5, 5))
+    M[:2, :2] = [[0.0, 1.0], [-a, -b]]
+    M[1, 2] = a
+    M[2, 3] = 1.0
+    M[1, 4] = 1.0
+    E = expm(M * ts)
+    return E[:2, :2].ravel().tolist(), E[:2, 2].tolist(), E[:2, 3].tolist(), E[:2, 4].tolist()
+
+
+def rest_angle(qm0: float, a: float, gx: float, gy: float) -> float:
+    """The link angle at rest with the motor at qm0: a (qm0 - q) = gx cos q + gy sin q."""
+    q = qm0
+    for _ in range(50):
+        q = qm0 - (gx * math.cos(q) + gy * math.sin(q)) / a
+    return q
+
+
+def simulate_link(qm: np.ndarray, ts: float, a: float, b: float, c: float = 0.0,
+                  gx: float = 0.0, gy: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """The link angle q [rad] at the samples of the motor angle `qm` [rad] (sample period `ts`
+    [s]), from rest at the start, and the link friction phi = friction / FS averaged over each
+    step (phi[k] over [t_k, t_k+1); the last is 0). Raises ValueError unless a > 0, b, c >= 0."""
+    if not (a > 0 and b >= 0 and c >= 0):
+        raise ValueError(f"the link needs a > 0, b >= 0, c >= 0 (got {a}, {b}, {c})")
+    (p00, p01, p10, p11), (u0q, u0v), (s0q, s0v), (f0q, f0v) = _transition(a, b, ts)
+    u = np.asarray(qm, dtype=float).tolist()
+    n = len(u)
+    cos, sin = math.cos, math.sin
+    q, v = rest_angle(u[0], a, gx, gy), 0.0
+    stuck = c > 0
+    gravity = gx != 0 or gy != 0
+    out_q, phi = np.empty(n), np.zeros(n)
+    out_q[0] = q
+    for k in range(n - 1):
+        slope = (u[k + 1] - u[k]) / ts
+        grav = gx * cos(q) + gy * sin(q)
+        if stuck:
+            force = a * (u[k + 1] - q) - grav
+            if abs(force) <= c:                # the spring cannot move it yet
+                phi[k] = force / c
+                out_q[k + 1] = q
+                continue
+            stuck = False
+            sg = 1.0 if force > 0 else -1.0    # breaks away (at the sample)
+        else:
+            sg = 1.0 if v > 0 else -1.0
+        f = -c * sg - grav
+        qn = p00 * q + p01 * v + u0q * u[k] + s0q * slope + f0q * f
+        if gravity:
+            # gravity at the step's middle angle: held at its start it would lag half a step,
+            # a negative damping of g MY T / 2 (12 % of FV on the arm's axis 6)
+            qh = 0.5 * (q + qn)
+            grav = gx * cos(qh) + gy * sin(qh)
+            f = -c * sg - grav
+            qn = p00 * q + p01 * v + u0q * u[k] + s0q * slope + f0q * f
+        vn = p10 * q + p11 * v + u0v * u[k] + s0v * slope + f0v * f
+        if vn * sg > 0 or c == 0:
+            phi[k], q, v = sg, qn, vn
+        else:
+            # the velocity reaches zero inside the step, at the share th of it: the friction
+            # is sg until then, and after it either holds the link or reverses
+            th = v / (v - vn) if v != vn else 0.0
+            qx = q + (qn - q) * th
+            end = a * (u[k + 1] - qx) - grav
+            hold = abs(a * (u[k] + (u[k + 1] - u[k]) * th - qx) - grav) <= c
+            after = max(-1.0, min(1.0, end / c)) if hold else -sg
+            phi[k] = sg * th + after * (1.0 - th)
+            f = -c * phi[k] - grav
+            qn = p00 * q + p01 * v + u0q * u[k] + s0q * slope + f0q * f
+            vn = p10 * q + p11 * v + u0v * u[k] + s0v * slope + f0v * f
+            stuck = hold and abs(end) <= c
+            q, v = (qx if stuck else qn), (0.0 if stuck else vn)
+        out_q[k + 1] = q
+    return out_q, phi
+
+
+def spectra(signals: list[np.ndarray], ts: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The Laplace variable s = j w on the FFT bins (the record zero padded to at least twice
+    its length, so that the link's response does not wrap), the spectra of the signals less
+    their first sample (rows), and those first samples. NaN counts as 0."""
+    u = np.nan_to_num(np.asarray(signals, dtype=float))
+    n = u.shape[-1]
+    L = 1 << int(math.ceil(math.log2(2 * max(n, 2))))
+    u0 = u[:, 0].copy()
+    return 2j * np.pi * np.fft.rfftfreq(L, ts), np.fft.rfft(u - u0[:, None], L), u0
+
+
+def inverse(X: np.ndarray, s: np.ndarray, n: int) -> np.ndarray:
+    """The first n samples of the signals whose spectra are the rows of X (bins of s)."""
+    return np.fft.irfft(X, 2 * (len(s) - 1))[..., :n]
+
+
+def link_response(u: np.ndarray, a: float, b: float, ts: float, order: int = 1,
+                  times_s: bool = False) -> np.ndarray:
+    """(H^order u) with H = 1 / (s^2 + b s + a), or (s H^order u) when `times_s`, from rest at
+    the first sample: the response to u - u[0] plus the static one to u[0] (u[0] / a^order,
+    none with the factor s). NaN in u counts as 0."""
+    s, U, u0 = spectra([u], ts)
+    H = (1.0 / (s * s + b * s + a)) ** order
+    if times_s:
+        H = H * s
+    out = inverse(H * U, s, len(u))[0]
+    return out if times_s else out + u0[0] / a ** order
