@@ -88,7 +88,9 @@ class _Rows:
         self.spectra = spectra([self.qm[2], self.qm[1], self.phi, self.cos, self.sin],
                                self.s.ts)
         rate = p["FSm"] / p["Jm"] if p["Jm"] > 0 and p["FSm"] > 0 else 0.0
-        self.sign = regressors._sign(self.qm[1], self.s, rate)
+        # the reversals placed as the joint-motor chain places them for this log's plant
+        motor, _ = regressors._friction_models(self.log, (rate, 0.0), self.log.q_m)
+        self.sign = regressors._sign(self.qm[1], self.s, *motor)
 
     def columns(self, p: dict[str, float]) -> np.ndarray:
         """The columns before decimation: (qm'', qm', sign, H u_i for the link inputs
