@@ -426,7 +426,10 @@ def test_signal_during_simulate_leaves_no_file(tmp_path, signum, status):
     out = tmp_path / "X.csv"
     proc = subprocess.Popen([sys.executable, "-m", "jointbench.bench.cli", "simulate", "--duration", "600",
                              "--out", str(out), "--quiet"], cwd=tmp_path,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            # as from a terminal: a suite started in the background inherits
+                            # SIGINT ignored (POSIX), and Python then keeps it ignored
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         # wait until the command runs (its SIGTERM handler is installed), then signal it
         deadline = time.monotonic() + 120
