@@ -152,7 +152,7 @@ def crossing_share(v0: np.ndarray, v1: np.ndarray, ts: float, rate: float = 0.0)
     jumps by 2 rate sign(v0) at it, since the Coulomb friction turns over: v0 + a theta T = 0
     and v1 = (a + 2 rate sign(v0)) (1 - theta) T give c theta^2 + (v1 - v0 - c) theta + v0 = 0
     with c = 2 rate sign(v0) T, whose one root in [0, 1] this is (the quadratic is v0 at 0 and
-    v1 at 1). At 17.5 samples a period (20 Hz at 350.87 Hz) the linear guess comes 0.2 sample
+    v1 at 1). At 17.5 samples a period (20 Hz at the paper's rate) the linear guess comes 0.2 sample
     late on average, and that alone leaves Jm +2.6 % (tests/test_filtering.py)."""
     v0, v1 = np.asarray(v0, dtype=float), np.asarray(v1, dtype=float)
     a = np.sign(v0)
@@ -301,7 +301,7 @@ def as_acceleration_sees(x: np.ndarray, ts: float, order: int, stencil: int = 5)
     acceleration weighted over its span, the gain G = g(w Ts)^2 (g = `stencil_gain`), so an
     equation Jm qm'' = tau - K (qm - q) - FV qm' holds between samples only with the other
     terms weighted alike: x times g^(2 - order) (order 1: x is already a stencil derivative,
-    gain g). At 20 Hz and 350.87 Hz, 1 - G is 0.1 % (0.4 % at 28 Hz), the size of the Jm
+    gain g). At 20 Hz and the paper's rate, 1 - G is 0.1 % (0.4 % at 28 Hz), the size of the Jm
     excess it leaves. Zero phase (FFT of the mirrored record); NaN where x is."""
     x = np.asarray(x, dtype=float)
     bad = ~np.isfinite(x)

@@ -139,7 +139,7 @@ def _friction_models(log: Log, friction: tuple[float, float] | Mapping[str, floa
     sixth of the time). The link, driven by the spring alone, keeps its reversals
     slip-through (its stick phases, tried the same way, moved K by +1.3 % on an axis without
     feed-forward). A log whose metadata says the simulator took one step a sample
-    (`substeps: 1`, MuJoCo's arm6 at 350.87 Hz) cannot switch its friction inside a sample:
+    (`substeps: 1`, MuJoCo's arm6 at the paper's rate) cannot switch its friction inside a sample:
     the reversals stay placed linearly between samples by the rates (the sub-sample model
     there: arm6 axis2 Jm -0.01 -> -1.1 %). Zero where a friction or inertia is missing or
     not positive."""
