@@ -370,3 +370,19 @@ def test_cli_rate_runs_the_experiment_at_that_rate(tmp_path, capsys):
     rc = main(["campaign", "--runs", "1", "--rate", "5", "--out", str(tmp_path / "b.csv")])
     assert rc == 2 and "--rate" in capsys.readouterr().err
     assert not (tmp_path / "b.csv").exists()
+
+
+def test_filter_overrides_keep_the_chooser_for_what_is_not_given():
+    """A campaign's --wn alone keeps the stencil identify chooses from f1 / Fs (it used to
+    force 3 points); an explicit --stencil 3 is kept; nothing given: identify's own choice."""
+    from jointbench.bench.campaign.run import _filter
+    from jointbench.bench.sim.experiment import run_experiment
+    from jointbench.identification.defaults import choose_filter
+
+    log = run_experiment("arm6", "axis1", duration=10.0, seed=0).log
+    base = choose_filter(log).settings
+    assert base.stencil == 5      # arm6's ~15 Hz mode at the bench's rate needs 5 points
+    assert _filter(RunSettings(model="arm6"), log) is None
+    s = _filter(RunSettings(model="arm6", wn=200.0), log)
+    assert (s.wn, s.Nd, s.stencil) == (200.0, base.Nd, base.stencil)
+    assert _filter(RunSettings(model="arm6", wn=200.0, stencil=3), log).stencil == 3

@@ -86,12 +86,13 @@ def _filter(settings: RunSettings, log) -> FilterSettings | None:
     """The run's filter: the default one (`choose_filter`: the first mode measured on the
     log, never the truth) with the settings' wn, Nd and stencil (None: the identification's
     own default)."""
-    if settings.wn is None and settings.Nd is None and settings.stencil == 3:
+    if settings.wn is None and settings.Nd is None and settings.stencil is None:
         return None
     base = choose_filter(log).settings
     return FilterSettings(wn=settings.wn if settings.wn is not None else base.wn, m=base.m,
                           Nd=settings.Nd if settings.Nd is not None else base.Nd, ts=log.ts,
-                          stencil=settings.stencil)
+                          stencil=settings.stencil if settings.stencil is not None
+                          else base.stencil)
 
 
 def corrected_sigmas(ident, log) -> dict[str, float]:

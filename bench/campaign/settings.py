@@ -30,8 +30,8 @@ class CampaignError(ValueError):
 @dataclass(frozen=True)
 class RunSettings:
     """What one virtual experiment and its identification use. None: the project default
-    (amplitude: the automatic chirp; motor_bits 17, link_bits 20; wn, Nd: the paper's 176 rad/s
-    and 26 at the paper's rate).
+    (amplitude: the automatic chirp; motor_bits 17, link_bits 20; wn, Nd, stencil: what
+    `identify` chooses from the log's first mode, identification.defaults.choose_filter).
 
     Raises CampaignError for an unknown or repeated identification model, a stencil other than
     3 or 5, or a replica count of 1."""
@@ -46,7 +46,7 @@ class RunSettings:
     scatter: float = 0.0
     wn: float | None = None
     Nd: int | None = None
-    stencil: int = 3
+    stencil: int | None = None
     effect: str | None = None
     id_models: tuple[str, ...] = ("joint-motor", "motor-only")
     debias: int = 0   # bias-correction replicas per two-mass identification (0: none)
@@ -59,7 +59,7 @@ class RunSettings:
             if m not in ID_MODELS:
                 raise CampaignError(f"unknown identification model {m!r} "
                                     f"(choices: {', '.join(ID_MODELS)})")
-        if self.stencil not in (3, 5):
+        if self.stencil not in (None, 3, 5):
             raise CampaignError(f"stencil must be 3 (eq. 22) or 5 points, got {self.stencil}")
         if self.debias != 0 and self.debias < 2:
             raise CampaignError(f"--debias needs 0 (off) or at least 2 replicas, got "

@@ -71,10 +71,12 @@ def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
     p.add_argument("--scatter", type=float, default=0.0,
                    help="relative (log-normal) scatter of K, Jm, JL, FVm, FSm, FV, FS around "
                         "the model, e.g. 0.1 (default 0)")
-    p.add_argument("--wn", type=float, help="Butterworth frequency in rad/s (default 176)")
-    p.add_argument("--decimate", type=int, help="decimation factor Nd (default 26)")
-    p.add_argument("--stencil", type=int, default=3, choices=(3, 5),
-                   help="central-difference points: 3, the paper's eq. (22) (default), or 5")
+    p.add_argument("--wn", type=float, help="Butterworth frequency in rad/s (default: designed "
+                                            "from the log's first mode, as identify does)")
+    p.add_argument("--decimate", type=int, help="decimation factor Nd (default: as --wn)")
+    p.add_argument("--stencil", type=int, choices=(3, 5),
+                   help="central-difference points: 3, the paper's eq. (22), or 5 (default: "
+                        "from f1 / Fs, as identify does)")
     p.add_argument("--effect", help="hidden effect(s) in every run: "
                                     "NAME=STRENGTH[:OPTION=VALUE][,NAME=STRENGTH...]")
     p.add_argument("--id-models", default="joint-motor,motor-only",
