@@ -111,9 +111,10 @@ def test_joint_motor_without_noise_sticking_motor():
     and no statistical error is left, so what remains is the method's own bias where the
     friction holds the drive for many samples. Measured 2026-12-01: Jm -0.37 % (FVm +10 %;
     soft -0.31 %, balanced -0.24 % with K +0.09 %; wrist, stiff_small within 0.1 %). It grows
-    with the band (Nd 10 -> 5 with the same wn: Jm +1.24 %; Nd 20: -0.25 %): the stick
-    phases (identification/friction_state.py) are placed on the filtered velocity, which the
-    Butterworth smears across them. Strict: a fix must take this case out."""
+    with the band (Nd 10 -> 5 with the same wn: Jm +1.24 %; Nd 20: -0.25 %); not traced
+    further (a guess: the stick phases of identification/friction_state.py are placed on the
+    filtered velocity, which the Butterworth smears across them). Strict: a fix must take
+    this case out."""
     log = simulate(FAMILIES["heavy_link"], seed=1, duration=60.0, sweep="linear",
                    feedforward=False, ideal_sensors=True)
     result, truth = identify(log, "joint-motor"), log.truth()
