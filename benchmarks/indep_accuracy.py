@@ -12,6 +12,13 @@ motor-only,
       5-point central difference (`FilterSettings.stencil = 5`).
 Printed: the errors of K, Jm and JL against the truth in %, and the filter used.
 
+`--spread 1-6` measures instead the joint-motor model's spread over seeds (the evidence for
+an estimator's efficiency, where one seed is one draw): per family and feed-forward on/off,
+linear sweep, every seed's K, Jm, JL errors and corrected sigma, then their mean, standard
+deviation and rms, for (a) the defaults and (c) `wide+st5`, measured only, no default: the
+chooser's wn with Nd lowered until the decimated cutoff 0.8 Fs / (2 Nd) reaches the
+reference's top frequency (indep_sim's 30 Hz) and the 5-point stencil.
+
 `--cross-check` adds the two simulators side by side: the paper's prototype simulated by
 MuJoCo (`run_experiment("prototype")`, seed 1, 60 s) and the same axis (its truth, sensors,
 gains rule, gravity and rest angle) simulated here, both identified the same way, with and
@@ -23,6 +30,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+import statistics
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -30,11 +38,12 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
-from indep_sim import FAMILIES, AxisFamily, simulate  # noqa: E402
+from indep_sim import FAMILIES, AxisFamily, default_reference, simulate  # noqa: E402
 
-from jointbench.identification.defaults import settings_for  # noqa: E402
+from jointbench.identification.defaults import choose_filter, settings_for  # noqa: E402
 from jointbench.identification.estimate import NotIdentifiable  # noqa: E402
 from jointbench.identification.filtering import FilterSettings  # noqa: E402
+from jointbench.identification.first_mode import FirstMode  # noqa: E402
 from jointbench.identification.identify import identify  # noqa: E402
 from jointbench.identification.log import Log, LogError  # noqa: E402
 from jointbench.identification.output import pct_error  # noqa: E402
@@ -64,6 +73,56 @@ def errors(log: Log, model: str, settings: FilterSettings | None) -> tuple[list[
     s = result.settings
     return cells, (f"wn {s.wn:.0f} rad/s, Nd {s.Nd} (cut {s.decimated_cutoff_hz:.1f} Hz), "
                    f"stencil {s.stencil}")
+
+
+def wide_settings(log: Log, family: AxisFamily, duration: float
+                  ) -> tuple[FilterSettings, FirstMode]:
+    """(c) the chooser's settings with Nd lowered until the decimated cutoff reaches the
+    reference's top frequency, and the 5-point stencil (measured only, not a default); with
+    the chooser's first mode, which sets the instruments' resolution as in (a)."""
+    choice = choose_filter(log)
+    top = default_reference(family, duration).f_hi
+    nd = max(1, min(choice.settings.Nd, round(0.8 * log.sample_rate_hz / (2 * top))))
+    return replace(choice.settings, Nd=nd, stencil=5), choice.first_mode
+
+
+def spread(families: list[str], seeds: list[int], duration: float) -> None:
+    """The joint-motor errors and corrected sigmas over `seeds`, and their mean, sd, rms."""
+    print(f"joint-motor spread over seeds {seeds}: error % (corrected sigma %)")
+    for name in families:
+        for feedforward in (True, False):
+            rows: dict[str, list[list[float]]] = {"defaults": [], "wide+st5": []}
+            for seed in seeds:
+                log = simulate(FAMILIES[name], seed, duration, "linear", feedforward)
+                for label, (settings, mode) in (
+                        ("defaults", (None, None)),
+                        ("wide+st5", wide_settings(log, FAMILIES[name], duration))):
+                    result = identify(log, "joint-motor", settings=settings, first_mode=mode)
+                    truth = log.truth()
+                    err = [100 * (result.physical[p] / truth[p] - 1) for p in PARAMS]
+                    sig = [100 * result.physical_sigma_corrected[p] / truth[p] for p in PARAMS]
+                    rows[label].append(err + sig)
+                    print(f"{name:<12} {'on' if feedforward else 'off':>3} seed {seed:<3} "
+                          f"{label:<8} Nd {result.settings.Nd:>2} " + " ".join(
+                              f"{p} {e:+6.2f} ({sd:.2f})" for p, e, sd in zip(PARAMS, err, sig)),
+                          flush=True)
+            for label, table in rows.items():
+                cols = list(zip(*table))
+                stats = " ".join(
+                    f"{p} mean {statistics.fmean(cols[i]):+.2f} sd "
+                    f"{statistics.stdev(cols[i]) if len(seeds) > 1 else math.nan:.2f} rms "
+                    f"{math.sqrt(statistics.fmean(x * x for x in cols[i])):.2f} sigma "
+                    f"{statistics.fmean(cols[i + len(PARAMS)]):.2f}"
+                    for i, p in enumerate(PARAMS))
+                print(f"{name:<12} {'on' if feedforward else 'off':>3} {label:<8} {stats}")
+
+
+def seed_list(text: str) -> list[int]:
+    """'1-6' or '1,2,5' as seeds."""
+    if "-" in text:
+        lo, hi = (int(x) for x in text.split("-"))
+        return list(range(lo, hi + 1))
+    return [int(x) for x in text.split(",")]
 
 
 def family_from_log(log: Log) -> AxisFamily:
@@ -109,7 +168,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--families", default=",".join(FAMILIES))
     parser.add_argument("--cross-check", action="store_true",
                         help="also the prototype by MuJoCo and by indep_sim, side by side")
+    parser.add_argument("--spread", type=seed_list, metavar="SEEDS",
+                        help="joint-motor spread over these seeds ('1-6' or '1,2,5') only")
     args = parser.parse_args(argv)
+    if args.spread:
+        start = time.perf_counter()
+        spread(args.families.split(","), args.spread, args.duration)
+        print(f"wall time {time.perf_counter() - start:.0f} s")
+        return 0
     header = (f"{'family':<12} {'f1 Hz':>6} {'JL/Jm':>6} {'ff':>3} {'sweep':<6} "
               f"{'model':<11} {'settings':<8} {'K %':>8} {'Jm %':>8} {'JL %':>8}  filter")
     print(f"identify on indep_sim logs: {args.duration:g} s, seed {args.seed}, 350.87 Hz, "

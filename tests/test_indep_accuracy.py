@@ -25,9 +25,18 @@ F1_OVER: dict[str, str] = {}   # the frequency response alone: heavy_link +11.3 
 # on every family but soft (Jm +0.19 %, JL +0.16 %: the paper's eq. (22) chain, which its
 # 4 Hz mode keeps), and stiff_small (f1 = 20 Hz at 17.5 samples a period) went from Jm +2.99
 # to +0.38 %. What is left over 0.5 % at seed 1 is the closed-loop torque noise, within 1.2
-# corrected sigma: heavy_link Jm -0.66 % (sigma 0.7 %; seeds 2, 3: +0.17, -0.37 %; it read
-# -0.02 % before, a +1.23 % friction bias, measured without noise, cancelling this draw), soft
-# Jm +0.55 % (seeds 2, 3: +0.36, -0.14 %).
+# corrected sigma: heavy_link Jm -0.66 % (sigma 0.7 %), soft Jm +0.55 %. Over seeds 1-10
+# (same code) heavy_link's Jm is -0.10 +- 0.59 % (mean +- sd; corrected sigma 0.67 %), soft's
+# +0.28 +- 0.51 % (sigma 0.46 %): the 0.5 % bound is under one sigma of a 60 s log in the
+# chooser's band (decimated cutoff 9.4 and 5.4 Hz; the sweep goes to 30 Hz). Tried, not kept:
+# prewhitening by an AR model of the residual (heavy_link sd 0.59 -> 0.50, soft 0.51 -> 0.55,
+# seeds 1-10; without feed-forward in a wide band Jm off by up to 24 %), a coarser
+# Welch resolution for the instruments, dropping motor rows near reversals (a 1 % velocity
+# floor with the filter's span drops 88 % of them). What works is the band: the chooser's wn
+# with the decimated cutoff at the sweep's top and the 5-point stencil gives heavy_link
+# -0.22 +- 0.32 % (sigma 0.41 %) and soft +0.34 +- 0.09 % (sigma 0.19 %) over seeds 1-6, but
+# is worse without feed-forward (benchmarks/indep_accuracy.py --spread; the band is
+# defaults.choose_filter's).
 JOINT_MOTOR_OVER = {"heavy_link": "Jm -0.66 % (0.9 sigma)", "soft": "Jm +0.55 % (1.2 sigma)"}
 # motor-only: the link reconstructed from q_m (identification/link_fit.py) took heavy_link from
 # K -15.9 / Jm -5.2 / JL -45.8 % to -0.02 / -0.08 / +0.01, stiff_small's Jm from +7.5 to +2.3 %
@@ -91,6 +100,23 @@ def test_joint_motor_without_noise(feedforward):
     samples they were Jm +2.79 % and +3.63 %."""
     log = simulate(FAMILIES["stiff_small"], seed=1, duration=60.0, sweep="linear",
                    feedforward=feedforward, ideal_sensors=True)
+    result, truth = identify(log, "joint-motor"), log.truth()
+    for p in ("K", "Jm", "JL"):
+        assert abs(result.physical[p] / truth[p] - 1) < 0.001, (p, result.physical[p])
+
+
+@pytest.mark.xfail(strict=True, reason="ideal sensors, no feed-forward: heavy_link Jm -0.37 %")
+def test_joint_motor_without_noise_sticking_motor():
+    """heavy_link without feed-forward, ideal sensors: the motor sticks at most reversals
+    and no statistical error is left, so what remains is the method's own bias where the
+    friction holds the drive for many samples. Measured 2026-12-01: Jm -0.37 % (FVm +10 %;
+    soft -0.31 %, balanced -0.24 % with K +0.09 %; wrist, stiff_small within 0.1 %). It grows
+    with the band (Nd 10 -> 5 with the same wn: Jm +1.24 %; Nd 20: -0.25 %); not traced
+    further (a guess: the stick phases of identification/friction_state.py are placed on the
+    filtered velocity, which the Butterworth smears across them). Strict: a fix must take
+    this case out."""
+    log = simulate(FAMILIES["heavy_link"], seed=1, duration=60.0, sweep="linear",
+                   feedforward=False, ideal_sensors=True)
     result, truth = identify(log, "joint-motor"), log.truth()
     for p in ("K", "Jm", "JL"):
         assert abs(result.physical[p] / truth[p] - 1) < 0.001, (p, result.physical[p])
