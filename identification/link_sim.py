@@ -73,7 +73,9 @@ def simulate_link(qm: np.ndarray, ts: float, a: float, b: float, c: float = 0.0,
         if stuck:
             force = a * (u[k + 1] - q) - grav
             if abs(force) <= c:                # the spring cannot move it yet
-                phi[k] = force / c
+                # the friction holds the spring's force: its mean over the step, not its end
+                # value (that would lead the motor by half a sample while the link sticks)
+                phi[k] = (a * (0.5 * (u[k] + u[k + 1]) - q) - grav) / c
                 out_q[k + 1] = q
                 continue
             stuck = False
@@ -98,13 +100,17 @@ def simulate_link(qm: np.ndarray, ts: float, a: float, b: float, c: float = 0.0,
             th = v / (v - vn) if v != vn else 0.0
             qx = q + (qn - q) * th
             end = a * (u[k + 1] - qx) - grav
-            hold = abs(a * (u[k] + (u[k + 1] - u[k]) * th - qx) - grav) <= c
+            ux = u[k] + (u[k + 1] - u[k]) * th
+            hold = abs(a * (ux - qx) - grav) <= c
+            held = a * (0.5 * (ux + u[k + 1]) - qx) - grav    # its mean over the rest
             after = max(-1.0, min(1.0, end / c)) if hold else -sg
             phi[k] = sg * th + after * (1.0 - th)
             f = -c * phi[k] - grav
             qn = p00 * q + p01 * v + u0q * u[k] + s0q * slope + f0q * f
             vn = p10 * q + p11 * v + u0v * u[k] + s0v * slope + f0v * f
             stuck = hold and abs(end) <= c
+            if stuck:     # held to the step's end: the holding force's mean, as above
+                phi[k] = sg * th + held / c * (1.0 - th)
             q, v = (qx if stuck else qn), (0.0 if stuck else vn)
         out_q[k + 1] = q
     return out_q, phi

@@ -47,14 +47,16 @@ def test_link_response_is_the_two_pole_filter():
 
 def test_the_link_sticks_while_the_spring_cannot_move_it():
     """A motor swing whose spring force a |qm| stays under the friction c: the link stays at
-    rest, and the friction is the spring's force (|phi| <= 1)."""
+    rest, and the friction is the spring's force (|phi| <= 1) averaged over each step (its
+    value at the step's end led the motor by half a sample: on an axis whose link sticks 75 %
+    of the time, the truth was no fixed point of the fit, K -1.4 % from it, now +0.07 %)."""
     t = np.arange(0, 5, TS)
     a, c = 400.0, 2.0
     qm = 0.9 * c / a * np.sin(2 * np.pi * t)
     q, phi = simulate_link(qm, TS, a, 0.5, c)
     assert np.all(q == 0.0)
     assert np.abs(phi).max() <= 1.0
-    assert phi[:-1] == pytest.approx(a * qm[1:] / c)
+    assert phi[:-1] == pytest.approx(a * (qm[1:] + qm[:-1]) / 2 / c)
 
 
 def test_rk4_link_sticks_too():
