@@ -140,7 +140,7 @@ def simulate_link_rk4(qm: np.ndarray, ts: float, a: float, b: float, c: float = 
     n, h, h2 = len(u), ts, ts / 2
     band = 2.0 / (FRICTION_DMAX * timeconst) if timeconst > 0 else math.inf
     cos, sin = math.cos, math.sin
-    gravity = gx != 0 or gy != 0
+    gravity, soft, fd = gx != 0 or gy != 0, math.isfinite(band), FRICTION_D
 
     def acc(q: float, v: float, um: float) -> tuple[float, float]:
         """The acceleration and the friction / FS at the state (q, v), motor angle um."""
@@ -148,31 +148,32 @@ def simulate_link_rk4(qm: np.ndarray, ts: float, a: float, b: float, c: float = 
         if gravity:
             a0 -= gx * cos(q) + gy * sin(q)
         if c > 0:
-            if math.isfinite(band):
-                f = -FRICTION_D * (a0 + band * v)
+            if soft:
+                f = -fd * (a0 + band * v)
             else:
                 f = -math.copysign(c, v) if v != 0 else -a0   # at rest: held if it can
-            f = min(c, max(-c, f))
+            f = c if f > c else (-c if f < -c else f)
             return a0 + f, f / c
         return a0, -1.0 if v > 0 else 1.0
 
     q, v = rest_angle(u[0], a, gx, gy), 0.0
-    out_q, phi = np.empty(n), np.zeros(n)
-    out_q[0] = q
+    out_q, phi = [q], []
     for k in range(n - 1):
-        um = 0.5 * (u[k] + u[k + 1])
-        a1, f1 = acc(q, v, u[k])
+        u0, u1 = u[k], u[k + 1]
+        um = 0.5 * (u0 + u1)
+        a1, f1 = acc(q, v, u0)
         v2 = v + h2 * a1
         a2, f2 = acc(q + h2 * v, v2, um)
         v3 = v + h2 * a2
         a3, f3 = acc(q + h2 * v2, v3, um)
         v4 = v + h * a3
-        a4, f4 = acc(q + h * v3, v4, u[k + 1])
+        a4, f4 = acc(q + h * v3, v4, u1)
         q += h / 6 * (v + 2 * v2 + 2 * v3 + v4)
         v += h / 6 * (a1 + 2 * a2 + 2 * a3 + a4)
-        phi[k] = -(f1 + 2 * f2 + 2 * f3 + f4) / 6
-        out_q[k + 1] = q
-    return out_q, phi
+        phi.append(-(f1 + 2 * f2 + 2 * f3 + f4) / 6)
+        out_q.append(q)
+    phi.append(0.0)
+    return np.array(out_q[:n]), np.array(phi[:n])
 
 
 def spectra(signals: list[np.ndarray], ts: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -69,7 +69,7 @@ def test_arm_identify_with_defaults(arm_logs, joint, model, tol, request):
     K, Jm, JL within 0.5 % (joint-motor) and 3 % (motor-only), the truth within 3 corrected
     sigma. Measured (seed 1): joint-motor within 0.25 % for K and JL on every joint, Jm
     +0.12..+0.56 % (a motor Coulomb friction residue, README "Accuracy on the six-axis
-    arm"); motor-only within 0.45 % (the link reconstructed from q_m; eqs. 18-20 alone:
+    arm"); motor-only within 0.28 % (the link reconstructed from q_m; eqs. 18-20 alone:
     within 2.5 %)."""
     if model == "joint-motor" and joint in JOINT_MOTOR_OVER:
         request.applymarker(pytest.mark.xfail(
