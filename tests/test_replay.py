@@ -268,3 +268,16 @@ def test_auto_on_rigid_virtual_log_with_two_encoders(tmp_path):
     assert result.model == "rigid" and any("joint-motor model" in n for n in result.notes)
     for name, value in (("J", 2.0), ("FV", 1.5), ("FS", 0.8), ("offset", 0.5)):
         assert abs(result.physical[name] - value) < 3 * result.physical_sigma[name], name
+
+
+def test_simulated_log_describes_the_replays_plant(ideal_run):
+    """A replay's log carries the replay's plant (substeps, integrator, friction time
+    constant), not the measured log's: the identification places the friction by them."""
+    log = ideal_run.log
+    model, axis = compile_axis(rigid_axis(222.0, 320.0, 50.0, timestep=log.ts))
+    result = replay(model, axis, log, np.zeros(len(log)), substeps=4)
+    sim = simulated_log(log, result, "test")
+    assert log.meta["substeps"] == "1" and sim.meta["substeps"] == "4"
+    assert sim.meta["integrator"] == mujoco.mjtIntegrator(model.opt.integrator).name
+    assert float(sim.meta["friction_timeconst_s"]) == pytest.approx(
+        float(model.dof_solref[axis.motor_dof][0]), rel=1e-9)

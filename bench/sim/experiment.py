@@ -22,7 +22,7 @@ import numpy as np
 
 from jointbench.bench.sim.axes import ExperimentModel, build_experiment_model
 from jointbench.bench.sim.controller import Gains, gains_rule
-from jointbench.bench.sim.friction import META_KEY, motor_timeconst
+from jointbench.bench.sim.friction import plant_meta
 from jointbench.bench.sim.defaults import (ACCELERATION_SHARE, AMPLITUDE_REDUCTION, AMPLITUDE_RAD,
                                            MAX_REDUCTIONS)
 from jointbench.bench.sim.loop import (INSTABILITY_WARNINGS, LoopChecks, LoopTrace,
@@ -127,8 +127,7 @@ def run_experiment(model: str | Path = "prototype", joint: str | None = None, *,
     meta.update(gains.to_meta())
     meta.update({
         "joint": ax.name, "source": f"jointbench virtual experiment, model {exp.source.name}",
-        "seed": str(seed), "lock": lock, "substeps": str(substeps),
-        "integrator": mujoco.mjtIntegrator(m.opt.integrator).name,
+        "seed": str(seed), "lock": lock,
         "chirp": f"{chirp.method} {chirp.f0:g}-{chirp.f1:g} Hz, amplitude {chirp.amplitude:g} "
                  f"{position_unit(m, ax)}, "
                  f"{chirp.duration:g} s, taper {chirp.taper:g} s",
@@ -136,8 +135,8 @@ def run_experiment(model: str | Path = "prototype", joint: str | None = None, *,
         "saturated_samples": str(trace.saturated),
         "actuator_clamped_samples": str(trace.clamped),
         "amplitude_reductions": str(reductions),
-        META_KEY: format_meta_number(motor_timeconst(m, ax.motor_dof)),
     })
+    meta.update(plant_meta(m, ax.motor_dof, substeps))
     if position_unit(m, ax) == "m":   # a slide joint: m and N (docs/log-format.md)
         meta["axis"] = "prismatic"
     if truth.gear_ratio is not None:

@@ -86,6 +86,17 @@ def motor_timeconst(model: mujoco.MjModel, motor_dof: int) -> float:
     return float(model.dof_solref[motor_dof][0])
 
 
+def plant_meta(model: mujoco.MjModel, motor_dof: int, substeps: int) -> dict[str, str]:
+    """How the simulated plant switches its friction, as a log of it carries it: physics steps
+    per sample (`substeps`), the integrator and the rotor's friction time constant (META_KEY).
+    The identification reads them (identification.regressors.PLANT_STEPS_KEY, link_fit) to
+    place the friction as this plant does; a measured log has none of them."""
+    from jointbench.identification.log import format_meta_number
+    return {"substeps": str(substeps),
+            "integrator": mujoco.mjtIntegrator(model.opt.integrator).name,
+            META_KEY: format_meta_number(motor_timeconst(model, motor_dof))}
+
+
 def timeconst_for_log(meta: dict[str, str], default: float, given: float | None = None
                       ) -> tuple[float, str]:
     """The friction time constant of a nominal axis replaying a log, and where it comes from:

@@ -21,12 +21,13 @@ from __future__ import annotations
 
 import copy
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
 
 from jointbench.bench.sim.controller import Gains
+from jointbench.bench.sim.friction import plant_meta
 from jointbench.bench.sim.loop import LoopChecks, first_warning, run_loop
 from jointbench.bench.sim.nominal import static_link_position
 from jointbench.bench.sim.sensors import Sensors
@@ -46,7 +47,9 @@ class ReplayResult:
     """The replayed signals, sampled as the log: `t` [s], `q_m` motor position, `q` link
     position (None for a rigid axis), `tau_m` the motor torque a log records (the controller's
     output, plus the disturbance when it enters at the motor), `saturated` the number of
-    samples clipped at tau_max, `disturbance` as applied (None when none)."""
+    samples clipped at tau_max, `disturbance` as applied (None when none), `plant` how the
+    replay's plant switches its friction (bench.sim.friction.plant_meta), which a log of the
+    replay carries in place of the measured log's."""
 
     t: np.ndarray
     q_m: np.ndarray
@@ -55,6 +58,7 @@ class ReplayResult:
     saturated: int
     disturbance: np.ndarray | None = None
     disturbance_at: str = "link"
+    plant: dict[str, str] = field(default_factory=dict)
 
 
 def _with_timestep(model: mujoco.MjModel, dt: float) -> mujoco.MjModel:
@@ -185,7 +189,8 @@ def replay(model: mujoco.MjModel, axis: Axis, log: Log, disturbance: np.ndarray 
     return ReplayResult(t=np.asarray(log.t, dtype=float).copy(), q_m=trace.q_m,
                         q=None if axis.rigid else trace.q, tau_m=trace.tau_m,
                         saturated=trace.saturated, disturbance=disturbance,
-                        disturbance_at=disturbance_at)
+                        disturbance_at=disturbance_at,
+                        plant=plant_meta(m, axis.motor_dof, substeps))
 
 
 def forward_errors(log: Log, result: ReplayResult, skip: int = 0) -> dict[str, float | str | int]:
@@ -242,6 +247,7 @@ def simulated_log(log: Log, result: ReplayResult, source: str) -> Log:
     if log.path:
         meta["replay_of"] = str(log.path)
     meta["saturated_samples"] = str(result.saturated)
+    meta.update(result.plant)    # the replay's plant, not the measured log's
     extra = {}
     if result.disturbance is not None:
         extra["disturbance"] = result.disturbance
