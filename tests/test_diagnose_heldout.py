@@ -196,3 +196,28 @@ def test_torque_lag_found_where_it_is_on_a_continuous_current_loop():
     nom = nominal(log, diagnosis_settings(log)[0])
     lag = candidate(nom, "torque_lag").parameters["lag_s"]
     assert lag == pytest.approx(0.004, rel=0.10)
+
+
+def test_asymmetric_friction_needs_its_viscous_part_to_beat_an_offset():
+    """While the motor moves, the Coulomb part of an asymmetric friction is a constant torque:
+    an offset. On the independent simulator's soft family (motor Coulomb 12 N m, viscous
+    3 N m s/rad at speeds of a few tenths of a rad/s) an asymmetry of 0.5 is almost all
+    Coulomb: its viscous part is not significant on top of an offset, so the simpler offset
+    is named and the answer says the log cannot tell them apart (docs/effects.md 4.3). On the
+    prototype (viscous and Coulomb comparable) an asymmetry of 0.15 is named with no
+    ambiguity (test_issue14_cases_are_named's log)."""
+    from indep_sim import FAMILIES, simulate
+    from jointbench.identification.discrepancy.heldout import t_bar
+
+    log = simulate(FAMILIES["soft"], seed=5, duration=DURATION,
+                   effects="asymmetric_friction=0.5")
+    d = diagnose(log, forward=False)
+    assert d.named_cause == "offset"
+    (note,) = d.ambiguities
+    assert "offset or asymmetric_friction" in note and "cannot tell them apart" in note
+    t = float(note.split("adds to offset has t = ")[1].split(",")[0])
+    assert t < t_bar(d.named.alpha)
+    assert d.to_json()["ambiguity"] == [note]
+    proto = diagnose(_log("prototype", None, 1, "asymmetric_friction", 0.15), forward=False)
+    assert proto.named_cause == "asymmetric_friction" and proto.ambiguities == ()
+    assert "ambiguity" not in proto.to_json()
