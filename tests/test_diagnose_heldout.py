@@ -221,3 +221,20 @@ def test_asymmetric_friction_needs_its_viscous_part_to_beat_an_offset():
     proto = diagnose(_log("prototype", None, 1, "asymmetric_friction", 0.15), forward=False)
     assert proto.named_cause == "asymmetric_friction" and proto.ambiguities == ()
     assert "ambiguity" not in proto.to_json()
+
+
+def test_hardening_grid_spans_the_logs_own_deflection_range():
+    """The hardening's engagement is searched over the log's whole deflection range: a stiff
+    second spring engaged only by the largest deflections (above 0.9 x the 99th percentile,
+    where the grid used to stop) lies inside it (docs/effects.md 4.3)."""
+    from types import SimpleNamespace
+
+    rng = np.random.default_rng(0)
+    d = rng.normal(0.0, 1e-3, 5000)
+    d[::500] = 6e-3                       # ten peaks, far above the 99th percentile
+    sig = SimpleNamespace(qm=d, q=np.zeros_like(d), sl=slice(None))
+    grid = EFFECTS["hardening"].grid(SimpleNamespace(sig=sig))
+    p99 = np.percentile(np.abs(d), 99)
+    assert grid[0] == pytest.approx(0.02 * p99)
+    assert 0.9 * p99 < 5e-3 < grid[-1] < 6e-3
+    assert np.all(np.diff(grid) > 0)
