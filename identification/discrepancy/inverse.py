@@ -77,8 +77,8 @@ def _rank(cands: list[Candidate]) -> list[Candidate]:
 
 def _round(nom: Nominal, names: list[str], causes: tuple[Candidate, ...],
            m: int) -> tuple[list[Candidate], str]:
-    """One round: the candidates ranked, the one to name first, and a note when the log
-    cannot tell it from the effect it reduces to ("" otherwise)."""
+    """One round: the candidates ranked, the one to name first at the top, and a note when
+    the log cannot tell a richer candidate from it ("" otherwise: _simplest_first)."""
     ref = reference(nom, tuple((c.effect, c.fixed) for c in causes), m=m)
     return _simplest_first(_rank([candidate(nom, name, ref) for name in names]), nom, causes, m)
 
@@ -118,9 +118,8 @@ def _simplest_first(ranked: list[Candidate], nom: Nominal, causes: tuple[Candida
     thirtieth of its engaged one explained 60.5 % where the backlash explained 58.8 %;
     Coulomb-dominated asymmetric frictions and offsets explained the same share within 0.5
     point, either way round: while the motor moves the Coulomb part of an asymmetry is a
-    constant torque, and only its viscous part a FVm |qm'| differs. A test of the best
-    against S directly, without nesting, left a hardening of ratio 0.5 (57.9 % of the
-    held-out residual) behind a backlash (35.2 %).)"""
+    constant torque, and only its viscous part a FVm |qm'| differs; compared directly, not
+    nested, the share that differs went either way by chance.)"""
     if not ranked or not ranked[0].significant:
         return ranked, ""
     best = ranked[0]
