@@ -196,3 +196,45 @@ def test_torque_lag_found_where_it_is_on_a_continuous_current_loop():
     nom = nominal(log, diagnosis_settings(log)[0])
     lag = candidate(nom, "torque_lag").parameters["lag_s"]
     assert lag == pytest.approx(0.004, rel=0.10)
+
+
+def test_asymmetric_friction_needs_its_viscous_part_to_beat_an_offset():
+    """While the motor moves, the Coulomb part of an asymmetric friction is a constant torque:
+    an offset. On the independent simulator's soft family (motor Coulomb 12 N m, viscous
+    3 N m s/rad at speeds of a few tenths of a rad/s) an asymmetry of 0.5 is almost all
+    Coulomb: its viscous part is not significant on top of an offset, so the simpler offset
+    is named and the answer says the log cannot tell them apart (docs/effects.md 4.3). On the
+    prototype (viscous and Coulomb comparable) an asymmetry of 0.15 is named with no
+    ambiguity (test_issue14_cases_are_named's log)."""
+    from indep_sim import FAMILIES, simulate
+    from jointbench.identification.discrepancy.heldout import t_bar
+
+    log = simulate(FAMILIES["soft"], seed=5, duration=DURATION,
+                   effects="asymmetric_friction=0.5")
+    d = diagnose(log, forward=False)
+    assert d.named_cause == "offset"
+    (note,) = d.ambiguities
+    assert "offset or asymmetric_friction" in note and "cannot tell them apart" in note
+    t = float(note.split("adds to offset has t = ")[1].split(",")[0])
+    assert t < t_bar(d.named.alpha)
+    assert d.to_json()["ambiguity"] == [note]
+    proto = diagnose(_log("prototype", None, 1, "asymmetric_friction", 0.15), forward=False)
+    assert proto.named_cause == "asymmetric_friction" and proto.ambiguities == ()
+    assert "ambiguity" not in proto.to_json()
+
+
+def test_hardening_grid_spans_the_logs_own_deflection_range():
+    """The hardening's engagement is searched over the log's whole deflection range: a stiff
+    second spring engaged only by the largest deflections (above 0.9 x the 99th percentile,
+    where the grid used to stop) lies inside it (docs/effects.md 4.3)."""
+    from types import SimpleNamespace
+
+    rng = np.random.default_rng(0)
+    d = rng.normal(0.0, 1e-3, 5000)
+    d[::500] = 6e-3                       # ten peaks, far above the 99th percentile
+    sig = SimpleNamespace(qm=d, q=np.zeros_like(d), sl=slice(None))
+    grid = EFFECTS["hardening"].grid(SimpleNamespace(sig=sig))
+    p99 = np.percentile(np.abs(d), 99)
+    assert grid[0] == pytest.approx(0.02 * p99)
+    assert 0.9 * p99 < 5e-3 < grid[-1] < 6e-3
+    assert np.all(np.diff(grid) > 0)

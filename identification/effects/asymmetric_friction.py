@@ -26,4 +26,7 @@ EFFECT = Effect(
     "asymmetric_friction", "asymmetry", "", "",
     "viscous and Coulomb friction that differ with the direction of motion",
     needs_link=False, rigid_axis=False, block=0, k=1, design=design,
-    params=column_value("a", "asymmetry"), reference=reference)
+    params=column_value("a", "asymmetry"), reference=reference,
+    # While the motor moves, the Coulomb part of the asymmetry, a FSm, is a constant torque:
+    # an offset. The viscous part a FVm |qm'| is what tells the two apart.
+    reduces_to="offset")

@@ -65,6 +65,10 @@ class Effect:
     search: str = ""          # the nonlinear parameter searched, a key of `fixed`
     grid: Callable[[Rows], np.ndarray] | None = None
     reference: Callable[[Rows], dict] | None = None
+    # The simpler effect this one reduces to where its distinguishing part vanishes: it is
+    # named over that one only when what it adds to it is significant held out
+    # (identification.discrepancy.inverse). "" for none.
+    reduces_to: str = ""
 
     def unit_for(self, prismatic: bool) -> str:
         return self.unit_prismatic if prismatic else self.unit

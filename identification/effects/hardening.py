@@ -15,10 +15,15 @@ def design(rows: Rows, fixed: dict) -> Design:
 
 
 def grid(rows: Rows) -> np.ndarray:
-    # Geometric grid: the engagement may sit near the encoder scale on a stiff joint.
+    # Geometric grid over the log's own deflection range: the engagement may sit near the
+    # encoder scale on a stiff joint, or near the largest deflection (a stiff second spring
+    # engaged by a few peaks: a 97-fold hardening engaged above 0.9 x the 99th percentile
+    # was missed by a grid that stopped there). The top is short of the largest deflection,
+    # so that the column is never empty.
     sig = rows.sig
-    dmax = float(np.percentile(np.abs((sig.qm - sig.q)[sig.sl]), 99))
-    return np.geomspace(0.02 * dmax, 0.9 * dmax, 60)
+    d = np.abs((sig.qm - sig.q)[sig.sl])
+    typical, top = float(np.percentile(d, 99)), float(np.max(d))
+    return np.geomspace(0.02 * typical, 0.98 * max(top, typical), 64)
 
 
 def params(v: dict, fixed: dict, rows: Rows) -> dict[str, float]:

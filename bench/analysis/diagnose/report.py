@@ -66,6 +66,7 @@ def report_markdown(d: Diagnosis, figures: dict[str, str]) -> str:
             L.append(f"| {c.effect} | not testable | | | | | | {c.reason} |")
     L += ["", f"**Named cause: {d.named_cause}** (verdict: {d.verdict})", ""]
     L += _causes_lines(d)
+    L += [f"Ambiguity: {a}.\n" for a in d.ambiguities]
     if d.reason:
         L += [f"Why: {d.reason}.", ""]
     L += [f"Warning: {w}" for w in d.warnings] + ([""] if d.warnings else [])
@@ -200,6 +201,7 @@ def summary_text(d: Diagnosis) -> str:
         L += [f"  {c.effect}: held out {c.heldout_pct:.3g} %, t {c.t_stat:.3g}, "
               f"{BLOCK_NAMES[c.block].split(':')[0]} {c.before_pct:.3g} % -> "
               f"{c.after_pct:.3g} % ({c.gain:.2f}x)" for c in d.causes]
+    L += [f"ambiguity: {a}" for a in d.ambiguities]
     if d.reason:
         L.append(f"why: {d.reason}")
     if d.named is not None:

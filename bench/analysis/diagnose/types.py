@@ -67,6 +67,12 @@ class Diagnosis:
         return () if self.overruled else self.inverse.causes
 
     @property
+    def ambiguities(self) -> tuple[str, ...]:
+        """What this log cannot tell apart about the named causes (an offset from a
+        Coulomb-dominated asymmetric friction: identification.discrepancy.inverse)."""
+        return () if self.overruled else self.inverse.notes
+
+    @property
     def verdict(self) -> str:
         """'named', 'none' or 'inconclusive' (the best candidate overruled)."""
         return "inconclusive" if self.overruled else ("named" if self.named else "none")
@@ -114,6 +120,8 @@ class Diagnosis:
             out["forward_note"] = self.forward_note
         if self.reason:
             out["reason"] = self.reason
+        if self.ambiguities:
+            out["ambiguity"] = list(self.ambiguities)
         if self.overruled and self.inverse.named is not None:
             out["rejected_cause"] = self.inverse.named.effect
         out["warnings"] = list(self.warnings)
