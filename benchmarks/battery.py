@@ -65,7 +65,8 @@ def run_one(spec: Spec) -> dict:
            "joint": p.joint or "", "family": p.family, "seed": spec.seed,
            "feedforward": spec.feedforward, "noise": spec.noise, "effects": list(spec.effects),
            "targets": list(spec.targets), "strengths": [], "options": [], "visibilities": [],
-           "combined": 0.0, "simulations": 0, "named": [], "verdict": "", "error": ""}
+           "combined": 0.0, "simulations": 0, "named": [], "ambiguity": [], "verdict": "",
+           "error": ""}
     t0 = time.perf_counter()
     try:
         out = run_spec(spec, _RUNNERS[p.source], _CACHE)
@@ -74,7 +75,7 @@ def run_one(spec: Spec) -> dict:
                    simulations=sum(len(s.tried) for s in out.searches) + 1)
         t1 = time.perf_counter()
         d = diagnose(out.log)
-        rec.update(named=named_causes(d), verdict=d.verdict,
+        rec.update(named=named_causes(d), ambiguity=list(d.ambiguities), verdict=d.verdict,
                    diagnose_s=time.perf_counter() - t1)
     except Exception as err:  # a failed case is reported, never hidden
         rec["error"] = f"{type(err).__name__}: {err}"
@@ -98,14 +99,15 @@ def _csv(records: list[dict]) -> str:
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(["index", "kind", "source", "model", "joint", "seed", "feedforward", "noise",
                 "effects", "strengths", "targets_pct", "visibilities_pct", "combined_pct",
-                "named", "right", "error"])
+                "named", "right", "ambiguity", "error"])
     for r in records:
         w.writerow([r["index"], r["kind"], r["source"], r["model"], r["joint"], r["seed"],
                     r["feedforward"], r["noise"], ";".join(r["effects"]),
                     ";".join(f"{s:.6g}" for s in r["strengths"]),
                     ";".join(f"{100 * t:.2f}" for t in r["targets"]),
                     ";".join(f"{100 * v:.2f}" for v in r["visibilities"]),
-                    f"{100 * r['combined']:.2f}", ";".join(r["named"]), right(r), r["error"]])
+                    f"{100 * r['combined']:.2f}", ";".join(r["named"]), right(r),
+                    " | ".join(r.get("ambiguity", [])), r["error"]])
     return buf.getvalue()
 
 

@@ -97,6 +97,19 @@ def test_detection_summary_and_95_threshold():
     assert "two-effect cases with both named: 1/1" in text and "6.0 %" in text
 
 
+def test_a_miss_with_the_hidden_effect_as_stated_alternative_is_counted_apart():
+    from jointbench.bench.campaign.detection import alternative_stated
+    amb = ["offset or asymmetric_friction: this log cannot tell them apart"]
+    miss = {"kind": "single", "effects": ["asymmetric_friction"], "visibilities": [0.2],
+            "named": ["offset"], "ambiguity": amb, "family": "x"}
+    wrong = dict(miss, effects=["backlash"])
+    hit = dict(miss, effects=["offset"])
+    assert alternative_stated(miss) and not alternative_stated(wrong)
+    assert not alternative_stated(hit) and right(hit) and not right(miss)   # never counted right
+    text = "\n".join(summary_lines([miss, wrong, hit]))
+    assert "named right: 1/3" in text and "(ambiguity): 1" in text
+
+
 # ---- the independent simulator's effects ----
 
 def test_indep_same_seed_same_log_bit_for_bit():

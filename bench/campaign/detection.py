@@ -33,6 +33,13 @@ def right(record: dict) -> bool:
     return set(hidden) <= set(named)
 
 
+def alternative_stated(record: dict) -> bool:
+    """A single-effect miss whose answer states that the log cannot tell the named cause from
+    the hidden one (the record's `ambiguity` texts name it): honest, not right."""
+    return (record["kind"] == "single" and not right(record)
+            and any(record["effects"][0] in a for a in record.get("ambiguity", ())))
+
+
 def confusion(records: list[dict]) -> tuple[list[str], np.ndarray]:
     """Clean and single-effect cases: rows the hidden effect (none for clean), columns the
     first named cause."""
@@ -107,6 +114,9 @@ def summary_lines(records: list[dict]) -> list[str]:
         k = sum(right(r) for r in at5)
         lines.append(f"single-effect cases at visibility >= 5 % named right: {k}/{len(at5)} "
                      f"({100 * k / len(at5):.0f} %)")
+        amb = sum(alternative_stated(r) for r in at5)
+        lines.append(f"  of the misses, answered with the hidden effect as the stated "
+                     f"alternative (ambiguity): {amb}")
     pairs = [r for r in records if r["kind"] == "pair"]
     if pairs:
         one = sum(bool(set(r["effects"]) & set(r["named"])) for r in pairs)
