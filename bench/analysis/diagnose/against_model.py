@@ -40,6 +40,7 @@ from jointbench.bench.analysis.diagnose.model_edit import (EDITABLE, Corrected, 
                                                            spec_truth)
 from jointbench.bench.analysis.diagnose.model_floor import (excess, replay_floor, replay_model,
                                                             torque_noise_std)
+from jointbench.bench.analysis.diagnose.model_precision import Coarse, coarse
 from jointbench.bench.analysis.diagnose.run import diagnose, extended_parameters
 from jointbench.bench.effects import write_effects
 from jointbench.bench.sim.nominal import write_xml
@@ -153,6 +154,12 @@ class ModelDiagnosis:
     @property
     def wrong_parameters(self) -> tuple[str, ...]:
         return tuple(n for n, e in self.errors.items() if e.significant)
+
+    @property
+    def coarse(self) -> dict[str, Coarse]:
+        """The parameters whose error this log cannot tell within 2 points, with the
+        duration that would (model_precision)."""
+        return coarse(self.errors, len(self.log) * self.log.ts)
 
     @property
     def named_cause(self) -> str:
