@@ -14,8 +14,8 @@ from jointbench.bench.sim.experiment import run_experiment
 from jointbench.identification.identify import identify
 
 
-def _e(s: float):
-    return types.SimpleNamespace(error_sigma_pct=s)
+def _e(s: float, data: float = 1.0, sigma: float = 0.01):
+    return types.SimpleNamespace(error_sigma_pct=s, data=data, sigma=sigma)
 
 
 def test_needed_duration_is_the_inverse_square_law():
@@ -27,8 +27,15 @@ def test_needed_duration_is_the_inverse_square_law():
     assert T == pytest.approx(60 * (1.959964 * 3.9 / 2) ** 2, rel=1e-6)
     assert 3.9 * (60.0 / T) ** 0.5 * Z == pytest.approx(POINTS, rel=1e-12)
     found = coarse({"K": _e(0.1), "FVm": _e(3.9), "FS": _e(2 / Z * 0.999),
-                    "MX": _e(float("nan"))}, 60.0)
+                    "Jm": _e(float("nan"))}, 60.0, 3.0)
     assert list(found) == ["FVm"] and found["FVm"].duration_s == pytest.approx(T)
+    # MX, MY of a vertical axis (arm6 axis1, 60 s: 0.00025 +- 0.00068 and 0.026 +- 0.022):
+    # no gravity moment to take a % of, whatever the duration; FSm 2.9 sigma from zero: none
+    vertical = {"MX": _e(2.64, 0.00025, 0.00068), "MY": _e(86.4, 0.0256, 0.0221),
+                "FSm": _e(10.0, 2.9, 1.0)}
+    assert coarse(vertical, 60.0, 3.0) == {}
+    assert list(coarse({**vertical, "MY": _e(86.4, 0.0256, 0.0021)}, 60.0, 3.0)) == ["MX",
+                                                                                    "MY"]
     assert "FVm +- 3.9 points (876 s)" in describe(found)
     assert describe({}) == "precision: every error known within 2 points (95 %)"
 

@@ -159,7 +159,7 @@ class ModelDiagnosis:
     def coarse(self) -> dict[str, Coarse]:
         """The parameters whose error this log cannot tell within 2 points, with the
         duration that would (model_precision)."""
-        return coarse(self.errors, len(self.log) * self.log.ts)
+        return coarse(self.errors, len(self.log) * self.log.ts, SIGMAS)
 
     @property
     def named_cause(self) -> str:

@@ -29,7 +29,12 @@ CONFIDENCE = 0.95   # two-sided
 Z = NormalDist().inv_cdf(0.5 + CONFIDENCE / 2)
 
 
+GRAVITY = ("MX", "MY")
+
+
 class _Error(Protocol):
+    data: float
+    sigma: float
     error_sigma_pct: float
 
 
@@ -53,15 +58,28 @@ def needed_duration(error_sigma_pct: float, duration_s: float,
     return duration_s * (Z * error_sigma_pct / points) ** 2
 
 
-def coarse(errors: Mapping[str, _Error], duration_s: float,
+def told_from_zero(errors: Mapping[str, _Error], name: str, sigmas: float) -> bool:
+    """Whether the log tells the reference of `name`'s error % from zero: |data| > `sigmas`
+    sigma (MX, MY: the gravity moment, sqrt(MX^2 + MY^2) against sqrt(sigma_MX^2 +
+    sigma_MY^2)). Where it does not (MX, MY of a vertical axis), there is no relative error
+    to tell, at any duration."""
+    keys = GRAVITY if name in GRAVITY else (name,)
+    if not all(k in errors for k in keys):
+        return False
+    value = math.hypot(*(errors[k].data for k in keys))
+    return value > sigmas * math.hypot(*(errors[k].sigma for k in keys))
+
+
+def coarse(errors: Mapping[str, _Error], duration_s: float, sigmas: float,
            points: float = POINTS) -> dict[str, Coarse]:
     """The parameters of `errors` whose error is not known within `points` at CONFIDENCE
-    (z sigma > points), each with the experiment length that would know it; a sigma that is
-    not finite (not identified) is left out."""
+    (z sigma > points), each with the experiment length that would know it; left out: a
+    sigma that is not finite (not identified), an error without a reference
+    (`told_from_zero` at `sigmas`)."""
     out = {}
     for name, e in errors.items():
         s = e.error_sigma_pct
-        if math.isfinite(s) and Z * s > points:
+        if math.isfinite(s) and Z * s > points and told_from_zero(errors, name, sigmas):
             out[name] = Coarse(name, s, needed_duration(s, duration_s, points))
     return out
 
