@@ -45,7 +45,7 @@ def test_sigma_shrinks_as_one_over_sqrt_duration():
     # experiment of the prototype, 30 s and 120 s (seed 1). The paper's (white) sigma of
     # every parameter shrinks by sqrt(4) = 2 (measured 1.87-2.12: the chirp is not exactly
     # the same experiment stretched; 15 %). The corrected sigma is itself estimated from the
-    # residual's autocorrelation and follows less closely (1.4-2.3 here, FS 1.37); FVm's, the
+    # residual's autocorrelation and follows less closely (1.37-3.26 here); FVm's, the
     # one the 60 s logs leave coarse, is held to 25 % (2.32 measured)
     short = identify(run_experiment("prototype", duration=30.0, seed=1).log, "joint-motor")
     long = identify(run_experiment("prototype", duration=120.0, seed=1).log, "joint-motor")
