@@ -155,7 +155,7 @@ def _set_gravity(spec: mujoco.MjSpec, joint: str, config: dict[str, float],
     if abs(np.linalg.det(A)) <= 1e-12 * max(float(np.abs(A).max()), 1e-300):
         body.ipos = ipos
         notes.append(f"MX, MY: moving the centre of mass of '{name}' does not change them "
-                     "(the axis is along gravity)")
+                     "(a slide joint, or a hinge along gravity); only their magnitude was set")
         return
     d = np.linalg.solve(A, target - base)
     body.ipos = ipos + d[0] * steps[0] + d[1] * steps[1]
@@ -171,9 +171,7 @@ def _set_jl(spec: mujoco.MjSpec, joint: str, config: dict[str, float], target: f
         link.armature = link.armature + (target - now)
         return
     link.armature = 0.0
-    model = spec.compile()
-    jid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, joint)
-    bodies = _subtree(model, int(model.jnt_bodyid[jid]))
+    bodies = _moving(spec, joint)[1]
     for masses in (False, True):
         base = _jl(spec, joint, config)
         _scale_inertia(spec, bodies, 0.5, masses)
