@@ -178,6 +178,17 @@ def test_corrected_spec_sets_gravity(joint, config, tmp_path):
     assert (t2.MX, t2.MY, t2.JL) == pytest.approx((t0.MX + 0.2 * g, t0.MY, t0.JL), rel=1e-9)
 
 
+def test_no_gravity_moment_on_a_vertical_axis():
+    # arm6 axis1 turns about gravity: no mass or centre of mass gives it MX, MY; the edit
+    # says so and leaves them (and the file's masses) as they were
+    src = model_path("arm6")
+    c = corrected_spec(src, "axis1", {}, {"MX": 0.5})
+    assert c.values == {"MX": 0.0} and any("does not turn them" for n in c.notes)
+    assert "MX, MY: left at 0, 0" in c.notes
+    t = spec_truth(c.spec, "axis2", {})[0]
+    assert t == spec_truth(mujoco.MjSpec.from_file(str(src)), "axis2", {})[0]
+
+
 def test_gravity_named_is_written(arm2, tmp_path):
     # JL lowered 20 % with the masses on arm6 axis2: MX, MY are off too and named; the
     # corrected.xml written must hold the data's values of all three (its gravity terms read

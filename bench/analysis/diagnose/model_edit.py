@@ -152,10 +152,10 @@ def _set_gravity(spec: mujoco.MjSpec, joint: str, config: dict[str, float],
         body.ipos = ipos + e
         slopes.append(_moments(spec, joint, config) - base)
     A = np.array(slopes).T
-    if abs(np.linalg.det(A)) <= 1e-12 * max(float(np.abs(A).max()), 1e-300):
+    if not abs(np.linalg.det(A)) > 1e-9 * float(np.abs(A).max()) ** 2:   # no turn of M
         body.ipos = ipos
-        notes.append(f"MX, MY: moving the centre of mass of '{name}' does not change them "
-                     "(a slide joint, or a hinge along gravity); only their magnitude was set")
+        notes.append(f"MX, MY: moving the centre of mass of '{name}' does not turn them (a "
+                     "slide joint, or a hinge along gravity)")
         return
     d = np.linalg.solve(A, target - base)
     body.ipos = ipos + d[0] * steps[0] + d[1] * steps[1]
@@ -219,8 +219,9 @@ def corrected_spec(path: str, joint: str, config: dict[str, float],
                                           rtol=1e-9, atol=1e-12 * float(np.abs(gravity).max())):
             break
     else:
-        notes.append("MX, MY: not reached together with JL "
-                     f"({', '.join(f'{v:.5g}' for v in _moments(spec, joint, config))})")
+        notes.append("MX, MY: left at " + ", ".join(
+            f"{v:.5g}" for v in _moments(spec, joint, config)) + (
+            " (with JL set)" if "JL" in values else ""))
     truth = spec_truth(spec, joint, config, str(path))[0]
     written = {n: float(getattr(truth, n)) for n in values if n in EDITABLE}
     return Corrected(spec=spec, values=written, notes=tuple(notes))
