@@ -36,8 +36,8 @@ from typing import Callable, Sequence
 import mujoco
 import numpy as np
 
-from jointbench.bench.analysis.diagnose.model_edit import (EDITABLE, Corrected, corrected_spec,
-                                                           spec_truth)
+from jointbench.bench.analysis.diagnose.model_edit import (EDITABLE, GRAVITY, Corrected,
+                                                           corrected_spec, spec_truth)
 from jointbench.bench.analysis.diagnose.model_floor import (excess, replay_floor, replay_model,
                                                             torque_noise_std)
 from jointbench.bench.analysis.diagnose.model_precision import Coarse, coarse
@@ -50,7 +50,6 @@ from jointbench.identification.log import Log
 from jointbench.identification.parameters import FRICTIONS, STIFFNESS_AND_INERTIAS
 from jointbench.models import find_axes, model_path, select_axis
 
-GRAVITY = ("MX", "MY")
 # The physical parameters of eq. (13) (identification.parameters.TWO_MASS), in the order.
 COMPARED = STIFFNESS_AND_INERTIAS + FRICTIONS + GRAVITY
 SIGMAS = 3.0        # |model - data| beyond this many corrected sigmas ...

@@ -24,12 +24,11 @@ from dataclasses import dataclass
 from statistics import NormalDist
 from typing import Mapping, Protocol
 
+from jointbench.bench.analysis.diagnose.model_edit import GRAVITY
+
 POINTS = 2.0        # the bar: an error known within this many points of %
 CONFIDENCE = 0.95   # two-sided
 Z = NormalDist().inv_cdf(0.5 + CONFIDENCE / 2)
-
-
-GRAVITY = ("MX", "MY")
 
 
 class _Error(Protocol):
