@@ -111,9 +111,9 @@ def summary(rows: list, false_named: list[str], floors: list, z: np.ndarray,
     print(f"\nright: {right} of {len(rows)} ({100 * right / len(rows):.1f} %); the right "
           f"parameters named, whatever the error: {sum(s.named_right for s in rows)}")
     flagged = sum(s.flagged for s in rows)
-    print(f"wrong cases whose misses the diagnosis flagged itself (error sigma too coarse for "
-          f"{POINTS:g} points): {flagged} of {len(rows) - right}; right or so flagged: "
-          f"{right + flagged} of {len(rows)}")
+    print(f"wrong cases whose misses (put off, and not named or over {POINTS:g} points off) the "
+          f"diagnosis flagged itself (error too coarse for {POINTS:g} points): {flagged} of "
+          f"{len(rows) - right}; right or so flagged: {right + flagged} of {len(rows)}")
     print("durations the true models' diagnoses ask for (2 points, 95 %): "
           + (", ".join(f"{k} {v:.0f} s" for k, v in sorted(asked.items(), key=lambda i: -i[1]))
              or "none, every error known within 2 points"))

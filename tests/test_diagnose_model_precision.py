@@ -54,3 +54,17 @@ def test_sigma_shrinks_as_one_over_sqrt_duration():
         assert ratio == pytest.approx(2.0, rel=0.15), (n, ratio)
     ratio = short.physical_sigma_corrected["FVm"] / long.physical_sigma_corrected["FVm"]
     assert ratio == pytest.approx(2.0, rel=0.25)
+
+
+def test_a_miss_is_flagged_only_where_the_diagnosis_said_it_could_not_tell():
+    from jointbench.bench.analysis.diagnose.model_cases import Score
+
+    def case(named, coarse=("FVm",)):
+        right = set(named) == {"K", "FVm"} and abs(named["FVm"] - 20.0) <= POINTS
+        return Score({"K": -16.0, "FVm": 20.0}, named, right, set(named) == {"K", "FVm"},
+                     10.0, 3.0, coarse=coarse)
+    assert not case({"K": -16.0, "FVm": 21.5}).flagged          # right: nothing to flag
+    assert case({"K": -16.0, "FVm": 22.3}).flagged              # 2.3 off, FVm coarse
+    assert case({"K": -16.0}).flagged                           # FVm not named, coarse
+    assert not case({"K": -16.0, "FVm": 22.3}, coarse=()).flagged
+    assert not case({"K": -16.0, "FVm": 22.3, "FS": 6.0}).flagged   # a false naming

@@ -87,15 +87,19 @@ class Score:
 
     @property
     def misses(self) -> tuple[str, ...]:
-        """The parameters put off beyond the floor, named, but reported over POINTS off."""
-        return tuple(k for k, v in self.named.items()
-                     if k in self.expected and abs(v - self.expected[k]) > POINTS)
+        """The parameters put off beyond the floor that are not named, or named but reported
+        over POINTS off."""
+        want = {k: v for k, v in self.expected.items() if abs(v) > FLOOR_PCT}
+        return tuple(k for k, v in want.items()
+                     if k not in self.named or abs(self.named[k] - v) > POINTS)
 
     @property
     def flagged(self) -> bool:
-        """Not right, but only through errors the diagnosis said it could not tell within
-        POINTS (the names right, every miss among `coarse`)."""
-        return (not self.right and self.named_right and bool(self.misses)
+        """Not right, but only on parameters put off whose error the diagnosis said it could
+        not tell within POINTS (every miss among `coarse`); never with a parameter named that
+        was not put off (a naming claims 3 sigma, whatever the precision)."""
+        extra = set(self.named) - {k for k, v in self.expected.items() if abs(v) > FLOOR_PCT}
+        return (not self.right and not extra and bool(self.misses)
                 and set(self.misses) <= set(self.coarse))
 
     @property
