@@ -127,8 +127,13 @@ def test_a_held_value_the_log_rules_out_does_not_leak(prototype, k, tmp_path):
     assert md.wrong_parameters == ("FVm",) and s.right, (s.expected, s.named)
 
 
-def test_arm_joint(tmp_path):
-    log = run_experiment("arm6", "axis2", duration=DURATION, seed=1).log
+@pytest.fixture(scope="module")
+def arm2():
+    return run_experiment("arm6", "axis2", duration=DURATION, seed=1).log
+
+
+def test_arm_joint(arm2, tmp_path):
+    log = arm2
     case = Case("arm6", "axis2", {"K": 0.8, "JL": 1.2})
     expected = true_errors(case, _config(log), tmp_path / "wrong.xml")
     md = diagnose_against_model(log, tmp_path / "wrong.xml")
@@ -144,6 +149,71 @@ def test_arm_joint(tmp_path):
         float(log.meta["torque_noise_std"]), rel=0.1)
     assert s.floor == pytest.approx(s.torque_after, rel=0.1)
     assert s.excess[1] < s.excess[0] / 2
+
+
+def _moments(spec, joint, config) -> np.ndarray:
+    t = spec_truth(spec, joint, config)[0]
+    return np.array([t.MX, t.MY])
+
+
+@pytest.mark.parametrize("joint, config", [("axis2", {}), ("axis5", {"axis4": 0.5})])
+def test_corrected_spec_sets_gravity(joint, config, tmp_path):
+    # a copy whose JL could only be lowered with the masses (MX, MY scaled with them): MX, MY
+    # and JL set back to the truth give the true axis back; a turned moment (MX alone moved)
+    # is reached with MY and JL kept
+    src = model_path("arm6")
+    t0 = spec_truth(mujoco.MjSpec.from_file(str(src)), joint, config)[0]
+    wrong = corrected_spec(src, joint, config, {"JL": 0.8 * t0.JL})
+    assert wrong.notes and _moments(wrong.spec, joint, config) == pytest.approx(
+        0.8 * np.array([t0.MX, t0.MY]), rel=1e-9)
+    write_xml(wrong.spec, tmp_path / "wrong.xml")
+    c = corrected_spec(tmp_path / "wrong.xml", joint, config,
+                       {"JL": t0.JL, "MX": t0.MX, "MY": t0.MY})
+    t1 = spec_truth(c.spec, joint, config)[0]
+    assert not c.notes
+    assert (t1.JL, t1.MX, t1.MY) == pytest.approx((t0.JL, t0.MX, t0.MY), rel=1e-5)
+    g = float(np.hypot(t0.MX, t0.MY))
+    c = corrected_spec(src, joint, config, {"MX": t0.MX + 0.2 * g, "JL": t0.JL})
+    t2 = spec_truth(c.spec, joint, config)[0]
+    assert (t2.MX, t2.MY, t2.JL) == pytest.approx((t0.MX + 0.2 * g, t0.MY, t0.JL), rel=1e-9)
+
+
+def test_no_gravity_moment_on_a_vertical_axis():
+    # arm6 axis1 turns about gravity: no mass or centre of mass gives it MX, MY; the edit
+    # says so and leaves them (and the file's masses) as they were
+    src = model_path("arm6")
+    c = corrected_spec(src, "axis1", {}, {"MX": 0.5})
+    assert c.values == {"MX": 0.0} and any("does not turn them" for n in c.notes)
+    assert "MX, MY: left at 0, 0" in c.notes
+    t = spec_truth(c.spec, "axis2", {})[0]
+    assert t == spec_truth(mujoco.MjSpec.from_file(str(src)), "axis2", {})[0]
+
+
+def test_gravity_named_is_written(arm2, tmp_path):
+    # JL lowered 20 % with the masses on arm6 axis2: MX, MY are off too and named; the
+    # corrected.xml written must hold the data's values of all three (its gravity terms read
+    # back from the file; MuJoCo's writer keeps 6 digits), which lie within 1 % of the truth,
+    # and replay the log at the noise floor (this case's corrected model left 1.68 % of
+    # excess over it with MX, MY unedited)
+    log = arm2
+    case = Case("arm6", "axis2", {"JL": 0.8})
+    expected = true_errors(case, _config(log), tmp_path / "wrong.xml")
+    assert set(expected) == {"JL", "MX", "MY"}
+    md = diagnose_against_model(log, tmp_path / "wrong.xml", "axis2")
+    assert set(md.wrong_parameters) == {"JL", "MX", "MY"} and not md.notes
+    (tmp_path / "corrected.xml").write_text(md.xml["corrected.xml"])
+    t = spec_truth(mujoco.MjSpec.from_file(str(tmp_path / "corrected.xml")), "axis2",
+                   md.config)[0]
+    truth = spec_truth(mujoco.MjSpec.from_file(str(model_path("arm6"))), "axis2",
+                       md.config)[0]
+    g = float(np.hypot(truth.MX, truth.MY))
+    for n in ("MX", "MY", "JL"):
+        assert getattr(t, n) == pytest.approx(md.errors[n].data, rel=1e-5, abs=1e-5 * g), n
+        assert getattr(t, n) == pytest.approx(getattr(truth, n), abs=0.01 * (
+            g if n != "JL" else truth.JL)), n
+    s = score(md, expected)
+    assert s.right, (s.expected, s.named)
+    assert s.excess[1] < 0.2 * s.floor, (s.torque_after, s.floor)
 
 
 def test_missing_link_friction_is_link_coulomb(prototype, tmp_path):

@@ -36,10 +36,11 @@ from typing import Callable, Sequence
 import mujoco
 import numpy as np
 
-from jointbench.bench.analysis.diagnose.model_edit import (EDITABLE, Corrected, corrected_spec,
-                                                           spec_truth)
+from jointbench.bench.analysis.diagnose.model_edit import (EDITABLE, GRAVITY, Corrected,
+                                                           corrected_spec, spec_truth)
 from jointbench.bench.analysis.diagnose.model_floor import (excess, replay_floor, replay_model,
                                                             torque_noise_std)
+from jointbench.bench.analysis.diagnose.model_precision import Coarse, coarse
 from jointbench.bench.analysis.diagnose.run import diagnose, extended_parameters
 from jointbench.bench.effects import write_effects
 from jointbench.bench.sim.nominal import write_xml
@@ -49,7 +50,6 @@ from jointbench.identification.log import Log
 from jointbench.identification.parameters import FRICTIONS, STIFFNESS_AND_INERTIAS
 from jointbench.models import find_axes, model_path, select_axis
 
-GRAVITY = ("MX", "MY")
 # The physical parameters of eq. (13) (identification.parameters.TWO_MASS), in the issue's order.
 COMPARED = STIFFNESS_AND_INERTIAS + FRICTIONS + GRAVITY
 SIGMAS = 3.0        # |model - data| beyond this many corrected sigmas ...
@@ -153,6 +153,12 @@ class ModelDiagnosis:
     @property
     def wrong_parameters(self) -> tuple[str, ...]:
         return tuple(n for n, e in self.errors.items() if e.significant)
+
+    @property
+    def coarse(self) -> dict[str, Coarse]:
+        """The parameters whose error this log cannot tell within 2 points, with the
+        duration that would (model_precision)."""
+        return coarse(self.errors, len(self.log) * self.log.ts, SIGMAS)
 
     @property
     def named_cause(self) -> str:

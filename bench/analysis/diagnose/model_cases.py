@@ -17,11 +17,12 @@ from jointbench.bench.analysis.diagnose.against_model import (COMPARED, FLOOR_PC
                                                               ModelDiagnosis)
 from jointbench.bench.analysis.diagnose.model_edit import corrected_spec, spec_truth
 from jointbench.bench.analysis.diagnose.model_floor import excess
+from jointbench.bench.analysis.diagnose.model_precision import POINTS
 from jointbench.bench.sim.nominal import write_xml
 from jointbench.models import model_path
 
 OFF = ("K", "Jm", "JL", "FS", "FVm")   # the parameters a case puts off
-POINTS = 2.0                            # the reported error must be this close to the truth
+# POINTS (model_precision): the reported error must be this close to the truth
 
 
 @dataclass(frozen=True)
@@ -81,6 +82,25 @@ class Score:
     torque_before: float            # forward torque error (% RMS), the wrong copy
     torque_after: float             # the corrected model
     floor: float = np.nan           # the replay's noise floor estimated from the log (% RMS)
+    # the parameters put off whose error the diagnosis says it cannot tell within POINTS
+    coarse: tuple[str, ...] = ()
+
+    @property
+    def misses(self) -> tuple[str, ...]:
+        """The parameters put off beyond the floor that are not named, or named but reported
+        over POINTS off."""
+        want = {k: v for k, v in self.expected.items() if abs(v) > FLOOR_PCT}
+        return tuple(k for k, v in want.items()
+                     if k not in self.named or abs(self.named[k] - v) > POINTS)
+
+    @property
+    def flagged(self) -> bool:
+        """Not right, but only on parameters put off whose error the diagnosis said it could
+        not tell within POINTS (every miss among `coarse`); never with a parameter named that
+        was not put off (a naming claims 3 sigma, whatever the precision)."""
+        extra = set(self.named) - {k for k, v in self.expected.items() if abs(v) > FLOOR_PCT}
+        return (not self.right and not extra and bool(self.misses)
+                and set(self.misses) <= set(self.coarse))
 
     @property
     def ratio(self) -> float:
@@ -108,4 +128,5 @@ def score(md: ModelDiagnosis, expected: dict[str, float]) -> Score:
     return Score(expected=expected, named=named, right=right, named_right=same,
                  torque_before=float(g.get("model", np.nan)),
                  torque_after=float(g.get("corrected", np.nan)),
-                 floor=float(g.get("floor", np.nan)))
+                 floor=float(g.get("floor", np.nan)),
+                 coarse=tuple(k for k in md.coarse if k in want))

@@ -8,8 +8,12 @@ mass matrix at the link joint. JL is raised with armature on joint `X` (a pure i
 the axis: gravity unchanged) and lowered by taking that armature off first, then by scaling
 the rotational inertias (not the masses) of the bodies the joint moves, so the gravity
 moments MX, MY stay as they are; only when that cannot reach the value are the masses scaled
-too (MX, MY then scale with them, a note says so). MX and MY themselves (masses and centres
-of mass) are reported, never edited.
+too (MX, MY then scale with them, a note says so). MX, MY (eq. 7, the first moment of the
+moving bodies across the axis) are set in two exact steps, both linear in what they change:
+the moving bodies' masses and inertias scaled by one factor (a uniformly heavier or lighter
+link: the moment's magnitude, its direction kept), then the centre of mass of the joint's own
+body moved across the axis (the rest, its direction). JL is set after them, and both again
+when JL had to scale the masses.
 """
 
 from __future__ import annotations
@@ -31,8 +35,9 @@ ATTRIBUTES = {"K": ("tendon", "{}_spring", "stiffness"),
               "FSm": ("joint", "{}_motor", "frictionloss"),
               "FV": ("joint", "{}", "damping"),
               "FS": ("joint", "{}", "frictionloss")}
-EDITABLE = (*ATTRIBUTES, "JL")
-NOT_EDITED = ("MX", "MY")   # masses and centres of mass: reported, never edited
+GRAVITY = ("MX", "MY")
+EDITABLE = (*ATTRIBUTES, "JL", *GRAVITY)
+ROUNDS = 3   # gravity, then JL, again while JL scales the masses (module docstring)
 
 
 @dataclass(frozen=True)
@@ -101,6 +106,61 @@ def _jl(spec: mujoco.MjSpec, joint: str, config: dict[str, float]) -> float:
     return spec_truth(spec, joint, config)[0].JL
 
 
+def _moments(spec: mujoco.MjSpec, joint: str, config: dict[str, float]) -> np.ndarray:
+    t = spec_truth(spec, joint, config)[0]
+    return np.array([t.MX, t.MY])
+
+
+def _moving(spec: mujoco.MjSpec, joint: str) -> tuple[str, list[str]]:
+    """(the body of joint `joint`, that body and every body below it)."""
+    model = spec.compile()
+    body = int(model.jnt_bodyid[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, joint)])
+    return model.body(body).name, _subtree(model, body)
+
+
+def _across(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit vectors orthogonal to `axis` and to each other."""
+    a = axis / np.linalg.norm(axis)
+    e1 = np.cross(a, np.eye(3)[int(np.argmin(np.abs(a)))])
+    e1 /= np.linalg.norm(e1)
+    return e1, np.cross(a, e1)
+
+
+def _set_gravity(spec: mujoco.MjSpec, joint: str, config: dict[str, float],
+                 target: np.ndarray, notes: list[str]) -> None:
+    """Make (MX, MY) = target (module docstring): the masses (M = M_0 + c M_1, M_1 the part
+    of the moving bodies with an explicit inertial: c the least-squares factor), then the
+    joint body's centre of mass (M linear in its shift across the axis: a 2 x 2 solve);
+    appends a note when it cannot (the body has no explicit inertial, or no mass)."""
+    name, bodies = _moving(spec, joint)
+    now = _moments(spec, joint, config)
+    _scale_inertia(spec, bodies, 2.0, True)
+    part = _moments(spec, joint, config) - now
+    _scale_inertia(spec, bodies, 0.5, True)          # back (powers of two: exact)
+    c = 1 + float(part @ (target - now)) / float(part @ part) if part @ part > 0 else 1.0
+    if c > 0 and c != 1:                              # c <= 0: a reversed moment, no mass can
+        _scale_inertia(spec, bodies, c, True)
+    body = spec.body(name)
+    if not body.explicitinertial or not body.mass > 0:
+        notes.append(f"MX, MY: body '{name}' has no explicit inertial with a mass; its centre "
+                     "of mass cannot be moved")
+        return
+    base, ipos = _moments(spec, joint, config), np.array(body.ipos)
+    steps = _across(np.array(spec.joint(joint).axis))
+    slopes = []
+    for e in steps:                                   # M is linear in the shift: one step each
+        body.ipos = ipos + e
+        slopes.append(_moments(spec, joint, config) - base)
+    A = np.array(slopes).T
+    if not abs(np.linalg.det(A)) > 1e-9 * float(np.abs(A).max()) ** 2:   # no turn of M
+        body.ipos = ipos
+        notes.append(f"MX, MY: moving the centre of mass of '{name}' does not turn them (a "
+                     "slide joint, or a hinge along gravity)")
+        return
+    d = np.linalg.solve(A, target - base)
+    body.ipos = ipos + d[0] * steps[0] + d[1] * steps[1]
+
+
 def _set_jl(spec: mujoco.MjSpec, joint: str, config: dict[str, float], target: float,
             notes: list[str]) -> None:
     """Make JL = target (module docstring: armature first, then rotational inertias, then
@@ -111,9 +171,7 @@ def _set_jl(spec: mujoco.MjSpec, joint: str, config: dict[str, float], target: f
         link.armature = link.armature + (target - now)
         return
     link.armature = 0.0
-    model = spec.compile()
-    jid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, joint)
-    bodies = _subtree(model, int(model.jnt_bodyid[jid]))
+    bodies = _moving(spec, joint)[1]
     for masses in (False, True):
         base = _jl(spec, joint, config)
         _scale_inertia(spec, bodies, 0.5, masses)
@@ -142,13 +200,28 @@ def corrected_spec(path: str, joint: str, config: dict[str, float],
     for name, v in values.items():
         if name not in EDITABLE:
             continue
-        if not math.isfinite(v) or v < 0 or (v == 0 and name in ("K", "Jm", "JL")):
+        if not math.isfinite(v) or (name not in GRAVITY and (
+                v < 0 or (v == 0 and name in ("K", "Jm", "JL")))):
             raise ValueError(f"{name} = {v:g} cannot be written into the model")
-        if name == "JL":
-            continue
-        _set(spec, joint, name, v)
-    if "JL" in values:
-        _set_jl(spec, joint, config, values["JL"], notes)
+        if name in ATTRIBUTES:
+            _set(spec, joint, name, v)
+    gravity = None
+    if any(n in values for n in GRAVITY):
+        now = _moments(spec, joint, config)
+        gravity = np.array([values.get(n, now[i]) for i, n in enumerate(GRAVITY)])
+    for _ in range(ROUNDS):   # JL after gravity; again when JL had to scale the masses
+        notes = []
+        if gravity is not None:
+            _set_gravity(spec, joint, config, gravity, notes)
+        if "JL" in values:
+            _set_jl(spec, joint, config, values["JL"], notes)
+        if gravity is None or np.allclose(_moments(spec, joint, config), gravity,
+                                          rtol=1e-9, atol=1e-12 * float(np.abs(gravity).max())):
+            break
+    else:
+        notes.append("MX, MY: left at " + ", ".join(
+            f"{v:.5g}" for v in _moments(spec, joint, config)) + (
+            " (with JL set)" if "JL" in values else ""))
     truth = spec_truth(spec, joint, config, str(path))[0]
     written = {n: float(getattr(truth, n)) for n in values if n in EDITABLE}
     return Corrected(spec=spec, values=written, notes=tuple(notes))

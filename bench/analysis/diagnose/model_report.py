@@ -13,6 +13,7 @@ from typing import Callable
 
 from jointbench.bench.analysis.diagnose.against_model import (FLOOR_PCT, MODELS, SIGMAS,
                                                               ModelDiagnosis, ParameterError)
+from jointbench.bench.analysis.diagnose.model_precision import CONFIDENCE, POINTS, describe
 from jointbench.bench.effects import axis_keys
 from jointbench.bench.output import OutputFolder
 from jointbench.identification.log import atomic_write_text
@@ -47,6 +48,9 @@ def to_json(md: ModelDiagnosis) -> dict:
         "parameter_errors": {n: e.to_json() for n, e in md.errors.items()},
         "wrong_parameters": list(md.wrong_parameters),
         "rule": RULE,
+        "precision": {"points": POINTS, "confidence": CONFIDENCE,
+                      "log_duration_s": len(md.log) * md.log.ts,
+                      "coarse": {n: c.to_json() for n, c in md.coarse.items()}},
         "units": {n: u for n, u in units(prismatic).items() if n in md.errors},
         "corrected_parameters": md.corrected.values,
         "extended_effects": [{"effect": n, "parameters": axis_keys(p, prismatic)}
@@ -118,6 +122,7 @@ def summary_text(md: ModelDiagnosis) -> str:
     L += [f"({RULE})", "",
           "wrong parameters: " + (", ".join(_wrong(md.errors[n]) for n in md.wrong_parameters)
                                   or "none"),
+          describe(md.coarse),
           "named causes: " + (", ".join(md.named_causes) or "none")]
     L += [f"note: {n}" for n in md.notes]
     for label, views in (("forward view", md.forward), ("cross-validation", md.validation)):
@@ -147,6 +152,7 @@ def report_markdown(md: ModelDiagnosis) -> str:
           f"{md.errors[n].data:.5g} ({_wrong(md.errors[n])[len(n) + 1:]})"
           for n in md.wrong_parameters]
     L += [f"- effect {n}" for n in md.named_causes] or ["- no structural effect"]
+    L += [f"- {describe(md.coarse)}"]
     L += [f"- note: {n}" for n in md.notes]
     L += ["", "## 3. Models", "",
           "`corrected.xml`: the MJCF with the wrong parameters set to the data's values "
