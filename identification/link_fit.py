@@ -42,6 +42,8 @@ from jointbench.identification.instruments import instrument_log
 from jointbench.identification.link_sim import (inverse, simulate_link, simulate_link_rk4,
                                                  spectra)
 from jointbench.identification.log import Log
+from jointbench.identification.log_schema import (PLANT_INTEGRATOR_KEY, PLANT_STEPS_KEY,
+                                                   PLANT_TIMECONST_KEY)
 from jointbench.identification.saturation import exclude_clipped
 
 NAMES = ("Jm", "FVm", "FSm", "K", "Kc", "Kgx", "Kgy", "a", "b")
@@ -51,8 +53,6 @@ ROUNDS_AGAIN = 1      # the same after the gravity is left out (from the converg
 GRAVITY_Z = 3.0       # MX or MY this many corrected sigma from zero keeps the gravity columns
 IV_PASSES = 2         # then passes with instruments
 B_FLOOR = 1e-6        # FV / JL kept positive (the link's response needs some damping)
-INTEGRATOR_KEY = "integrator"              # log metadata (docs/log-format.md, descriptive)
-TIMECONST_KEY = "friction_timeconst_s"     # the simulated model's MuJoCo friction time constant
 
 
 @dataclass(frozen=True)
@@ -77,10 +77,10 @@ def link_stepper(log: Log) -> tuple[Callable[..., tuple[np.ndarray, np.ndarray]]
     absent: a hard Coulomb friction); else `simulate_link`, a plant integrated continuously
     (a measured axis has no such keys)."""
     meta = log.meta
-    steps = meta.get(regressors.PLANT_STEPS_KEY, "").strip()
-    if steps == "1" and "RK4" in meta.get(INTEGRATOR_KEY, "").upper():
+    steps = meta.get(PLANT_STEPS_KEY, "").strip()
+    if steps == "1" and "RK4" in meta.get(PLANT_INTEGRATOR_KEY, "").upper():
         try:
-            tc = float(meta.get(TIMECONST_KEY, "0"))
+            tc = float(meta.get(PLANT_TIMECONST_KEY, "0"))
         except ValueError:
             tc = 0.0
         tc = tc if math.isfinite(tc) and tc > 0 else 0.0

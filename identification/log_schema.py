@@ -16,6 +16,11 @@ import numpy as np
 
 FORMAT_KEY = "jointbench-log"
 FORMAT_VERSION = "1"
+# The simulated plant's keys (docs/log-format.md "The simulated plant"): physics steps per
+# sample, MuJoCo's integrator, the rotor's friction time constant [s]. A measured log has none.
+PLANT_STEPS_KEY = "substeps"
+PLANT_INTEGRATOR_KEY = "integrator"
+PLANT_TIMECONST_KEY = "friction_timeconst_s"
 REQUIRED_COLUMNS = ("t", "q_m", "tau_m")
 OPTIONAL_COLUMNS = ("q", "q_ref")
 # Metadata the analyses read as numbers: key -> must the value be positive?

@@ -26,6 +26,7 @@ from jointbench.identification.filtering import (Drive, FilterSettings, as_accel
                                                  decimate_parallel, derivatives, kink_corrected,
                                                  lowpass, stencil_view, zoh_align)
 from jointbench.identification.log import Log, LogError
+from jointbench.identification.log_schema import PLANT_STEPS_KEY
 from jointbench.identification.parameters import JOINT_MOTOR, MOTOR_ONLY, MOTOR_ONLY_CORRECTED, RIGID
 
 MODELS = ("joint-motor", "motor-only", "rigid")
@@ -121,9 +122,6 @@ def _as_seen(s: FilterSettings):
     if s.stencil != 5:
         return lambda x, order: x
     return lambda x, order: as_acceleration_sees(x, s.ts, order, s.stencil)
-
-
-PLANT_STEPS_KEY = "substeps"   # log metadata: a simulator's integration steps per sample
 
 
 def _friction_models(log: Log, friction: tuple[float, float] | Mapping[str, float],

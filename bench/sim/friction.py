@@ -18,6 +18,9 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from jointbench.identification.log_schema import (PLANT_INTEGRATOR_KEY, PLANT_STEPS_KEY,
+                                                   PLANT_TIMECONST_KEY)
+
 SOFT_ERROR_MAX = 0.01   # friction error RMS over the torque RMS above which the model is warned
 
 
@@ -77,7 +80,7 @@ def soft_friction_warnings(bands: list[FrictionBand], v_motor: np.ndarray,
     return out
 
 
-META_KEY = "friction_timeconst_s"   # docs/log-format.md: the simulated axis' solreffriction
+META_KEY = PLANT_TIMECONST_KEY   # docs/log-format.md: the simulated axis' solreffriction
 
 
 def motor_timeconst(model: mujoco.MjModel, motor_dof: int) -> float:
@@ -89,11 +92,11 @@ def motor_timeconst(model: mujoco.MjModel, motor_dof: int) -> float:
 def plant_meta(model: mujoco.MjModel, motor_dof: int, substeps: int) -> dict[str, str]:
     """How the simulated plant switches its friction, as a log of it carries it: physics steps
     per sample (`substeps`), the integrator and the rotor's friction time constant (META_KEY).
-    The identification reads them (identification.regressors.PLANT_STEPS_KEY, link_fit) to
+    The identification reads them (identification.regressors, link_fit) to
     place the friction as this plant does; a measured log has none of them."""
     from jointbench.identification.log import format_meta_number
-    return {"substeps": str(substeps),
-            "integrator": mujoco.mjtIntegrator(model.opt.integrator).name,
+    return {PLANT_STEPS_KEY: str(substeps),
+            PLANT_INTEGRATOR_KEY: mujoco.mjtIntegrator(model.opt.integrator).name,
             META_KEY: format_meta_number(motor_timeconst(model, motor_dof))}
 
 
