@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from jointbench.identification.log import format_meta_number
 from jointbench.identification.log_schema import (PLANT_INTEGRATOR_KEY, PLANT_STEPS_KEY,
                                                    PLANT_TIMECONST_KEY)
 
@@ -94,7 +95,6 @@ def plant_meta(model: mujoco.MjModel, motor_dof: int, substeps: int) -> dict[str
     per sample (`substeps`), the integrator and the rotor's friction time constant (META_KEY).
     The identification reads them (identification.regressors, link_fit) to
     place the friction as this plant does; a measured log has none of them."""
-    from jointbench.identification.log import format_meta_number
     return {PLANT_STEPS_KEY: str(substeps),
             PLANT_INTEGRATOR_KEY: mujoco.mjtIntegrator(model.opt.integrator).name,
             META_KEY: format_meta_number(motor_timeconst(model, motor_dof))}
