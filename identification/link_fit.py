@@ -27,7 +27,6 @@ the paper's rate: K -0.45 -> -0.28 %, FV -33 -> -2.5 %, FS +7.9 -> +1.9 %).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from functools import partial
 from typing import Callable
@@ -75,15 +74,12 @@ def link_stepper(log: Log) -> tuple[Callable[..., tuple[np.ndarray, np.ndarray]]
     metadata says one RK4 step a sample (`substeps: 1`, `integrator: mjINT_RK4`, MuJoCo's
     arm6 and prototype at the paper's rate), with the log's `friction_timeconst_s` (0 when
     absent: a hard Coulomb friction); else `simulate_link`, a plant integrated continuously
-    (a measured axis has no such keys)."""
+    (a measured axis has no such keys). Raises LogError when the time constant is not a
+    number."""
     meta = log.meta
     steps = meta.get(PLANT_STEPS_KEY, "").strip()
     if steps == "1" and "RK4" in meta.get(PLANT_INTEGRATOR_KEY, "").upper():
-        try:
-            tc = float(meta.get(PLANT_TIMECONST_KEY, "0"))
-        except ValueError:
-            tc = 0.0
-        tc = tc if math.isfinite(tc) and tc > 0 else 0.0
+        tc = log.plant_timeconst() or 0.0
         return (partial(simulate_link_rk4, timeconst=tc),
                 f"the link's friction as the log's one RK4 step a sample switches it (at each "
                 f"stage; soft, time constant {tc:g} s)")

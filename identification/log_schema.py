@@ -25,13 +25,15 @@ REQUIRED_COLUMNS = ("t", "q_m", "tau_m")
 OPTIONAL_COLUMNS = ("q", "q_ref")
 # Metadata the analyses read as numbers: key -> must the value be positive?
 NUMERIC_META = {"sample_rate_hz": True, "gravity": False, "kp": False, "kv": False,
-                "ki": False, "tau_max": True, "gear_ratio": True}
+                "ki": False, "tau_max": True, "gear_ratio": True, PLANT_STEPS_KEY: True,
+                PLANT_TIMECONST_KEY: False}
 BOOLEAN_META = ("velocity_feedforward",)
 # The unit word a numeric key may carry after its number (docs/log-format.md), spaces, `*`
 # and `.` between unit symbols ignored: SI on the joint side (a prismatic axis: N, m).
 META_UNITS = {"sample_rate_hz": ("Hz",), "gravity": ("m/s^2", "m/s2", "m s^-2", "m/s²"),
               "kp": ("1/s", "s^-1"), "kv": ("N m s/rad", "N s/m"),
-              "ki": ("N m/rad", "N/m"), "tau_max": ("N m", "N"), "gear_ratio": ()}
+              "ki": ("N m/rad", "N/m"), "tau_max": ("N m", "N"), "gear_ratio": (),
+              PLANT_STEPS_KEY: (), PLANT_TIMECONST_KEY: ("s",)}
 # The metadata rate is used as it is when it agrees with `t` to this relative precision
 # (the precision of the written time stamps); otherwise the rate comes from `t`.
 RATE_AGREEMENT = 1e-6
@@ -122,6 +124,13 @@ class Log:
         if key not in self.meta:
             return None
         return meta_number(key, self.meta[key], self.path, self.meta_lines.get(key))
+
+    def plant_timeconst(self) -> float | None:
+        """The simulated plant's friction time constant [s] (PLANT_TIMECONST_KEY, MuJoCo's
+        solreffriction), None when the log has none or gives MuJoCo's direct form (<= 0);
+        LogError (file, line) when it is not a number."""
+        value = self.meta_float(PLANT_TIMECONST_KEY)
+        return value if value is not None and value > 0 else None
 
     def meta_bool(self, key: str, default: bool) -> bool:
         if key not in self.meta:

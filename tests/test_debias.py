@@ -8,6 +8,7 @@ estimate is within 0.25 % and 2 sigma on every seed. README "Bias correction".
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from dataclasses import astuple
@@ -195,9 +196,11 @@ def test_friction_timeconst_comes_from_the_log():
     from jointbench.bench.sim.nominal import SOLREF_FRICTION
     log = run_experiment("arm6", "axis4", seed=1, duration=6.0).log
     assert float(log.meta[META_KEY]) == pytest.approx(0.00025)
-    assert timeconst_for_log(log.meta, SOLREF_FRICTION[0]) == (
+    assert timeconst_for_log(log, SOLREF_FRICTION[0]) == (
         pytest.approx(0.00025), f"the log's {META_KEY} (the simulated model's)")
-    tc, source = timeconst_for_log({}, SOLREF_FRICTION[0])
+    bare = dataclasses.replace(log, meta={k: v for k, v in log.meta.items() if k != META_KEY})
+    tc, source = timeconst_for_log(bare, SOLREF_FRICTION[0])
     assert tc == SOLREF_FRICTION[0] and source.startswith("default")
-    assert timeconst_for_log({META_KEY: "nan"}, 0.002)[1].startswith("default")
-    assert timeconst_for_log(log.meta, 0.002, given=0.001) == (0.001, "given (--friction-timeconst)")
+    direct = dataclasses.replace(log, meta={**log.meta, META_KEY: "-1000"})  # MuJoCo's direct form
+    assert timeconst_for_log(direct, 0.002)[1].startswith("default")
+    assert timeconst_for_log(log, 0.002, given=0.001) == (0.001, "given (--friction-timeconst)")

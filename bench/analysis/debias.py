@@ -133,7 +133,7 @@ def debias(log: Log, ident: Identification, *, replicas: int = DEFAULT_REPLICAS,
     except RefineError as err:
         raise DebiasError(str(err).replace("--refine", "--debias")) from None
     sens = _sensors(log, sensors)
-    tc, source = timeconst_for_log(log.meta, SOLREF_FRICTION[0], friction_timeconst)
+    tc, source = timeconst_for_log(log, SOLREF_FRICTION[0], friction_timeconst)
     model, axis = axis_for_log(log, theta, "bias-correction axis", tc)
     notes = [*notes, f"nominal axis: Coulomb friction time constant {1e3 * tc:g} ms "
              f"(solreffriction), {source}"]

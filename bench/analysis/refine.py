@@ -192,7 +192,7 @@ def axis_for_log(log: Log, theta: dict[str, float], source: str,
     log's sample period, torque limit, gravity and joint name; its friction time constant
     `friction_timeconst`, else the log's (bench.sim.friction.timeconst_for_log)."""
     if friction_timeconst is None:
-        friction_timeconst = timeconst_for_log(log.meta, SOLREF_FRICTION[0])[0]
+        friction_timeconst = timeconst_for_log(log, SOLREF_FRICTION[0])[0]
     spec = two_mass_axis(*(theta[n] for n in ("Jm", "FVm", "FSm", "K", "JL", "FV", "FS",
                                                "MX", "MY")),
                          timestep=log.ts, tau_max=log.meta_float("tau_max"),
@@ -367,7 +367,7 @@ def refine(log: Log, ident: Identification, *, params: tuple[str, ...] | None = 
     sigma, sigma_c, withdrawn = withdraw_when_unmoved(theta, start, sigma, sigma_c,
                                                       ident.physical_sigma_corrected)
     notes += withdrawn
-    tc, source = timeconst_for_log(log.meta, SOLREF_FRICTION[0])
+    tc, source = timeconst_for_log(log, SOLREF_FRICTION[0])
     notes.append(f"nominal axis: Coulomb friction time constant {1e3 * tc:g} ms "
                  f"(solreffriction), {source}")
     return RefineResult(

@@ -12,7 +12,6 @@ gives v_b ~ 1e-4 rad/s.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import mujoco
@@ -20,7 +19,7 @@ import numpy as np
 
 from jointbench.identification.log import format_meta_number
 from jointbench.identification.log_schema import (PLANT_INTEGRATOR_KEY, PLANT_STEPS_KEY,
-                                                   PLANT_TIMECONST_KEY)
+                                                   PLANT_TIMECONST_KEY, Log)
 
 SOFT_ERROR_MAX = 0.01   # friction error RMS over the torque RMS above which the model is warned
 
@@ -100,20 +99,17 @@ def plant_meta(model: mujoco.MjModel, motor_dof: int, substeps: int) -> dict[str
             META_KEY: format_meta_number(motor_timeconst(model, motor_dof))}
 
 
-def timeconst_for_log(meta: dict[str, str], default: float, given: float | None = None
+def timeconst_for_log(log: Log, default: float, given: float | None = None
                       ) -> tuple[float, str]:
     """The friction time constant of a nominal axis replaying a log, and where it comes from:
     `given` (the command's flag), else the log's META_KEY (a jointbench log carries its
     model's), else `default`, said to be one: a measured robot's friction has no MuJoCo time
-    constant, and the bias correction depends on it (README, "Bias correction")."""
+    constant, and the bias correction depends on it (README, "Bias correction"). Raises
+    LogError when the log's value is not a number."""
     if given is not None:
         return given, "given (--friction-timeconst)"
-    raw = meta.get(META_KEY)
-    try:
-        value = float(raw) if raw is not None else math.nan
-    except ValueError:
-        value = math.nan
-    if math.isfinite(value) and value > 0:
+    value = log.plant_timeconst()
+    if value is not None:
         return value, f"the log's {META_KEY} (the simulated model's)"
     return default, (f"default: the log has no {META_KEY}; a measured axis's Coulomb friction "
                      "has none, and the correction of Jm and the frictions depends on it "
