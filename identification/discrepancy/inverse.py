@@ -75,12 +75,21 @@ def _rank(cands: list[Candidate]) -> list[Candidate]:
                                         -c.heldout_pct))
 
 
+def _model(causes: tuple[Candidate, ...]) -> tuple[tuple[str, dict], ...]:
+    """The named causes with their values as the last one's fit has them (a cause that shapes
+    the same law as one before it searches that one's value again: candidates._coupled)."""
+    if not causes:
+        return ()
+    last = causes[-1]
+    return last.base + ((last.effect, last.fixed),)
+
+
 def _round(nom: Nominal, names: list[str], causes: tuple[Candidate, ...],
            m: int) -> tuple[list[Candidate], str]:
     """One round: the candidates ranked, the one to name first at the top, and a note when
     the log cannot tell a richer candidate from it ("" otherwise: _simplest_first)."""
-    ref = reference(nom, tuple((c.effect, c.fixed) for c in causes), m=m)
-    return _simplest_first(_rank([candidate(nom, name, ref) for name in names]), nom, causes, m)
+    ref = reference(nom, _model(causes), m=m)
+    return _simplest_first(_rank([candidate(nom, name, ref) for name in names]), nom, m)
 
 
 def _better(worse: Candidate | np.ndarray, better: Candidate | np.ndarray,
@@ -96,17 +105,16 @@ def _better(worse: Candidate | np.ndarray, better: Candidate | np.ndarray,
 
 
 def _on_top(nom: Nominal, richer: Candidate, simpler: Candidate,
-            causes: tuple[Candidate, ...], m: int) -> tuple[float, float]:
-    """Does `richer` add to `simpler` what the log supports? `richer` fitted on top of the
-    causes and `simpler`, and the segment test without margin (_better) of its held-out
+            m: int) -> tuple[float, float]:
+    """Does `richer` add to `simpler` what the log supports? `richer` fitted on top of
+    `simpler` and the causes under it (as `simpler`'s fit has them), and the segment test without margin (_better) of its held-out
     errors against `simpler`'s: t and p (p = 1 for an unphysical fit)."""
-    base = tuple((c.effect, c.fixed) for c in causes) + ((simpler.effect, simpler.fixed),)
-    c = candidate(nom, richer.effect, reference(nom, base, m=m))
+    c = candidate(nom, richer.effect, reference(nom, _model((simpler,)), m=m))
     t, p = _better(simpler, c, len(nom.sig.index))
     return t, (1.0 if c.unphysical else p)
 
 
-def _simplest_first(ranked: list[Candidate], nom: Nominal, causes: tuple[Candidate, ...],
+def _simplest_first(ranked: list[Candidate], nom: Nominal,
                     m: int) -> tuple[list[Candidate], str]:
     """Parsimony among the significant: the best is named over a simpler significant
     candidate S (fewer parameters, or the effect it reduces to: registry `reduces_to`) only
@@ -126,13 +134,13 @@ def _simplest_first(ranked: list[Candidate], nom: Nominal, causes: tuple[Candida
     sig = [c for c in ranked if c.significant]
     alpha = best.alpha
     richer = next((c for c in sig if EFFECTS[c.effect].reduces_to == best.effect), None)
-    if richer is not None and _on_top(nom, richer, best, causes, m)[1] < alpha:
+    if richer is not None and _on_top(nom, richer, best, m)[1] < alpha:
         return [richer] + [c for c in ranked if c is not richer], ""
     first, note = best, ""
     for s in sig:
         if not (s.k < first.k or EFFECTS[first.effect].reduces_to == s.effect):
             continue
-        t, p = _on_top(nom, first, s, causes, m)
+        t, p = _on_top(nom, first, s, m)
         if p >= alpha:
             note = (f"{s.effect} or {first.effect}: this log cannot tell them apart "
                     f"({first.effect} explains {first.heldout_pct:.3g} % of the held-out "
@@ -195,15 +203,15 @@ def _pruned(nom: Nominal, causes: tuple[Candidate, ...],
             i += 1
             continue
         others = causes[:i] + causes[i + 1:]
-        ref = reference(nom, tuple((o.effect, o.fixed) for o in others))
+        values = dict(_model(causes))
+        ref = reference(nom, tuple((o.effect, values[o.effect]) for o in others))
         again = candidate(nom, c.effect, ref)
         if _better(ref.scores.errors, again, n)[1] < c.alpha and not again.unphysical:
             i += 1
             continue
         chain: tuple[Candidate, ...] = ()
         for o in others:
-            ref = reference(nom, tuple((x.effect, x.fixed) for x in chain),
-                            m=max(1, round(ALPHA / o.alpha)))
+            ref = reference(nom, _model(chain), m=max(1, round(ALPHA / o.alpha)))
             chain += (candidate(nom, o.effect, ref),)
         causes, notes, i = chain, tuple(x for x in notes if x[0] != c.effect), 0
     return causes, notes

@@ -45,6 +45,7 @@ from jointbench.bench.analysis.diagnose.run import diagnose, extended_parameters
 from jointbench.bench.effects import write_effects
 from jointbench.bench.sim.nominal import write_xml
 from jointbench.bench.sim.replay import ReplayError, forward_errors
+from jointbench.identification.discrepancy.candidates import joint_parameters
 from jointbench.identification.identify import Identification, identify
 from jointbench.identification.log import Log
 from jointbench.identification.parameters import FRICTIONS, STIFFNESS_AND_INERTIAS
@@ -284,6 +285,9 @@ def _structural(log: Log, errors: dict[str, ParameterError], model_fs: float,
     if fs is not None and fs.significant and model_fs == 0 and fs.data > 0:
         named.append("link_coulomb")
     causes = getattr(d.inverse, "causes", None) or ((d.named,) if d.named else ())
+    # each cause's values from the one fit of all of them (a cause's own fit may predate a
+    # later one that searched its value again: identification.discrepancy.candidates)
+    joint = dict(joint_parameters(d.inverse.nominal, [c for c in causes if c is not None]))
     for c in causes:
         if c is None or c.effect in named:
             continue
@@ -292,7 +296,8 @@ def _structural(log: Log, errors: dict[str, ParameterError], model_fs: float,
             notes.append(f"{c.effect}: carried by {AS_PARAMETERS[c.effect]}; see the "
                          "parameter errors")
             continue
-        effects.append((c.effect, extended_parameters(c, d.inverse.nominal)))
+        effects.append((c.effect, {**extended_parameters(c, d.inverse.nominal),
+                                   **joint.get(c.effect, {})}))
     return effects, named, notes, d
 
 
