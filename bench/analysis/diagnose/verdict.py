@@ -20,7 +20,10 @@ answer is then "inconclusive", with the reason.
   development battery: an offset and a ripple on a noisy log at 23.5 % -> 23.9 %, within the
   spread; a ripple of period 0.0105 rad, fitted at 1.86 N m for 2.08, at 36.1 % -> 48.1 % on
   a replay that ran 0.0024 rad off the logged motor angle, beyond it.) An extended model that
-  does not replay while the nominal does is worse too.
+  does not replay while the nominal does is worse too. A cause periodic in the motor angle
+  (torque_ripple) is judged only on the segments where both replays keep its phase
+  (bench.analysis.diagnose.forward.forward_scope); on fewer than a quarter of them the
+  forward view cannot judge it, and the diagnosis says so (`forward_note`).
 """
 
 from __future__ import annotations
