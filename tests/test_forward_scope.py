@@ -133,3 +133,36 @@ def test_forward_worse_on_the_judged_segments():
 
 def seg_mask(which) -> np.ndarray:
     return np.array([which(k) for k in range(SEGMENTS)])
+
+
+def test_gain_reason_judges_a_ripple_where_the_phase_is_kept():
+    """verdict.gain_reason on a torque_ripple: the replays keep its phase in the first half
+    only; the extended replay is 1.2 times worse there and far better in the second half (a
+    gain over 1 on the whole log): overruled, with the judged segments' errors. When the
+    phase is kept in fewer than MIN_JUDGED segments, the forward view does not overrule."""
+    from jointbench.bench.analysis.diagnose.verdict import gain_reason
+
+    rng = np.random.default_rng(5)
+    seg = np.arange(N) * SEGMENTS // N
+    tau = 10 + rng.standard_normal(N)
+    q = np.zeros(N)
+    small, large = np.full(N, 0.02 * PERIOD), np.full(N, 0.5 * PERIOD)
+    nominal_tau = tau + rng.standard_normal(N)
+    extended_tau = tau + np.where(seg < 20, 1.2, 0.1) * rng.standard_normal(N)
+
+    def diagnosis(off_extended):
+        d = _diagnosis(q, small, off_extended)
+        d.log.tau_m = tau
+        for view, t in ((d.forward_nominal, nominal_tau), (d.forward_extended, extended_tau)):
+            view.tau_m = t
+            view.tau_rel_pct = 100 * np.linalg.norm(t - tau) / np.linalg.norm(tau)
+        d.inverse = SimpleNamespace(named=SimpleNamespace(effect="torque_ripple",
+                                                          before_pct=20.0, after_pct=10.0))
+        return d
+
+    d = diagnosis(np.where(seg < 20, small, large))
+    assert d.forward_extended.tau_rel_pct < d.forward_nominal.tau_rel_pct   # gain > 1 overall
+    why = gain_reason(d)
+    assert "worse in the forward view on the 20 segments it judges" in why
+    # judged nowhere but MIN_JUDGED - 1 segments: no forward verdict
+    assert gain_reason(diagnosis(np.where(seg < MIN_JUDGED - 1, small, large))) == ""
