@@ -22,10 +22,11 @@ from jointbench.bench.analysis.diagnose.forward import (MIN_JUDGED, PHASE_LIMIT,
 from jointbench.bench.analysis.diagnose.verdict import forward_worse  # noqa: E402
 from jointbench.bench.sim import nominal as nominal_axes  # noqa: E402
 from jointbench.bench.sim.replay import replay  # noqa: E402
+from jointbench.identification.defaults import PAPER_RATE  # noqa: E402
 from jointbench.identification.discrepancy import SEGMENTS  # noqa: E402
 from jointbench.identification.log import Log  # noqa: E402
 
-RATE = 350.87
+RATE = PAPER_RATE
 N = 4000          # samples: 100 per segment
 PERIOD = 0.01     # rad
 
@@ -85,7 +86,8 @@ def test_phase_errors_analytic():
 def _diagnosis(q_m: np.ndarray, off_nominal: np.ndarray, off_extended: np.ndarray,
                effect: str = "torque_ripple"):
     view = lambda off: SimpleNamespace(q_m=q_m + off)   # noqa: E731
-    return SimpleNamespace(log=SimpleNamespace(q_m=q_m), forward_nominal=view(off_nominal),
+    return SimpleNamespace(log=SimpleNamespace(q_m=q_m, meta={}),
+                           forward_nominal=view(off_nominal),
                            forward_extended=view(off_extended),
                            causes=(SimpleNamespace(effect=effect),),
                            extended_parameters={"ripple_period_rad": PERIOD})
@@ -166,3 +168,12 @@ def test_gain_reason_judges_a_ripple_where_the_phase_is_kept():
     assert "worse in the forward view on the 20 segments it judges" in why
     # judged nowhere but MIN_JUDGED - 1 segments: no forward verdict
     assert gain_reason(diagnosis(np.where(seg < MIN_JUDGED - 1, small, large))) == ""
+
+
+def test_phase_errors_of_a_plant_that_held_the_torque_too():
+    """A log of a MuJoCo plant held the ripple over the sample as the replay does: only the
+    position error counts."""
+    dq, e = 0.001, 0.0007
+    q = dq * np.arange(N)
+    s = phase_errors(q, [q + e], PERIOD, held=True)
+    assert s == pytest.approx(np.full(SEGMENTS, 2 * math.pi / PERIOD * e), rel=1e-9)

@@ -87,7 +87,7 @@ def plant_substeps(log: Log) -> int:
     simulator's soft family without feedforward, noise-free (40 s, 350.87 Hz, seed 7): the
     true axis replays its log at 10.9 % torque error with one step a sample, 0.56 % with 8;
     the identified nominal at 10.7 % and 7.2 % with 2 steps or more."""
-    if log.meta.get(PLANT_INTEGRATOR_KEY, "").strip().startswith("mjINT_"):
+    if _mujoco_plant(log):
         steps = log.meta_float(PLANT_STEPS_KEY)
         if steps is not None and steps >= 1:
             return int(steps)
@@ -160,12 +160,11 @@ def add_forward_view(d: Diagnosis, say: Callable[[str], None]) -> Diagnosis:
     return d
 
 
-# A torque periodic in the motor angle (torque_ripple, period p) replayed with a phase error
-# delta ~ N(0, s^2) correlates with the logged one by exp(-s^2 / 2) on average; adding it to
-# the model lowers the squared error of that term only when the correlation exceeds 1/2 (the
-# error A^2 (1 - rho) + ... of the replayed ripple against A^2 / 2 without it), i.e. for
-# s < sqrt(2 ln 2) = 1.18 rad. Where the replay is farther off, the forward view cannot tell
-# a right ripple from a wrong one.
+# A torque periodic in the motor angle (torque_ripple, amplitude A, period p) replayed with a
+# phase error delta ~ N(0, s^2) correlates with the logged one by rho = exp(-s^2 / 2) on
+# average; the replayed ripple then leaves E (r - r')^2 = A^2 (1 - rho) of it, against A^2 / 2
+# without it: adding it lowers the error only for rho > 1/2, s < sqrt(2 ln 2) = 1.18 rad.
+# Where the replay is farther off, the forward view cannot tell a right ripple from a wrong one.
 PHASE_LIMIT = math.sqrt(2.0 * math.log(2.0))   # rad
 MIN_JUDGED = SEGMENTS // 4   # segments the forward view must judge (else: it cannot judge)
 PERIODIC = {"torque_ripple": "ripple_period_rad"}   # effect -> its spatial period parameter
@@ -187,17 +186,24 @@ def _segment_rms(x: np.ndarray) -> np.ndarray:
     return np.sqrt(segment_sums(x ** 2) / np.maximum(count, 1))
 
 
-def phase_errors(log_q_m: np.ndarray, replays: list[np.ndarray], period: float) -> np.ndarray:
+def phase_errors(log_q_m: np.ndarray, replays: list[np.ndarray], period: float,
+                 held: bool = False) -> np.ndarray:
     """Per segment, the RMS phase error [rad] of a torque of spatial `period` in the motor
     angle as the replays apply it against the one the logged motion carried:
     2 pi / period x sqrt(e^2 + (dq / 2)^2), e the worst replay's RMS motor-angle error in the
-    segment, dq the logged motion per sample (the replay holds the torque of the sample's
-    angle, a continuous one follows the angle through the sample: half a sample's motion off
-    on average)."""
+    segment, dq the logged motion per sample: the replay holds the torque of the sample's
+    angle over the sample (bench.sim.loop), a continuous one follows the angle through it,
+    half a sample's motion off on average. `held`: the log's plant held it too (a jointbench
+    log of a MuJoCo plant, whose bench loop is the replay's): dq counts 0."""
     q = np.asarray(log_q_m, float)
     e = np.max([_segment_rms(np.asarray(r, float) - q) for r in replays], axis=0)
-    half = _segment_rms(0.5 * np.diff(q, append=q[-1]))
+    half = 0.0 if held else _segment_rms(0.5 * np.diff(q, append=q[-1]))
     return 2.0 * math.pi / period * np.sqrt(e ** 2 + half ** 2)
+
+
+def _mujoco_plant(log: Log) -> bool:
+    """A jointbench log of a MuJoCo plant (its `integrator` one of MuJoCo's, mjINT_...)."""
+    return log.meta.get(PLANT_INTEGRATOR_KEY, "").strip().startswith("mjINT_")
 
 
 def forward_scope(d: Diagnosis) -> ForwardScope:
@@ -211,12 +217,14 @@ def forward_scope(d: Diagnosis) -> ForwardScope:
     if a is None or b is None or not periods:
         return ForwardScope(None, True, "")
     effect, period = min(periods, key=lambda x: x[1])
-    s = phase_errors(d.log.q_m, [a.q_m, b.q_m], period)
+    held = _mujoco_plant(d.log)
+    s = phase_errors(d.log.q_m, [a.q_m, b.q_m], period, held)
+    motion = "" if held else " and half a sample's motion"
     keep = s < PHASE_LIMIT
     how = (f"the replays keep the phase of {effect} (period {period:.4g}) within "
-           f"{PHASE_LIMIT:.2f} rad RMS (position error and half a sample's motion, against the "
-           f"period) in {int(keep.sum())} of {SEGMENTS} segments of the experiment "
-           f"(median phase error {float(np.median(s)):.2f} rad)")
+           f"{PHASE_LIMIT:.2f} rad RMS (position error{motion}, against the period) in "
+           f"{int(keep.sum())} of {SEGMENTS} segments of the experiment (median phase error "
+           f"{float(np.median(s)):.2f} rad)")
     if keep.sum() < MIN_JUDGED:
         return ForwardScope(None, False, f"the forward view cannot judge {effect} on this log: "
                             f"{how}, under {MIN_JUDGED}; {effect} is named on the inverse view "
