@@ -45,7 +45,7 @@ def report_markdown(d: Diagnosis, figures: dict[str, str]) -> str:
               f"- motor position error: {f.q_m_rms:.4g} RMS ({f.q_m_rel_pct:.2f} % of its motion)"]
         if f.q_rms is not None:
             L.append(f"- link position error: {f.q_rms:.4g} RMS")
-    elif d.forward_note:
+    if d.forward_note:
         L += ["", f"Forward view: {d.forward_note}"]
     for key in ("structure", "spectrum", "inverse", "forward", "forward_frf"):
         if key in figures:
@@ -180,7 +180,7 @@ def summary_text(d: Diagnosis) -> str:
         f = d.forward_nominal
         L.append(f"forward view, nominal: torque {f.tau_rel_pct:.2f} % RMS, q_m {f.q_m_rms:.3g} "
                  "RMS" + (f", q {f.q_rms:.3g} RMS" if f.q_rms is not None else ""))
-    elif d.forward_note:
+    if d.forward_note:
         L.append(f"forward view: {d.forward_note}")
     L += ["", f"{'effect':20s} {'signif.':>7s} {'held-out %':>10s} {'t':>7s} "
               f"{'explained %':>11s} {'delta BIC':>10s} {'size %':>7s}  parameters"]

@@ -20,13 +20,17 @@ answer is then "inconclusive", with the reason.
   development battery: an offset and a ripple on a noisy log at 23.5 % -> 23.9 %, within the
   spread; a ripple of period 0.0105 rad, fitted at 1.86 N m for 2.08, at 36.1 % -> 48.1 % on
   a replay that ran 0.0024 rad off the logged motor angle, beyond it.) An extended model that
-  does not replay while the nominal does is worse too.
+  does not replay while the nominal does is worse too. A cause periodic in the motor angle
+  (torque_ripple) is judged only on the segments where both replays keep its phase
+  (bench.analysis.diagnose.forward.forward_scope); on fewer than a quarter of them the
+  forward view cannot judge it, and the diagnosis says so (`forward_note`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from jointbench.bench.analysis.diagnose.forward import forward_scope
 from jointbench.bench.analysis.diagnose.types import Diagnosis
 from jointbench.identification.discrepancy.heldout import ALPHA, segment_sums, segment_t
 from jointbench.identification.sanity import mislabel_reason
@@ -73,31 +77,47 @@ def gain_reason(d: Diagnosis) -> str:
         return (f"{c.effect}'s extended model does not replay while the nominal does "
                 f"({d.forward_note})")
     if a is not None and b is not None:
-        t, p = forward_worse(d.log.tau_m, a.tau_m, b.tau_m)
-        gain = f"gain {a.tau_rel_pct / b.tau_rel_pct:.2f}x"
+        scope = forward_scope(d)   # a torque periodic in q_m: only where the replays keep its phase
+        if not scope.judged:
+            return ""              # the forward view cannot judge it (d.forward_note says so)
+        t, p = forward_worse(d.log.tau_m, a.tau_m, b.tau_m, scope.keep)
+        ea, eb, where = a.tau_rel_pct, b.tau_rel_pct, ""
+        if scope.keep is not None:
+            ea, eb = (_error_pct(d.log.tau_m, x.tau_m, scope.keep) for x in (a, b))
+            where = f" on the {int(scope.keep.sum())} segments it judges"
+        gain = f"gain {ea / eb:.2f}x"
         improves = f"though the inverse view improves ({c.before_pct:.3g} % -> {c.after_pct:.3g} %)"
         if p < ALPHA:
-            return (f"{c.effect}'s extended model is worse in the forward view: torque error "
-                    f"{a.tau_rel_pct:.3g} % -> {b.tau_rel_pct:.3g} % ({gain}; worse over the "
+            return (f"{c.effect}'s extended model is worse in the forward view{where}: torque "
+                    f"error {ea:.3g} % -> {eb:.3g} % ({gain}; worse over the "
                     f"experiment's segments with t = {t:.3g}, p = {p:.2g} < {ALPHA:g}), "
                     f"{improves}: the fit does not describe the experiment")
-        if not b.tau_rel_pct < a.tau_rel_pct:
+        if not eb < ea:
             # issue 14, item 4: no named effect whose extended model has a gain below 1, even
             # when the replay's noise could explain the loss: the replay does not confirm it
-            return (f"{c.effect}'s extended model does not improve the forward view: torque "
-                    f"error {a.tau_rel_pct:.3g} % -> {b.tau_rel_pct:.3g} % ({gain}, under 1; "
+            return (f"{c.effect}'s extended model does not improve the forward view{where}: "
+                    f"torque error {ea:.3g} % -> {eb:.3g} % ({gain}, under 1; "
                     f"within the experiment's spread, t = {t:.3g}, p = {p:.2g}), {improves}: "
                     "the replay does not confirm it")
     return ""
 
 
-def forward_worse(tau: np.ndarray, nominal: np.ndarray, extended: np.ndarray) -> tuple[float, float]:
+def _error_pct(tau: np.ndarray, replayed: np.ndarray, keep: np.ndarray) -> float:
+    """The replay's torque error [% RMS of the logged torque] over the kept segments."""
+    tau = np.asarray(tau, float)
+    num, den = segment_sums((np.asarray(replayed) - tau) ** 2), segment_sums(tau ** 2)
+    return 100.0 * float(np.sqrt(num[keep].sum() / den[keep].sum()))
+
+
+def forward_worse(tau: np.ndarray, nominal: np.ndarray, extended: np.ndarray,
+                  keep: np.ndarray | None = None) -> tuple[float, float]:
     """Is the extended model's replayed torque significantly worse than the nominal's? The
     segments' log-ratios log(sum e_ext^2 / sum e_nom^2) (e = replayed - logged torque, the
-    held-out test's SEGMENTS contiguous segments, identification.discrepancy.heldout): t of
-    their mean with the successive-difference spread, and its one-sided p-value."""
+    held-out test's SEGMENTS contiguous segments, identification.discrepancy.heldout; only
+    those `keep` marks when given): t of their mean with the successive-difference spread,
+    and its one-sided p-value."""
     tau = np.asarray(tau, float)
     h0 = segment_sums((np.asarray(nominal) - tau) ** 2)
     h1 = segment_sums((np.asarray(extended) - tau) ** 2)
-    ok = (h0 > 0) & (h1 > 0)
+    ok = (h0 > 0) & (h1 > 0) & (True if keep is None else keep)
     return segment_t(np.log(h1[ok] / h0[ok]))
