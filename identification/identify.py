@@ -118,7 +118,9 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
     stiffness in the band (`stiffness_rejection`; with q, for example a rigid axis whose q
     follows q_m). Without settings the filter is `choose_filter(log, f1_hz)` (the first mode
     measured on the log when f1 is not given); the result carries the first mode, the
-    stencil's reason and the warnings of `band_checks.band_warnings`; with `settings`,
+    stencil's reason and the warnings of `band_checks.band_warnings`, and a joint-motor fit
+    with a mode found is fitted again in the wide band and the more precise kept
+    (`band_choice.choose_band`, reported in `band`); with `settings`,
     `first_mode` (what the caller measured, for example before overriding wn or Nd) is
     reported and checked against them. Raises LogError for unusable logs and NotIdentifiable when
     nothing is excited.
