@@ -21,7 +21,7 @@ from scipy import signal
 from scipy.optimize import brentq
 
 from jointbench.identification.band_checks import stencil_gain
-from jointbench.identification.defaults import STENCIL_DISTORTION_MAX, with_stencil
+from jointbench.identification.defaults import STENCIL_DISTORTION_MAX, stencil_for
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.log import Log
 
@@ -99,7 +99,7 @@ def wide_settings(log: Log, base: FilterSettings) -> tuple[FilterSettings | None
     """The wide candidate: `base`'s Butterworth and chain, Nd = ceil(0.8 Fs / (2 top)) (the
     smallest decimation whose cutoff stays at or under top), top = the least of the
     excitation's top, the 5-point stencil's (`stencil_top_hz`) and the Butterworth's wn / 2 pi,
-    and the stencil and edge `defaults.with_stencil` gives that band. Returns (None, top, why) when that Nd is
+    and the stencil `stencil_for` gives that band. Returns (None, top, why) when that Nd is
     not below base's (the chooser's band reaches the top already)."""
     exc, what = excitation_top_hz(log)
     rate = log.sample_rate_hz
@@ -110,7 +110,8 @@ def wide_settings(log: Log, base: FilterSettings) -> tuple[FilterSettings | None
     if nd >= base.Nd:
         return None, exc, (f"the chooser's band (cutoff {base.decimated_cutoff_hz:.3g} Hz) "
                            f"already reaches the top {top:.3g} Hz")
-    return with_stencil(replace(base, Nd=nd)), exc, f"excitation top from {what}"
+    wide = replace(base, Nd=nd)
+    return replace(wide, stencil=stencil_for(wide)[0]), exc, f"excitation top from {what}"
 
 
 def max_rel_sigma(physical: dict[str, float], sigma: dict[str, float]) -> float:

@@ -52,16 +52,7 @@ def default_settings(rate_hz: float, f1_hz: float | None = None, m: int = 4) -> 
     else:
         s = FilterSettings(wn=wn_from_f1(rate_hz, f1_hz, m), m=m, Nd=nd_from_f1(rate_hz, f1_hz),
                            ts=ts)
-    return with_stencil(s)
-
-
-def with_stencil(s: FilterSettings) -> FilterSettings:
-    """`s` with the chooser's stencil (`stencil_for`) and, for it, the edge its own end
-    transients ask (`filtering.end_transient_rows`): what every chosen band carries."""
-    from jointbench.identification.filtering import end_transient_rows
-
-    s = replace(s, stencil=stencil_for(s)[0])
-    return replace(s, edge=end_transient_rows(s))
+    return replace(s, stencil=stencil_for(s)[0])
 
 
 STENCIL_DISTORTION_MAX = 0.01   # 1 - sinc(w T)^4 at the decimated cutoff, eq. (22) kept below
@@ -134,8 +125,8 @@ def generic_settings(rate_hz: float, m: int = 4) -> FilterSettings:
     double differentiation amplifies."""
     from jointbench.identification.filtering import FilterSettings
 
-    return with_stencil(FilterSettings(wn=2 * np.pi * GENERIC_WN_RATIO * rate_hz, m=m,
-                                       Nd=GENERIC_ND, ts=1.0 / rate_hz))
+    return FilterSettings(wn=2 * np.pi * GENERIC_WN_RATIO * rate_hz, m=m, Nd=GENERIC_ND,
+                          ts=1.0 / rate_hz)
 
 
 @dataclass(frozen=True)
@@ -163,6 +154,7 @@ def choose_filter(log: Log, f1_hz: float | None = None) -> FilterChoice:
         s = default_settings(rate, mode.f1_hz)
         return FilterChoice(s, mode, stencil_for(s)[1])
     s = generic_settings(rate)
+    s = replace(s, stencil=stencil_for(s)[0])
     text = (f"no resonance found ({mode.note}): generic band wn = {s.wn:.4g} rad/s "
             f"({s.wn / (2 * np.pi):.4g} Hz, a tenth of the rate), Nd = {s.Nd}, decimated cutoff "
             f"{s.decimated_cutoff_hz:.3g} Hz; give --f1 if the axis has a mode")

@@ -286,32 +286,6 @@ def decimate_parallel(y: np.ndarray, W: np.ndarray, settings: FilterSettings
     return yd[ok], Wd[ok], index[ok]
 
 
-# The end transients are dropped until they have decayed to this share of their start: the
-# same 1 % relative budget as the differentiator's distortion (defaults.STENCIL_DISTORTION_MAX)
-EDGE_DECAY = 0.01
-
-
-def _slowest_decay_samples(b_a_or_zpk: tuple) -> float:
-    """Time constant [samples] of a digital filter's slowest pole, -1 / ln max |p|."""
-    return float(-1.0 / np.log(np.max(np.abs(b_a_or_zpk[1]))))
-
-
-def end_transient_rows(s: FilterSettings, nd: int = 4) -> int:
-    """Decimated samples to drop at each end (`FilterSettings.edge`) for the chain of `s`:
-    the zero-phase Butterworth's and the decimation's (scipy.signal.decimate's order-8
-    Chebyshev I at 0.8 / Nd, 0.05 dB) end transients, each decaying with its slowest pole's
-    time constant, dropped until both have fallen to EDGE_DECAY (ln 100 = 4.6 time constants
-    each), plus the `nd` stencil derivatives' half spans, in raw samples over Nd, rounded up.
-    The Chebyshev's time constant is about 5.5 decimated samples at every Nd, so this is
-    about 26-28 rows (3 before: half a time constant, which the motor-only model's fourth
-    derivatives do not forgive with the generic band, Nd = 10 at 1 kHz)."""
-    raw = _slowest_decay_samples(signal.butter(s.m, s.wn * s.ts / np.pi, output="zpk"))
-    if s.Nd > 1:
-        raw += _slowest_decay_samples(signal.cheby1(8, 0.05, 0.8 / s.Nd, output="zpk"))
-    raw = np.log(1 / EDGE_DECAY) * raw + nd * (s.stencil - 1) / 2
-    return int(np.ceil(raw / s.Nd))
-
-
 def stencil_gain(w_ts: np.ndarray, stencil: int = 5) -> np.ndarray:
     """The gain of the stencil's first derivative relative to the true one at w Ts:
     sin(x) / x (eq. 22) or (8 sin x - sin 2x) / (6 x) (5 points); 1 at 0."""

@@ -24,7 +24,6 @@ import pytest
 from scipy.linalg import expm
 
 from jointbench.identification.defaults import default_settings, generic_settings
-from jointbench.identification.filtering import end_transient_rows
 from jointbench.identification.estimate import least_squares
 from jointbench.identification.log import Log, LogError
 from jointbench.identification.parameters import JOINT_MOTOR, MOTOR_ONLY, RIGID
@@ -134,10 +133,7 @@ def test_motor_only_recovers_eq_19(axis_log, settings, corrected):
     if corrected:
         # Gravity 0: the g cos qm, g sin qm columns are zero and reported unidentified.
         assert set(ls.unidentifiable) == {"X10", "X11"}
-        # X8, X9 are zero within their standard deviation (the model error's scatter, no
-        # noise here: X9 3.1e-5 with 3 edge rows, 1.8e-4 with the derived 27, sd 2.7e-4)
-        for name in ("X8", "X9"):
-            assert abs(ls.value(name)) < 3 * ls.std(name), name
+        assert abs(ls.value("X8")) < 1e-4 and abs(ls.value("X9")) < 1e-4
 
 
 def test_table3_on_the_estimate_returns_the_axis(axis_log, settings):
@@ -161,14 +157,21 @@ def test_weighted_inversion_on_the_estimate_returns_the_axis(axis_log, settings)
     assert np.all(np.isfinite(phys.sigma))
 
 
+@pytest.mark.xfail(strict=True, reason=(
+    "FilterSettings.edge drops 3 decimated samples at each end whatever the filter; with the "
+    "generic filter (Nd = 10 at 1 kHz, wn = 2 pi 100 rad/s) that is 30 raw samples, fewer "
+    "than the end transient of filtfilt followed by four central differences: the last rows "
+    "of the motor-only regression carry residuals of several times the torque and bias X1..X6 "
+    "by 5-40 % on noiseless data (edge = 30 decimated samples brings them within 0.03 %). "
+    "Tried (issue 17, session 6): the edge derived from the filters' own end transients "
+    "(Butterworth and decimation Chebyshev slowest poles decayed to 1 %, plus the stencil "
+    "spans: 29 rows here, 27-33 on the chosen bands) passes this test (0.002 %) and moves "
+    "the prototype and the arm by under 0.1 % (within 0.5 % still), but turns the independent simulator's "
+    "heavy_link, no feed-forward, log sweep, motor-only (generic band) from Jm -2.69 % into a "
+    "failed link reconstruction (the eqs. 18-20 start goes negative from 20 rows on): not "
+    "kept"))
 def test_motor_only_with_the_generic_filter_recovers_eq_19(axis_log):
-    # What `identify --model motor-only` uses on a 1 kHz log when no f1 is given. With 3
-    # decimated samples dropped at each end whatever the filter, the last rows carried the
-    # filtfilt end transients (residuals of several times the torque: X1..X6 off by 5-40 %);
-    # the edge derived from the filters' slowest poles (filtering.end_transient_rows, 29
-    # rows here, 5 points) brings them within 0.002 % (measured; 3 points, edge 12: 0.54 %,
-    # 20: 0.034 %).
-    assert generic_settings(RATE).edge == end_transient_rows(generic_settings(RATE)) == 29
+    # What `identify --model motor-only` uses on a 1 kHz log when no f1 is given.
     reg = motor_only(axis_log, generic_settings(RATE), corrected=False)
     ls = least_squares(reg.W, reg.y, reg.names, corrected=False)
     truth = eq19(AXIS)
