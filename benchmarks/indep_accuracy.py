@@ -14,7 +14,7 @@ Printed: the errors of K, Jm and JL against the truth in %, and the filter used.
 
 `--spread 1-6` measures instead the joint-motor model's spread over seeds (the evidence for
 an estimator's efficiency, where one seed is one draw): per family and feed-forward on/off,
-linear sweep, every seed's K, Jm, JL errors and corrected sigma, then their mean, standard
+linear sweep (`--sweep log`: logarithmic), every seed's K, Jm, JL errors and corrected sigma, then their mean, standard
 deviation and rms, for `chooser` (the chooser's band alone), `wide` (the chooser's wn with Nd
 lowered until the decimated cutoff 0.8 Fs / (2 Nd) reaches the excitation's top measured on
 the log, identification/band_choice.py) and `defaults` (the pick between the two, when
@@ -95,15 +95,16 @@ def band_fits(log: Log) -> dict[str, Identification]:
     return fits
 
 
-def spread(families: list[str], seeds: list[int], duration: float) -> None:
+def spread(families: list[str], seeds: list[int], duration: float, sweep: str = "linear"
+           ) -> None:
     """The joint-motor errors and corrected sigmas over `seeds`, and their mean, sd, rms, in
     the chooser's band, the wide band and the defaults' pick (`band_fits`)."""
-    print(f"joint-motor spread over seeds {seeds}: error % (corrected sigma %)")
+    print(f"joint-motor spread over seeds {seeds}, {sweep} sweep: error % (corrected sigma %)")
     for name in families:
         for feedforward in (True, False):
             rows: dict[str, list[list[float]]] = {}
             for seed in seeds:
-                log = simulate(FAMILIES[name], seed, duration, "linear", feedforward)
+                log = simulate(FAMILIES[name], seed, duration, sweep, feedforward)
                 fits = band_fits(log)
                 truth = log.truth()
                 for label, result in fits.items():
@@ -180,10 +181,12 @@ def main(argv: list[str] | None = None) -> int:
                         help="also the prototype by MuJoCo and by indep_sim, side by side")
     parser.add_argument("--spread", type=seed_list, metavar="SEEDS",
                         help="joint-motor spread over these seeds ('1-6' or '1,2,5') only")
+    parser.add_argument("--sweep", choices=("linear", "log"), default="linear",
+                        help="the sweep of the --spread logs")
     args = parser.parse_args(argv)
     if args.spread:
         start = time.perf_counter()
-        spread(args.families.split(","), args.spread, args.duration)
+        spread(args.families.split(","), args.spread, args.duration, args.sweep)
         print(f"wall time {time.perf_counter() - start:.0f} s")
         return 0
     header = (f"{'family':<12} {'f1 Hz':>6} {'JL/Jm':>6} {'ff':>3} {'sweep':<6} "
