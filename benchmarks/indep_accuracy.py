@@ -15,10 +15,10 @@ Printed: the errors of K, Jm and JL against the truth in %, and the filter used.
 `--spread 1-6` measures instead the joint-motor model's spread over seeds (the evidence for
 an estimator's efficiency, where one seed is one draw): per family and feed-forward on/off,
 linear sweep (`--sweep log`: logarithmic), every seed's K, Jm, JL errors and corrected
-sigma, then their mean, standard deviation and rms, for `chooser` (the chooser's band alone), `wide` (the chooser's wn with Nd
-lowered until the decimated cutoff 0.8 Fs / (2 Nd) reaches the excitation's top measured on
-the log, identification/band_choice.py) and `defaults` (the pick between the two, when
-there is a wide band; rows say which).
+sigma, then their mean, standard deviation and rms, for `chooser` (the chooser's band
+alone), `wide` (the chooser's wn with Nd lowered until the decimated cutoff 0.8 Fs / (2 Nd)
+reaches the excitation's top measured on the log, identification/band_choice.py) and
+`defaults` (the pick between the two, when there is a wide band; rows say which).
 
 `--cross-check` adds the two simulators side by side: the paper's prototype simulated by
 MuJoCo (`run_experiment("prototype")`, seed 1, 60 s) and the same axis (its truth, sensors,
