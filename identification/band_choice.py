@@ -95,15 +95,25 @@ def stencil_top_hz(rate_hz: float, stencil: int = 5, nd: int = 2) -> float:
     return x * rate_hz / (2 * math.pi)
 
 
+def butterworth_flat_top_hz(s: FilterSettings) -> float:
+    """The highest frequency [Hz] where the zero-phase Butterworth of `s` (gain
+    1 / (1 + (w / wn)^2m), forward and back) passes the band within
+    defaults.STENCIL_DISTORTION_MAX: there every column, the Coulomb ones built from the
+    filtered velocity included, sees the signal the equation holds for. For m = 4: 0.56 wn."""
+    eps = STENCIL_DISTORTION_MAX
+    return s.wn / (2 * math.pi) * (eps / (1 - eps)) ** (1 / (2 * s.m))
+
+
 def wide_settings(log: Log, base: FilterSettings) -> tuple[FilterSettings | None, float, str]:
     """The wide candidate: `base`'s Butterworth and chain, Nd = ceil(0.8 Fs / (2 top)) (the
     smallest decimation whose cutoff stays at or under top), top = the least of the
-    excitation's top, the 5-point stencil's (`stencil_top_hz`) and the Butterworth's wn / 2 pi,
+    excitation's top, the 5-point stencil's (`stencil_top_hz`) and the Butterworth's flat
+    band (`butterworth_flat_top_hz`),
     and the stencil `stencil_for` gives that band. Returns (None, top, why) when that Nd is
     not below base's (the chooser's band reaches the top already)."""
     exc, what = excitation_top_hz(log)
     rate = log.sample_rate_hz
-    top = min(exc, stencil_top_hz(rate), base.wn / (2 * math.pi))
+    top = min(exc, stencil_top_hz(rate), butterworth_flat_top_hz(base))
     if not math.isfinite(top):
         return None, exc, f"no excitation top found in {what}"
     nd = max(1, math.ceil(0.8 * rate / (2 * top) - 1e-9))

@@ -12,9 +12,9 @@ import pytest
 from scipy import signal
 
 from jointbench.identification.band_checks import stencil_gain
-from jointbench.identification.band_choice import (CONSISTENCY_Z, choose_band,
-                                                   excitation_top_hz, stencil_top_hz,
-                                                   wide_settings)
+from jointbench.identification.band_choice import (CONSISTENCY_Z, butterworth_flat_top_hz,
+                                                   choose_band, excitation_top_hz,
+                                                   stencil_top_hz, wide_settings)
 from jointbench.identification.defaults import STENCIL_DISTORTION_MAX, default_settings
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.log import Log
@@ -49,13 +49,22 @@ def test_stencil_top_is_where_the_distortion_reaches_the_chooser_s_bound():
     assert 30 < f < 40   # (x^4 / 15 = 1 %: x = 0.62, 34.8 Hz at 350.87 Hz)
 
 
-def test_wide_settings_reach_the_top_with_the_chooser_s_butterworth():
-    base = default_settings(RATE, 6.0)           # Nd about 12, cutoff about 8.3 Hz
-    wide, top, _ = wide_settings(_chirp_log(30.0), base)
+def test_butterworth_flat_top_is_where_the_filtfilt_gain_loses_1_percent():
+    s = default_settings(RATE, 6.0)
+    f = butterworth_flat_top_hz(s)
+    gain = 1 / (1 + (2 * math.pi * f / s.wn) ** (2 * s.m))   # |H|^2: forward and back
+    assert gain == pytest.approx(1 - STENCIL_DISTORTION_MAX, rel=1e-9)
+
+
+@pytest.mark.parametrize("f_hi", [12.0, 30.0])
+def test_wide_settings_reach_the_top_with_the_chooser_s_butterworth(f_hi):
+    base = default_settings(RATE, 4.0)           # the paper's: Nd 26, cutoff 5.4 Hz
+    wide, top, _ = wide_settings(_chirp_log(f_hi), base)
     assert wide.wn == base.wn and wide.Nd < base.Nd
-    assert wide.decimated_cutoff_hz <= min(top, stencil_top_hz(RATE), base.wn / 2 / math.pi)
+    limit = min(top, stencil_top_hz(RATE), butterworth_flat_top_hz(base))
+    assert wide.decimated_cutoff_hz <= limit
     # the smallest Nd under the top: one less would cut above it
-    assert 0.8 * RATE / (2 * (wide.Nd - 1)) > min(top, base.wn / 2 / math.pi)
+    assert 0.8 * RATE / (2 * (wide.Nd - 1)) > limit
     assert wide.stencil == 5
 
 
