@@ -53,7 +53,7 @@ def test_arm_f1_at_paper_rate(arm_logs, joint):
 
 def test_prototype_unchanged(prototype_log):
     """The paper's filter (wn 176, Nd 26, 3 points) and the reference numbers (seed 1): the
-    band rule (identification/band_choice.py) keeps it, the wide band (Nd 6, 23.4 Hz) being
+    band rule (identification/band_choice.py) keeps it, the wide band (Nd 9, 15.6 Hz) being
     the less precise on this log (largest relative corrected sigma 0.16 % against 0.13 %)."""
     result = identify(prototype_log, "joint-motor")
     s = result.settings
