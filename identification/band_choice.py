@@ -2,14 +2,19 @@
 
 Two candidates: the chooser's band (`defaults.choose_filter`: decimated cutoff about 1.4 f1)
 and a wide one, the chooser's Butterworth with the decimation lowered until the decimated
-cutoff 0.8 Fs / (2 Nd) reaches the top of what the log can give (`wide_settings`). The
-chooser's band throws away the excitation between 1.4 f1 and the sweep's top, which carries
-most of what the motor inertia is seen by. Both are fitted; `choose_band` keeps the one whose
-estimate of K, Jm, JL is the more precise by the fit's own autocorrelation-consistent
-covariance, unless the two disagree (`CONSISTENCY_Z`), which no precision can settle: then
-the chooser's band, and a warning. Pure numerics; the fits come from a callable.
-"""
+cutoff 0.8 Fs / (2 Nd) reaches the top of what the log can give (`wide_settings`: the
+excitation's top measured on the log, capped where the 5-point stencil or the zero-phase
+Butterworth would distort the band by more than defaults.STENCIL_DISTORTION_MAX, the 1 %
+the chooser's stencil rule allows). The chooser's band throws away the excitation between
+1.4 f1 and the sweep's top, which carries most of what the motor inertia is seen by.
 
+The rule (`choose_band`): both are fitted; the one whose largest relative corrected sigma
+of K, Jm, JL (the fit's own autocorrelation-consistent covariance) is the smaller is kept,
+unless the two estimates lie more than 3 root-sum-square sigmas apart on any of K, Jm, JL
+(`CONSISTENCY_Z`): one of them is then biased, which no precision can settle, and the
+chooser's band stays with a warning. No threshold is tuned on test cases: the 1 % budgets
+are the chooser's, the 3 sigma the suite's. Pure numerics; the fits come from a callable.
+"""
 from __future__ import annotations
 
 import math
@@ -105,23 +110,28 @@ def butterworth_flat_top_hz(s: FilterSettings) -> float:
 
 
 def wide_settings(log: Log, base: FilterSettings) -> tuple[FilterSettings | None, float, str]:
-    """The wide candidate: `base`'s Butterworth and chain, Nd = ceil(0.8 Fs / (2 top)) (the
-    smallest decimation whose cutoff stays at or under top), top = the least of the
-    excitation's top, the 5-point stencil's (`stencil_top_hz`) and the Butterworth's flat
-    band (`butterworth_flat_top_hz`),
-    and the stencil `stencil_for` gives that band. Returns (None, top, why) when that Nd is
-    not below base's (the chooser's band reaches the top already)."""
+    """The wide candidate, the excitation's top [Hz] and how the band's top was set:
+    `base`'s Butterworth and chain, Nd = ceil(0.8 Fs / (2 top)) (the smallest decimation whose
+    cutoff stays at or under top), top = the least of the excitation's top
+    (`excitation_top_hz`), the 5-point stencil's (`stencil_top_hz`) and the Butterworth's
+    flat band (`butterworth_flat_top_hz`), and the stencil `stencil_for` gives that band.
+    The candidate is None when that Nd is not below base's (the chooser's band reaches the
+    top already) or no excitation top is found."""
     exc, what = excitation_top_hz(log)
     rate = log.sample_rate_hz
-    top = min(exc, stencil_top_hz(rate), butterworth_flat_top_hz(base))
-    if not math.isfinite(top):
+    caps = {"the 5-point stencil's": stencil_top_hz(rate),
+            "the Butterworth's flat band": butterworth_flat_top_hz(base)}
+    if not math.isfinite(exc):
         return None, exc, f"no excitation top found in {what}"
+    top = min(exc, *caps.values())
+    why = f"the excitation's top {exc:.3g} Hz ({what})" + "".join(
+        f", capped at {name} {f:.3g} Hz" for name, f in caps.items() if f == top < exc)
     nd = max(1, math.ceil(0.8 * rate / (2 * top) - 1e-9))
     if nd >= base.Nd:
         return None, exc, (f"the chooser's band (cutoff {base.decimated_cutoff_hz:.3g} Hz) "
-                           f"already reaches the top {top:.3g} Hz")
+                           f"already reaches {why}")
     wide = replace(base, Nd=nd)
-    return replace(wide, stencil=stencil_for(wide)[0]), exc, f"excitation top from {what}"
+    return replace(wide, stencil=stencil_for(wide)[0]), exc, why
 
 
 def max_rel_sigma(physical: dict[str, float], sigma: dict[str, float]) -> float:
@@ -152,7 +162,7 @@ def choose_band(log: Log, chosen: Fit, fit: Callable[[FilterSettings], Fit],
     smaller, unless the two estimates lie more than CONSISTENCY_Z root-sum-square sigmas
     apart on any of K, Jm, JL: then the chooser's, and a warning. The chooser's fit also
     stays when there is no wider band or its fit fails (ValueError and subclasses, the
-    identification's errors). No threshold but the 3 sigma is involved."""
+    identification's errors)."""
     base_est = estimate(chosen)
     settings = chosen.settings
     rel = max_rel_sigma(*base_est) if base_est else math.inf
@@ -161,7 +171,7 @@ def choose_band(log: Log, chosen: Fit, fit: Callable[[FilterSettings], Fit],
     if wide is None:
         return chosen, replace(keep, reason=f"chooser's band: {why}")
     label = (f"Nd {wide.Nd}, cutoff {wide.decimated_cutoff_hz:.3g} Hz, {wide.stencil} points; "
-             f"{why} {top:.3g} Hz")
+             f"{why}")
     try:
         other = fit(wide)
     except (ValueError, ArithmeticError, np.linalg.LinAlgError) as err:
