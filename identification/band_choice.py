@@ -134,6 +134,15 @@ def wide_settings(log: Log, base: FilterSettings) -> tuple[FilterSettings | None
     return replace(wide, stencil=stencil_for(wide)[0]), exc, why
 
 
+def band_for(log: Log, base: FilterSettings, band: BandChoice | None) -> FilterSettings:
+    """The band a fit's `band` choice gives another log whose chooser's settings are `base`:
+    its own wide candidate (`wide_settings`) when the fit took the wide band and the log has
+    one, else `base` (`identify --validate` compares like with like)."""
+    if band is None or band.used != "wide":
+        return base
+    return wide_settings(log, base)[0] or base
+
+
 def max_rel_sigma(physical: dict[str, float], sigma: dict[str, float]) -> float:
     """max over K, Jm, JL of sigma / |value| (inf when one is missing or not finite)."""
     out = 0.0
