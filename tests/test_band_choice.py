@@ -15,11 +15,11 @@ from jointbench.identification.band_checks import stencil_gain
 from jointbench.identification.band_choice import (CONSISTENCY_Z, butterworth_flat_top_hz,
                                                    choose_band, excitation_top_hz,
                                                    stencil_top_hz, wide_settings)
-from jointbench.identification.defaults import STENCIL_DISTORTION_MAX, default_settings
+from jointbench.identification.defaults import PAPER_RATE, STENCIL_DISTORTION_MAX, default_settings
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.log import Log
 
-RATE = 350.87
+RATE = PAPER_RATE   # the mission's rate
 
 
 def _chirp_log(f_hi: float, with_ref: bool = True, seconds: float = 60.0) -> Log:
