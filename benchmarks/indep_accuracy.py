@@ -14,10 +14,11 @@ Printed: the errors of K, Jm and JL against the truth in %, and the filter used.
 
 `--spread 1-6` measures instead the joint-motor model's spread over seeds (the evidence for
 an estimator's efficiency, where one seed is one draw): per family and feed-forward on/off,
-linear sweep, every seed's K, Jm, JL errors and corrected sigma, then their mean, standard
-deviation and rms, for (a) the defaults and (c) `wide+st5`, measured only, no default: the
-chooser's wn with Nd lowered until the decimated cutoff 0.8 Fs / (2 Nd) reaches the
-reference's top frequency (indep_sim's 30 Hz) and the 5-point stencil.
+linear sweep (`--sweep log`: logarithmic), every seed's K, Jm, JL errors and corrected
+sigma, then their mean, standard deviation and rms, for `chooser` (the chooser's band
+alone), `wide` (the chooser's wn with Nd lowered until the decimated cutoff 0.8 Fs / (2 Nd)
+reaches the excitation's top measured on the log, identification/band_choice.py) and
+`defaults` (the pick between the two, when there is a wide band; rows say which).
 
 `--cross-check` adds the two simulators side by side: the paper's prototype simulated by
 MuJoCo (`run_experiment("prototype")`, seed 1, 60 s) and the same axis (its truth, sensors,
@@ -38,13 +39,13 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
-from indep_sim import FAMILIES, AxisFamily, default_reference, simulate  # noqa: E402
+from indep_sim import FAMILIES, AxisFamily, simulate  # noqa: E402
 
+from jointbench.identification.band_choice import choose_band, wide_settings  # noqa: E402
 from jointbench.identification.defaults import choose_filter, settings_for  # noqa: E402
 from jointbench.identification.estimate import NotIdentifiable  # noqa: E402
 from jointbench.identification.filtering import FilterSettings  # noqa: E402
-from jointbench.identification.first_mode import FirstMode  # noqa: E402
-from jointbench.identification.identify import identify  # noqa: E402
+from jointbench.identification.identify import Identification, identify  # noqa: E402
 from jointbench.identification.log import Log, LogError  # noqa: E402
 from jointbench.identification.output import pct_error  # noqa: E402
 from jointbench.identification.physical import InversionError  # noqa: E402
@@ -71,50 +72,60 @@ def errors(log: Log, model: str, settings: FilterSettings | None) -> tuple[list[
         err = pct_error(result.physical.get(name), truth[name])
         cells.append("nan" if err is None else f"{err:+.2f}")
     s = result.settings
+    band = f", {result.band.used} band" if result.band is not None else ""
     return cells, (f"wn {s.wn:.0f} rad/s, Nd {s.Nd} (cut {s.decimated_cutoff_hz:.1f} Hz), "
-                   f"stencil {s.stencil}")
+                   f"stencil {s.stencil}{band}")
 
 
-def wide_settings(log: Log, family: AxisFamily, duration: float
-                  ) -> tuple[FilterSettings, FirstMode]:
-    """(c) the chooser's settings with Nd lowered until the decimated cutoff reaches the
-    reference's top frequency, and the 5-point stencil (measured only, not a default); with
-    the chooser's first mode, which sets the instruments' resolution as in (a)."""
+def band_fits(log: Log) -> dict[str, Identification]:
+    """The joint-motor fit in (a') the chooser's band (`choose_filter`, what the defaults were
+    before `band_choice`), (c) the wide band (`band_choice.wide_settings` from the log, when
+    there is one), and (a) the defaults' pick between the two (`band_choice.choose_band`, the
+    rule `identify` applies, here on the same two fits)."""
     choice = choose_filter(log)
-    top = default_reference(family, duration).f_hi
-    nd = max(1, min(choice.settings.Nd, round(0.8 * log.sample_rate_hz / (2 * top))))
-    return replace(choice.settings, Nd=nd, stencil=5), choice.first_mode
+    fits = {"chooser": identify(log, "joint-motor", settings=choice.settings,
+                                first_mode=choice.first_mode)}
+    wide, _, _ = wide_settings(log, choice.settings)
+    if wide is not None and choice.first_mode is not None and choice.first_mode.found:
+        fits["wide"] = identify(log, "joint-motor", settings=wide, first_mode=choice.first_mode)
+        fits["defaults"], band = choose_band(
+            log, fits["chooser"], lambda s: fits["wide"],
+            lambda r: (r.physical, r.physical_sigma_corrected))
+        fits["defaults"] = replace(fits["defaults"], band=band)
+    return fits
 
 
-def spread(families: list[str], seeds: list[int], duration: float) -> None:
-    """The joint-motor errors and corrected sigmas over `seeds`, and their mean, sd, rms."""
-    print(f"joint-motor spread over seeds {seeds}: error % (corrected sigma %)")
+def spread(families: list[str], seeds: list[int], duration: float, sweep: str = "linear"
+           ) -> None:
+    """The joint-motor errors and corrected sigmas over `seeds`, and their mean, sd, rms, in
+    the chooser's band, the wide band and the defaults' pick (`band_fits`)."""
+    print(f"joint-motor spread over seeds {seeds}, {sweep} sweep: error % (corrected sigma %)")
     for name in families:
         for feedforward in (True, False):
-            rows: dict[str, list[list[float]]] = {"defaults": [], "wide+st5": []}
+            rows: dict[str, list[list[float]]] = {}
             for seed in seeds:
-                log = simulate(FAMILIES[name], seed, duration, "linear", feedforward)
-                for label, (settings, mode) in (
-                        ("defaults", (None, None)),
-                        ("wide+st5", wide_settings(log, FAMILIES[name], duration))):
-                    result = identify(log, "joint-motor", settings=settings, first_mode=mode)
-                    truth = log.truth()
+                log = simulate(FAMILIES[name], seed, duration, sweep, feedforward)
+                fits = band_fits(log)
+                truth = log.truth()
+                for label, result in fits.items():
                     err = [100 * (result.physical[p] / truth[p] - 1) for p in PARAMS]
                     sig = [100 * result.physical_sigma_corrected[p] / truth[p] for p in PARAMS]
-                    rows[label].append(err + sig)
+                    rows.setdefault(label, []).append(err + sig)
+                    pick = f" {result.band.used}" if result.band is not None else ""
                     print(f"{name:<12} {'on' if feedforward else 'off':>3} seed {seed:<3} "
                           f"{label:<8} Nd {result.settings.Nd:>2} " + " ".join(
-                              f"{p} {e:+6.2f} ({sd:.2f})" for p, e, sd in zip(PARAMS, err, sig)),
-                          flush=True)
+                              f"{p} {e:+6.2f} ({sd:.2f})" for p, e, sd in zip(PARAMS, err, sig))
+                          + pick, flush=True)
             for label, table in rows.items():
                 cols = list(zip(*table))
                 stats = " ".join(
                     f"{p} mean {statistics.fmean(cols[i]):+.2f} sd "
-                    f"{statistics.stdev(cols[i]) if len(seeds) > 1 else math.nan:.2f} rms "
+                    f"{statistics.stdev(cols[i]) if len(table) > 1 else math.nan:.2f} rms "
                     f"{math.sqrt(statistics.fmean(x * x for x in cols[i])):.2f} sigma "
                     f"{statistics.fmean(cols[i + len(PARAMS)]):.2f}"
                     for i, p in enumerate(PARAMS))
-                print(f"{name:<12} {'on' if feedforward else 'off':>3} {label:<8} {stats}")
+                print(f"{name:<12} {'on' if feedforward else 'off':>3} {label:<8} n {len(table)} "
+                      f"{stats}")
 
 
 def seed_list(text: str) -> list[int]:
@@ -170,10 +181,12 @@ def main(argv: list[str] | None = None) -> int:
                         help="also the prototype by MuJoCo and by indep_sim, side by side")
     parser.add_argument("--spread", type=seed_list, metavar="SEEDS",
                         help="joint-motor spread over these seeds ('1-6' or '1,2,5') only")
+    parser.add_argument("--sweep", choices=("linear", "log"), default="linear",
+                        help="the sweep of the --spread logs")
     args = parser.parse_args(argv)
     if args.spread:
         start = time.perf_counter()
-        spread(args.families.split(","), args.spread, args.duration)
+        spread(args.families.split(","), args.spread, args.duration, args.sweep)
         print(f"wall time {time.perf_counter() - start:.0f} s")
         return 0
     header = (f"{'family':<12} {'f1 Hz':>6} {'JL/Jm':>6} {'ff':>3} {'sweep':<6} "

@@ -3,7 +3,9 @@
 The paper's values (section 4: 350.87 Hz, wn = 176 rad/s, Nd = 26, f1 = 3.9 Hz) are the
 prototype's, and a default for the prototype only; every other log gets its filter from its
 own first mode (eqs. 28-29). Every command that needs a filter asks `settings_for` or
-`default_settings`, here and nowhere else.
+`default_settings`, here and nowhere else; `identify` then widens a joint-motor fit's band
+when the log's own precision says so (identification/band_choice.py), and the commands that
+identify read the band used from the result (`Identification.settings`, `.band`).
 """
 
 from __future__ import annotations

@@ -13,7 +13,8 @@ from jointbench.identification import link_fit, regressors
 from jointbench.identification.checks import check_excitation, check_signals
 from jointbench.identification.estimate import LSResult, NotIdentifiable, block_weighted, least_squares
 from jointbench.identification.band_checks import band_warnings
-from jointbench.identification.defaults import choose_filter, is_paper_prototype
+from jointbench.identification.band_choice import BandChoice, choose_band
+from jointbench.identification.defaults import choose_filter, is_paper_prototype, stencil_for
 from jointbench.identification.first_mode import FirstMode, given_first_mode
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.instruments import instrument_log
@@ -54,6 +55,7 @@ class Identification:
     # motor-only: the weighted inversion of eqs. (18)-(20)'s X's, from which the link
     # reconstruction (identification/link_fit.py, `physical`) starts; {} when it fails
     physical_eqs18_20: dict[str, float] = field(default_factory=dict)
+    band: BandChoice | None = None        # joint-motor with defaults: the band_choice rule
 
     @property
     def relative_error_pct(self) -> float:
@@ -116,7 +118,9 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
     stiffness in the band (`stiffness_rejection`; with q, for example a rigid axis whose q
     follows q_m). Without settings the filter is `choose_filter(log, f1_hz)` (the first mode
     measured on the log when f1 is not given); the result carries the first mode, the
-    stencil's reason and the warnings of `band_checks.band_warnings`; with `settings`,
+    stencil's reason and the warnings of `band_checks.band_warnings`, and a joint-motor fit
+    with a mode found is fitted again in the wide band and the more precise kept
+    (`band_choice.choose_band`, reported in `band`); with `settings`,
     `first_mode` (what the caller measured, for example before overriding wn or Nd) is
     reported and checked against them. Raises LogError for unusable logs and NotIdentifiable when
     nothing is excited.
@@ -125,7 +129,8 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
         raise ValueError(f"unknown model {model!r} (choices: {', '.join(MODEL_CHOICES)})")
     warnings: list[str] = []
     notes: list[str] = []
-    if settings is None:
+    chooser = settings is None
+    if chooser:
         choice = choose_filter(log, f1_hz)
         settings, mode, why = choice.settings, choice.first_mode, choice.stencil_reason
         warnings += choice.warnings
@@ -135,6 +140,13 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
         why = f"given: {settings.stencil} points"
     f1 = mode.f1_hz if mode is not None and mode.found else None
     result = _identify(log, model, settings, notes, f1)
+    if chooser and result.model == "joint-motor" and f1 is not None:   # a mode found
+        result, band = choose_band(log, result, lambda s: _identify(log, model, s, [], f1),
+                                   _joint_motor_estimate)
+        settings = result.settings
+        why = stencil_for(settings)[1] if band.used == "wide" else why
+        warnings += [band.warning] if band.warning else []
+        result = replace(result, band=band)
     if mode is not None and mode.found and mode.method != "given" and result.model != "rigid":
         mode, text = model_first_mode(result, mode)
         if text:
@@ -148,6 +160,10 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
         warnings = []
     return replace(result, first_mode=mode, warnings=tuple(warnings), stencil_reason=why,
                    paper_axis=is_paper_prototype(log))
+
+
+def _joint_motor_estimate(r: Identification) -> tuple[dict, dict] | None:
+    return (r.physical, r.physical_sigma_corrected) if r.model == "joint-motor" else None
 
 
 MODE_DISAGREEMENT = 0.2   # relative gap between the two f1 estimates that voids the band

@@ -14,6 +14,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from jointbench.identification import regressors
+from jointbench.identification.band_choice import band_for
 from jointbench.identification.defaults import settings_for
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.identify import Identification
@@ -82,11 +83,13 @@ class Validation:
 def validate_on(result: Identification, other: Log, f1_hz: float | None = None) -> Validation:
     """Predict `other`'s motor torque with the identified X of `result` (inverse view).
 
-    The filter is `settings_for(other, f1_hz)` (its own rate and band), with the chain options
+    The filter is `settings_for(other, f1_hz)` (its own rate and band; its wide band,
+    `band_choice.band_for`, when the fit took the wide one), with the chain options
     of the fit (ZOH alignment, torque filter, skip, stencil). Raises LogError when the other
     log lacks what the model needs (q for joint-motor) or is too short for the filter.
     """
     base, note = settings_for(other, f1_hz)
+    base = band_for(other, base, result.band)   # the fit's band rule: wide there, wide here
     s = result.settings
     settings = replace(base, zoh=s.zoh, filter_torque=s.filter_torque, skip=s.skip,
                        stencil=s.stencil)

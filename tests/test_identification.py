@@ -54,7 +54,7 @@ def test_zoh_alignment_matters(prototype_log, monkeypatch):
     estimate: the aligned K is at least three times closer to the truth."""
     truth = prototype_log.truth()
     aligned = identify(prototype_log, "joint-motor")
-    monkeypatch.setattr(models, "zoh_align", lambda tau: np.asarray(tau, dtype=float))
+    monkeypatch.setattr(models, "zoh_align", lambda tau, **_: np.asarray(tau, dtype=float))
     naive = identify(prototype_log, "joint-motor")
     for name in ("K", "FVm"):
         assert abs(err_pct(naive.physical[name], truth[name])) > \

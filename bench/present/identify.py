@@ -21,6 +21,8 @@ def identify_json(result: Identification, truth: dict[str, float] | None, flags:
     answer = to_json(result, truth)
     answer["flags"] = flags
     answer["warnings"] = list(warnings) + [w for w in result.warnings if w not in warnings]
+    if result.band is not None:   # the joint-motor band picked by its precision (band_choice)
+        answer["band"] = result.band.to_json()
     if refined is not None:
         answer["refined"] = refined_json(refined, result, truth)
     if debiased is not None:
@@ -29,9 +31,9 @@ def identify_json(result: Identification, truth: dict[str, float] | None, flags:
 
 
 def _filter_chain(source: str, log: Log, result: Identification) -> list[str]:
-    """The first lines: `source` (the file name), the Butterworth and decimation of `result`
-    and the identification chain's departures from the paper's (eq. 22, ZOH alignment, torque
-    filter)."""
+    """The first lines: `source` (the file name), the Butterworth and decimation of `result`,
+    which band and why (`band_choice`, joint-motor with defaults) and the identification
+    chain's departures from the paper's (eq. 22, ZOH alignment, torque filter)."""
     s = result.settings
     lines = [f"{source}: model {result.model}, {len(log)} samples at "
              f"{log.sample_rate_hz:g} Hz; filter wn = {s.wn:g} rad/s (order {s.m}), Nd = {s.Nd} "
@@ -42,6 +44,8 @@ def _filter_chain(source: str, log: Log, result: Identification) -> list[str]:
                                    (s.skip, f"first {s.skip} samples dropped"),
                                    (s.stencil != 3, f"{s.stencil}-point central differences"))
              if on]
+    if result.band is not None:
+        lines.append(f"band: {result.band.reason}")
     if log.prismatic or chain:
         lines.append("; ".join((["prismatic axis: positions in m, forces in N, masses in kg"]
                                 if log.prismatic else []) + chain))
