@@ -162,7 +162,7 @@ def _ambiguity(nom: Nominal, simpler: Candidate, richer: Candidate, t: float,
     `richer` in turn (then the log tells them apart: an offset the asymmetry's viscous shape
     cannot follow), whichever of the two explains more and whether or not `richer` passes
     on its own. (Before, the note came only when the richer explained more and was
-    significant: two asymmetries answered `offset` without it on the seed-2026 battery.)"""
+    significant, and an offset named otherwise said nothing of the asymmetry.)"""
     alpha = simpler.alpha
     t2, p2 = _on_top(nom, simpler, richer, causes, m)
     return "" if p2 < alpha else _apart(simpler, richer, t, alpha, t2)
