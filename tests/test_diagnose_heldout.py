@@ -238,3 +238,67 @@ def test_hardening_grid_spans_the_logs_own_deflection_range():
     assert grid[0] == pytest.approx(0.02 * p99)
     assert 0.9 * p99 < 5e-3 < grid[-1] < 6e-3
     assert np.all(np.diff(grid) > 0)
+
+
+def test_evidence_is_measured_in_the_equations_the_effect_changes(clean_prototype):
+    """identification.discrepancy.candidates.acts_in: a torque lag, an offset, an asymmetric
+    friction and a ripple change the motor equation's rows, gravity the link equation's, a
+    dead band and a spring damping both."""
+    from jointbench.identification.discrepancy.candidates import acts_in, reference
+    from jointbench.identification.discrepancy.stacked import apply
+
+    settings, _ = diagnosis_settings(clean_prototype)
+    nom = nominal(clean_prototype, settings)
+    base = reference(nom).base
+    fixed = {"torque_lag": {"lag_s": 0.003}, "offset": {}, "gravity": {},
+             "asymmetric_friction": {"FV_ref": 1.0, "FS_ref": 1.0},
+             "backlash": {"backlash_rad": 0.001}, "spring_damping": {}}
+    want = {"torque_lag": (0,), "offset": (0,), "asymmetric_friction": (0,), "gravity": (1,),
+            "backlash": (0, 1), "spring_damping": (0, 1)}
+    for name, fx in fixed.items():
+        assert acts_in(nom, base.design(), apply(base, name, fx)[1]) == want[name], name
+    # a design that changes nothing acts nowhere: the test then uses every row
+    assert acts_in(nom, base.design(), base.design()) == ()
+
+
+def test_a_motor_side_effect_is_not_diluted_by_the_link_equation():
+    """A 6 ms current-loop lag on the independent simulator's soft family (f1 4 Hz, 30 s):
+    measured on the motor equation it changes, its held-out t passes the bar of the first
+    round (measured 6.15 for 4.28); on both equations, whose link rows carry the same errors
+    in both models, every segment's ratio was pulled towards 1 and t fell under it (3.31)."""
+    from indep_sim import FAMILIES, simulate
+    from jointbench.identification.discrepancy.candidates import candidate, reference
+    from jointbench.identification.discrepancy.heldout import t_bar
+
+    log = simulate(FAMILIES["soft"], seed=3, duration=DURATION, effects="torque_lag=0.006")
+    nom = nominal(log, diagnosis_settings(log)[0])
+    ref = reference(nom)
+    c = candidate(nom, "torque_lag", ref)
+    assert c.acts == (0,)
+    assert c.parameters["lag_s"] == pytest.approx(0.006, rel=0.10)
+    assert c.significant and c.t_stat > t_bar(c.alpha)
+    both = evidence(ref.scores.errors, c.heldout_errors, len(nom.sig.index))
+    assert both.explained_pct == pytest.approx(c.heldout_pct)
+    assert both.t < t_bar(c.alpha) < c.t_stat
+
+
+def test_offset_named_over_an_asymmetry_that_explains_less_states_the_ambiguity():
+    """The note is stated whichever of the two explains more (identification.discrepancy.
+    inverse._ambiguity): on the soft family (motor Coulomb 12 N m dominates its viscous
+    friction) an offset of 3 N m explains 30.9 % of the held-out residual and an asymmetric
+    friction 30.3 %; neither adds significantly to the other (t -0.58 and 0.93 measured), so
+    the offset is named with the note. (The note used to come only when the asymmetry
+    explained more: such logs answered `offset` with none.)"""
+    from indep_sim import FAMILIES, simulate
+    from jointbench.identification.discrepancy.heldout import t_bar
+
+    d = diagnose(simulate(FAMILIES["soft"], seed=5, duration=DURATION, effects="offset=3"),
+                 forward=False)
+    assert d.named_cause == "offset" and [c.effect for c in d.causes] == ["offset"]
+    share = {c.effect: c.heldout_pct for c in d.inverse.candidates}
+    assert share["offset"] > share["asymmetric_friction"]
+    (note,) = d.ambiguities
+    assert note.startswith("offset or asymmetric_friction: this log cannot tell them apart")
+    t = float(note.split("adds to offset has t = ")[1].split(",")[0])
+    back = float(note.split("adds to asymmetric_friction t = ")[1].split(",")[0])
+    assert max(t, back) < t_bar(d.named.alpha)

@@ -52,6 +52,7 @@ class Candidate:
     heldout_errors: np.ndarray | None = field(default=None, repr=False, compare=False)
     fixed: dict = field(default_factory=dict)   # values the effect's columns are built with
     base: tuple[tuple[str, dict], ...] = ()     # causes named before it, as its fit has them
+    acts: tuple[int, ...] = ()   # the equation blocks its columns change (acts_in); () all
 
     @property
     def significant(self) -> bool:
@@ -149,7 +150,8 @@ def _evaluate(nom: Nominal, ref: Reference, e: Effect, fixed: dict,
     pred_change = (res_before - res_after)[rows]
     size = 100 * float(np.sqrt(np.mean(pred_change ** 2))) / nom.reference_rms[block]
     errors = held_out(records, ref.folds)
-    ev = evidence(ref.scores.errors, errors, len(nom.sig.index))
+    acts = acts_in(nom, ref.base.design(), (y, W, names))
+    ev = evidence(ref.scores.errors, errors, len(nom.sig.index), acts)
     values = dict(zip(names, X))
     why = e.check({**fixed, **values}, nom) if e.check else ""   # fitted and searched values
     return Candidate(effect=e.name, testable=True, parameters=e.params(values, fixed, nom),
@@ -161,7 +163,21 @@ def _evaluate(nom: Nominal, ref: Reference, e: Effect, fixed: dict,
                      before_pct=nom.relative_error_pct(res_before, block),
                      after_pct=_own_error_pct(nom, res_after, block, W, X, names), block=block,
                      X=tuple(float(x) for x in X), names=tuple(names), fixed=fixed,
-                     base=under.effects)
+                     base=under.effects, acts=acts)
+
+
+def acts_in(nom: Nominal, reference: Design, extended: Design) -> tuple[int, ...]:
+    """The equation blocks (0 motor, 1 link) whose rows the extended design changes: its
+    left-hand side, a reference column rebuilt (a lag's led motor columns, a dead band's
+    deflection) or an added column not zero there; () when it changes none. Its held-out
+    evidence is measured on those rows (identification.discrepancy.heldout.segment_log_ratios):
+    elsewhere the extended model differs from the reference only by the shared parameters'
+    refit."""
+    y0, W0, _ = reference
+    y1, W1, _ = extended
+    k = W0.shape[1]
+    changed = ((y1 != y0) | np.any(W1[:, :k] != W0, axis=1) | np.any(W1[:, k:] != 0, axis=1))
+    return tuple(int(b) for b in np.unique(nom.block[changed]))
 
 
 def _own_error_pct(nom: Nominal, residual: np.ndarray, block: int, W: np.ndarray,

@@ -31,7 +31,10 @@ slowly and keep the segment-to-segment noise; on independent l_s their estimate 
 variance of a chi-square with nu = 2 (S - 1)^2 / (3 S - 4) degrees of freedom (26 for S = 40),
 which the p-value uses. The spread holds the noise, the residual's colour and the effect's own
 uneven visibility within a segment as this log has them: no noise level, correlation time or
-effect size is assumed. Under the null hypothesis (the effect's columns carry nothing the
+effect size is assumed. The sums run over the rows of the equations the effect's columns
+change (identification.discrepancy.candidates.acts_in; segment_log_ratios): the rows of the
+other equation carry the same errors in both models, up to the shared parameters' refit, and
+only dilute each ratio towards 1. Under the null hypothesis (the effect's columns carry nothing the
 reference misses) the extra columns only add estimation variance to the held-out prediction:
 E[l_s] < 0 in every segment.
 
@@ -145,17 +148,30 @@ class Evidence:
     p: float                 # its one-sided p-value, dof(SEGMENTS) degrees of freedom
 
 
-def evidence(e0: np.ndarray, e1: np.ndarray, n_times: int) -> Evidence:
+def evidence(e0: np.ndarray, e1: np.ndarray, n_times: int,
+             blocks: tuple[int, ...] = ()) -> Evidence:
     """Segment test of e1 removing more than MATERIAL of e0's squared error (module
-    docstring); rows are stacked by block, `n_times` instants each."""
-    a0 = (e0 ** 2).reshape(-1, n_times).sum(axis=0)
-    a1 = (e1 ** 2).reshape(-1, n_times).sum(axis=0)
+    docstring); rows are stacked by block, `n_times` instants each. The share is over every
+    row; the test over the rows of `blocks` (the equations the effect acts in; () all)."""
+    a0, a1 = (e ** 2 for e in (e0, e1))
     total0 = float(a0.sum())
     share = 100 * (1 - float(a1.sum()) / total0) if total0 > 0 else 0.0
-    h0, h1 = segment_sums(a0), segment_sums(a1)
-    ok = (h0 > 0) & (h1 > 0)
-    t, p = segment_t(np.log(h0[ok] / h1[ok]) + np.log(1 - MATERIAL))
+    t, p = segment_t(segment_log_ratios(e0, e1, n_times, blocks) + np.log(1 - MATERIAL))
     return Evidence(explained_pct=share, t=t, p=p)
+
+
+def segment_log_ratios(e0: np.ndarray, e1: np.ndarray, n_times: int,
+                       blocks: tuple[int, ...] = ()) -> np.ndarray:
+    """log(sum e0^2 / sum e1^2) in each segment (where both are positive), over the rows of
+    `blocks` (every block for ()). An effect that acts in one equation is measured there:
+    the other equation's errors, which it leaves as they were, would add the same amount to
+    both sums and pull every ratio towards 1 (a torque lag removing 79 % of the motor
+    equation's held-out residual removed 43 % of both: t 5.35 on its equation, 3.91 on both)."""
+    sq0, sq1 = ((e ** 2).reshape(-1, n_times) for e in (e0, e1))
+    rows = list(blocks) if blocks else slice(None)
+    h0, h1 = segment_sums(sq0[rows].sum(axis=0)), segment_sums(sq1[rows].sum(axis=0))
+    ok = (h0 > 0) & (h1 > 0)
+    return np.log(h0[ok] / h1[ok])
 
 
 def segment_sums(x: np.ndarray) -> np.ndarray:

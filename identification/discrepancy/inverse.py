@@ -23,7 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from jointbench.identification.discrepancy.candidates import Candidate, candidate, reference
-from jointbench.identification.discrepancy.heldout import ALPHA, segment_sums, segment_t, t_bar
+from jointbench.identification.discrepancy.heldout import (ALPHA, segment_log_ratios, segment_t,
+                                                           t_bar)
 from jointbench.identification.discrepancy.nominal import Nominal, nominal
 from jointbench.identification.effects import EFFECTS, NONE
 from jointbench.identification.filtering import FilterSettings
@@ -92,23 +93,20 @@ def _round(nom: Nominal, names: list[str], causes: tuple[Candidate, ...],
     return _simplest_first(_rank([candidate(nom, name, ref) for name in names]), nom, m)
 
 
-def _better(worse: Candidate | np.ndarray, better: Candidate | np.ndarray,
-            n: int) -> tuple[float, float]:
+def _better(worse: Candidate | np.ndarray, better: Candidate, n: int) -> tuple[float, float]:
     """The segment test without margin (identification.discrepancy.heldout) that `better`'s
-    held-out errors are smaller than `worse`'s: t and its one-sided p-value."""
+    held-out errors are smaller than `worse`'s, on the equations `better` acts in: t and its
+    one-sided p-value."""
     e0 = worse.heldout_errors if isinstance(worse, Candidate) else worse
-    e1 = better.heldout_errors if isinstance(better, Candidate) else better
-    h0 = segment_sums((e0 ** 2).reshape(-1, n).sum(axis=0))
-    h1 = segment_sums((e1 ** 2).reshape(-1, n).sum(axis=0))
-    ok = (h0 > 0) & (h1 > 0)
-    return segment_t(np.log(h0[ok] / h1[ok]))
+    return segment_t(segment_log_ratios(e0, better.heldout_errors, n, better.acts))
 
 
 def _on_top(nom: Nominal, richer: Candidate, simpler: Candidate,
             m: int) -> tuple[float, float]:
     """Does `richer` add to `simpler` what the log supports? `richer` fitted on top of
-    `simpler` and the causes under it (as `simpler`'s fit has them), and the segment test without margin (_better) of its held-out
-    errors against `simpler`'s: t and p (p = 1 for an unphysical fit)."""
+    `simpler` and the causes under it (as `simpler`'s fit has them), and the segment test
+    without margin (_better) of its held-out errors against `simpler`'s: t and p (p = 1 for
+    an unphysical fit)."""
     c = candidate(nom, richer.effect, reference(nom, _model((simpler,)), m=m))
     t, p = _better(simpler, c, len(nom.sig.index))
     return t, (1.0 if c.unphysical else p)
@@ -133,22 +131,50 @@ def _simplest_first(ranked: list[Candidate], nom: Nominal,
     best = ranked[0]
     sig = [c for c in ranked if c.significant]
     alpha = best.alpha
-    richer = next((c for c in sig if EFFECTS[c.effect].reduces_to == best.effect), None)
-    if richer is not None and _on_top(nom, richer, best, m)[1] < alpha:
-        return [richer] + [c for c in ranked if c is not richer], ""
     first, note = best, ""
+    # a richer effect that reduces to the best, significant or not (while the motor moves a
+    # Coulomb-dominated asymmetric friction is an offset, and may explain a hair less)
+    richer = next((c for c in ranked if c.testable and not c.unphysical
+                   and EFFECTS[c.effect].reduces_to == best.effect), None)
+    if richer is not None:
+        t, p = _on_top(nom, richer, best, m)
+        if richer.significant and p < alpha:
+            return [richer] + [c for c in ranked if c is not richer], ""
+        note = _ambiguity(nom, best, richer, t, m)
     for s in sig:
         if not (s.k < first.k or EFFECTS[first.effect].reduces_to == s.effect):
             continue
         t, p = _on_top(nom, first, s, m)
         if p >= alpha:
-            note = (f"{s.effect} or {first.effect}: this log cannot tell them apart "
-                    f"({first.effect} explains {first.heldout_pct:.3g} % of the held-out "
-                    f"residual, {s.effect} {s.heldout_pct:.3g} %; what {first.effect} adds to "
-                    f"{s.effect} has t = {t:.3g}, the bar t > {t_bar(alpha):.3g}); the "
-                    f"simpler, {s.effect}, is named")
+            note = (_ambiguity(nom, s, first, t, m)
+                    if EFFECTS[first.effect].reduces_to == s.effect else
+                    _apart(s, first, t, alpha))
             first = s
     return [first] + [c for c in ranked if c is not first], note
+
+
+def _apart(simpler: Candidate, richer: Candidate, t: float, alpha: float,
+           converse: float | None = None) -> str:
+    back = ("" if converse is None else
+            f", what {simpler.effect} adds to {richer.effect} t = {converse:.3g}")
+    return (f"{simpler.effect} or {richer.effect}: this log cannot tell them apart "
+            f"({richer.effect} explains {richer.heldout_pct:.3g} % of the held-out residual, "
+            f"{simpler.effect} {simpler.heldout_pct:.3g} %; what {richer.effect} adds to "
+            f"{simpler.effect} has t = {t:.3g}{back}, the bar t > {t_bar(alpha):.3g}); the "
+            f"simpler, {simpler.effect}, is named")
+
+
+def _ambiguity(nom: Nominal, simpler: Candidate, richer: Candidate, t: float,
+               m: int) -> str:
+    """The note when `simpler` is named over `richer`, which reduces to it, because what
+    `richer` adds to it (t) is not significant: stated unless `simpler` adds significantly to
+    `richer` in turn (then the log tells them apart: an offset the asymmetry's viscous shape
+    cannot follow), whichever of the two explains more and whether or not `richer` passes
+    on its own. (Before, the note came only when the richer explained more and was
+    significant, and an offset named otherwise said nothing of the asymmetry.)"""
+    alpha = simpler.alpha
+    t2, p2 = _on_top(nom, simpler, richer, m)
+    return "" if p2 < alpha else _apart(simpler, richer, t, alpha, t2)
 
 
 def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...] | None = None,
@@ -195,11 +221,16 @@ def _pruned(nom: Nominal, causes: tuple[Candidate, ...],
     hidden beside a backlash; the first round, which the backlash dominated, named its
     Coulomb part an offset; its viscous part passed in the third round, on top of the
     backlash, and the offset then added nothing to it. Every cause so checked, not only
-    these, dropped a true backlash under a spurious third-round hardening.)"""
+    these, dropped a true backlash under a spurious third-round hardening.) Likewise an
+    asymmetric friction named beside the offset it reduces to, in either order, must add
+    to all the others, the offset included (an offset of 182 N m beside a backlash, with the
+    evidence in the motor equation alone: asymmetric friction first, then backlash, offset
+    and hardening)."""
     n, i = len(nom.sig.index), 0
-    while i < len(causes) - 1:
+    while i < len(causes):
         c = causes[i]
-        if not any(EFFECTS[r.effect].reduces_to == c.effect for r in causes[i + 1:]):
+        if not any(EFFECTS[r.effect].reduces_to == c.effect for r in causes[i + 1:]) and not (
+                EFFECTS[c.effect].reduces_to in {r.effect for r in causes[:i] + causes[i + 1:]}):
             i += 1
             continue
         others = causes[:i] + causes[i + 1:]
