@@ -27,8 +27,8 @@ def draw(u: Uniform, sign: float, tau_max: float, f1_hz: float, K: float):
     # Engagement at a fraction of the deflection a tenth of the torque limit gives, so the
     # stiffer spring takes part on every axis without being engaged all the time. That
     # deflection is 0.6-2.2 times the RMS deflection of the battery's chirps with velocity
-    # feedforward (clean 40 s logs at 350.87 Hz), 0.9-5.8 times it without, where the median
-    # deflection is far smaller still (3 urad on the independent soft family): there the
+    # feedforward (clean 40 s logs at the paper's rate), 0.9-5.8 times it without, where the
+    # median deflection is far smaller still (3 urad on the independent soft family): there the
     # spring engages only at the sweep's largest deflections, and a target visibility can
     # ask for a second spring hundreds of times K: a hard stop, one count of the link
     # encoder worth tens of N m (a prototype case without feedforward, ratio 626 at 4.1 mrad:

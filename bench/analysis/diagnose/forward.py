@@ -84,8 +84,8 @@ def plant_substeps(log: Log) -> int:
     other log (a measured axis, another simulator) comes from a continuous plant: steps no
     longer than the friction constraint's time constant, which a longer step does not resolve
     (the soft constraint then chatters through the stick phases). Measured on the independent
-    simulator's soft family without feedforward, noise-free (40 s, 350.87 Hz, seed 7): the
-    true axis replays its log at 10.9 % torque error with one step a sample, 0.56 % with 8;
+    simulator's soft family without feedforward, noise-free (40 s at the paper's rate, seed
+    7): the true axis replays its log at 10.9 % torque error with one step a sample, 0.56 % with 8;
     the identified nominal at 10.7 % and 7.2 % with 2 steps or more."""
     if _mujoco_plant(log):
         steps = log.meta_float(PLANT_STEPS_KEY)
