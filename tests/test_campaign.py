@@ -382,7 +382,9 @@ def test_filter_overrides_keep_the_chooser_for_what_is_not_given():
     log = run_experiment("arm6", "axis1", duration=10.0, seed=0).log
     base = choose_filter(log).settings
     assert base.stencil == 5      # arm6's ~15 Hz mode at the bench's rate needs 5 points
-    assert _filter(RunSettings(model="arm6"), log) is None
-    s = _filter(RunSettings(model="arm6", wn=200.0), log)
+    assert _filter(RunSettings(model="arm6"), log) == (None, None)
+    s, mode = _filter(RunSettings(model="arm6", wn=200.0), log)
     assert (s.wn, s.Nd, s.stencil) == (200.0, base.Nd, base.stencil)
-    assert _filter(RunSettings(model="arm6", wn=200.0, stencil=3), log).stencil == 3
+    own = choose_filter(log).first_mode    # the log's own measurement goes to identify
+    assert (mode.found, mode.method, mode.note) == (own.found, own.method, own.note)
+    assert _filter(RunSettings(model="arm6", wn=200.0, stencil=3), log)[0].stencil == 3

@@ -35,6 +35,7 @@ from jointbench.bench.sim.experiment import run_experiment
 from jointbench.bench.sim.sensors import Sensors
 from jointbench.identification.defaults import choose_filter
 from jointbench.identification.filtering import FilterSettings
+from jointbench.identification.first_mode import FirstMode
 from jointbench.identification.identify import identify
 from jointbench.identification.physical import invert_motor_only
 
@@ -82,17 +83,18 @@ def _sensors(settings: RunSettings, model_ref: str, joint: str | None):
         torque_noise_std=settings.noise * base.torque_noise_std)
 
 
-def _filter(settings: RunSettings, log) -> FilterSettings | None:
-    """The run's filter: the default one (`choose_filter`: the first mode measured on the
-    log, never the truth) with the settings' wn, Nd and stencil (None: the identification's
-    own default)."""
+def _filter(settings: RunSettings, log) -> tuple[FilterSettings | None, FirstMode | None]:
+    """The run's filter and the first mode it was designed from: the default one
+    (`choose_filter`: the first mode measured on the log, never the truth) with the settings'
+    wn, Nd and stencil ((None, None): the identification's own default)."""
     if settings.wn is None and settings.Nd is None and settings.stencil is None:
-        return None
-    base = choose_filter(log).settings
+        return None, None
+    choice = choose_filter(log)
+    base = choice.settings
     return FilterSettings(wn=settings.wn if settings.wn is not None else base.wn, m=base.m,
                           Nd=settings.Nd if settings.Nd is not None else base.Nd, ts=log.ts,
                           stencil=settings.stencil if settings.stencil is not None
-                          else base.stencil)
+                          else base.stencil), choice.first_mode
 
 
 def corrected_sigmas(ident, log) -> dict[str, float]:
@@ -183,7 +185,8 @@ def run_task_with(methods: Sequence[Method], timeout_s: float, task: RunTask) ->
         for m in s.id_models:
             tm = time.perf_counter()
             try:
-                ident = identify(log, m, _filter(s, log))
+                chosen, mode = _filter(s, log)
+                ident = identify(log, m, chosen, first_mode=mode)
                 corr = corrected_sigmas(ident, log)
             except Exception as err:  # noqa: BLE001 - recorded in the row
                 reasons.append(f"{m}: {type(err).__name__}: {err}")

@@ -25,6 +25,7 @@ from jointbench.identification import output
 from jointbench.identification.defaults import PAPER_F1, PAPER_ND, PAPER_RATE, PAPER_WN, nd_from_f1
 from jointbench.identification.design import design_bandpass
 from jointbench.identification.filtering import FilterSettings
+from jointbench.identification.first_mode import measure_first_mode
 from jointbench.identification.identify import identify
 from jointbench.identification.parameters import STIFFNESS_AND_INERTIAS
 
@@ -54,10 +55,12 @@ def evaluate(task: TuneTask) -> np.ndarray:
     except Exception:  # noqa: BLE001 - a failed experiment contributes NaN
         return out
     truth = log.truth()
+    mode = measure_first_mode(log)   # once per log, not once per pair (identify would)
     for i, (wn, Nd) in enumerate(task.pairs):
         try:
             ident = identify(log, task.id_model,
-                             FilterSettings(wn=float(wn), m=4, Nd=int(Nd), ts=log.ts))
+                             FilterSettings(wn=float(wn), m=4, Nd=int(Nd), ts=log.ts),
+                             first_mode=mode)
         except Exception:  # noqa: BLE001 - e.g. wn beyond Nyquist, too few samples
             continue
         for j, p in enumerate(task.params):
