@@ -3,22 +3,14 @@ mode with the chosen differentiator (eq. 29), and does the band hold the mode.""
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from scipy.optimize import brentq
 
 from jointbench.identification.design import design_bandpass
-from jointbench.identification.filtering import FilterSettings
+from jointbench.identification.filtering import FilterSettings, stencil_gain
 
 MIN_CUTOFF_OVER_F1 = 1.3   # decimated cutoff / f1 below which the band does not hold the mode
 NYQUIST_CAP = 0.8          # wn_from_f1 caps the Butterworth at 0.8 of the Nyquist frequency
-
-
-def stencil_gain(x: float, stencil: int) -> float:
-    """Gain of the central difference at w Ts = x over the true derivative: sin(x) / x for
-    eq. (22), (8 sin x - sin 2x) / (6 x) for the 5-point stencil."""
-    return math.sin(x) / x if stencil == 3 else (8 * math.sin(x) - math.sin(2 * x)) / (6 * x)
 
 
 def required_rate_hz(f1_hz: float, stencil: int = 3, nd: int = 2, m: int = 4) -> float:

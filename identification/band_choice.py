@@ -30,9 +30,8 @@ import numpy as np
 from scipy import signal
 from scipy.optimize import brentq
 
-from jointbench.identification.band_checks import stencil_gain
 from jointbench.identification.defaults import STENCIL_DISTORTION_MAX, stencil_for
-from jointbench.identification.filtering import FilterSettings
+from jointbench.identification.filtering import FilterSettings, stencil_gain
 from jointbench.identification.log import Log
 
 PRECISION_PARAMS = ("K", "Jm", "JL")

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from jointbench.identification.band_checks import stencil_gain
+from jointbench.identification.filtering import stencil_gain
 from jointbench.identification.band_choice import (CONSISTENCY_Z, butterworth_flat_top_hz,
                                                    choose_band, excitation_top_hz,
                                                    stencil_top_hz, wide_settings)
