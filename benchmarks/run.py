@@ -17,7 +17,8 @@ What is measured (wall time with time.perf_counter, best of N repeats, in this p
 5. Start-up of the command line, in fresh processes (best of 5, resp. 3): `jointbench --help`
    against a bare `python -c pass` (target: under 0.5 s), and `jointbench simulate
    --duration 60` against the simulation's own time, the in-process experiment of [1]
-   (target: under 1.5x).
+   (target: under 1.5x), and the floor under it: a fresh `python -c "import numpy, mujoco"`
+   (MuJoCo's OpenGL probe off, as the CLI sets it) added to the experiment's time.
 6. `jointbench survey --model arm6 --seed 1 --workers 2` (six 60 s experiments, each
    identified), in a fresh process, once: its wall time (issue 18's target: under 30 s on 2
    cores).
@@ -172,11 +173,12 @@ HELP_TARGET_S = 0.5
 SIMULATE_TARGET = 1.5
 
 
-def _command_wall(argv: list[str], repeats: int) -> float:
+def _command_wall(argv: list[str], repeats: int, extra_env: dict[str, str] | None = None) -> float:
     """Best wall time [s] of `python argv` in a fresh process (output discarded), as a user
     runs it: with Python's bytecode cache (PYTHONDONTWRITEBYTECODE, set on some CI machines,
     would charge every start with compiling the package's sources again, about 0.08 s)."""
     env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    env.update(extra_env or {})
 
     def run() -> None:
         subprocess.run([sys.executable, *argv], check=True, stdout=subprocess.DEVNULL,
@@ -198,7 +200,15 @@ def bench_startup(sim_wall: float) -> dict[str, float]:
     print(f"[5] `jointbench simulate --duration 60`: {sim:.3f} s wall (best of 3) against "
           f"{sim_wall:.3f} s for the experiment in-process [1] ({sim / sim_wall:.2f}x; target "
           f"under {SIMULATE_TARGET}x)")
-    return {"bare": bare, "help": helps, "simulate": sim, "simulate_ratio": sim / sim_wall}
+    # The least any command that simulates with these libraries can take: the interpreter and
+    # the imports of numpy and MuJoCo (with MuJoCo's OpenGL probe off, as the CLI sets it).
+    floor = _command_wall(["-c", "import numpy, mujoco"], 5, {"MUJOCO_GL": "disable"})
+    print(f"[5] `python -c 'import numpy, mujoco'`: {floor:.3f} s wall (best of 5): a simulating "
+          f"command cannot go under ({floor:.3f} + {sim_wall:.3f}) / {sim_wall:.3f} = "
+          f"{(floor + sim_wall) / sim_wall:.2f}x; jointbench's own share of the command: "
+          f"{sim - floor - sim_wall:.3f} s")
+    return {"bare": bare, "help": helps, "simulate": sim, "simulate_ratio": sim / sim_wall,
+            "floor": floor, "floor_ratio": (floor + sim_wall) / sim_wall}
 
 
 SURVEY_TARGET_S = 30.0
@@ -255,6 +265,8 @@ def main() -> None:
     rows.append(("`python -c pass` wall", f"{startup['bare']:.3f} s", "-", "-"))
     rows.append(("`simulate --duration 60` / experiment", f"{startup['simulate_ratio']:.2f}x",
                  f"< {SIMULATE_TARGET}x", f"{startup['simulate_ratio'] / SIMULATE_TARGET:.2f}"))
+    rows.append(("floor: (numpy + MuJoCo imports + experiment) / experiment",
+                 f"{startup['floor_ratio']:.2f}x", "-", "-"))
     rows.append(("`survey --model arm6` (2 workers) wall", f"{survey:.1f} s",
                  f"< {SURVEY_TARGET_S:g} s", f"{survey / SURVEY_TARGET_S:.2f}"))
     w0 = max(len(r[0]) for r in rows + [("figure",)])
