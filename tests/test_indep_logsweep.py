@@ -7,9 +7,10 @@ The log sweep spends a fifth of its time above the first mode (heavy_link: 15 s 
 without. Switched off one at a time (benchmarks/indep_accuracy.py, 2026-12-01), only the torque
 noise moves heavy_link's Jm (-1.71 % with it, -0.10 % without; quantisation, the measured
 against the true f1, the chooser's against the wide band, the Welch segment of the
-instruments and perfect instruments from a noise-free replay all within 0.4 % of -1.7 %).
-Over seeds 1-16 its Jm is -0.38 % on average (sd 0.90 %, corrected sigma 0.72 %): the 0.5 %
-bound is under one sigma of such a log, and seed 1 is a 1.5-sd draw. So the tests below check
+instruments and perfect instruments from a noise-free replay all within 0.35 % of -1.7 %).
+Over seeds 1-16 its Jm is -0.38 % on average (sd 0.96 %, corrected sigma 0.71 %; -0.10 %
+noise-free, so a bias of -0.28 +- 0.24 %, not significant): the 0.5 % bound is under one
+sigma of such a log, and seed 1 is a 1.4-sd draw. So the tests below check
 what the log supports: K and JL within 0.5 %, the truth within 3 corrected sigma, and Jm's
 sigma under 1 %; Jm within 0.5 % is a strict xfail with the measured value."""
 
