@@ -4,7 +4,7 @@
 The log sweep spends a fifth of its time above the first mode (heavy_link: 15 s of 60 above
 6 Hz, against 48 s for the linear sweep), where the motor inertia is seen; the torque noise
 (1.25 % of tau_max) then leaves Jm a corrected sigma of 0.5-0.8 % with feed-forward and 1.3-2 %
-without. Switched off one at a time (benchmarks/indep_accuracy.py, 2026-12-01), only the torque
+without. Switched off one at a time (measured 2026-12-01, seed 1), only the torque
 noise moves heavy_link's Jm (-1.71 % with it, -0.10 % without; quantisation, the measured
 against the true f1, the chooser's against the wide band, the Welch segment of the
 instruments and perfect instruments from a noise-free replay all within 0.35 % of -1.7 %).
