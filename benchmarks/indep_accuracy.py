@@ -18,7 +18,9 @@ linear sweep (`--sweep log`: logarithmic), every seed's K, Jm, JL errors and cor
 sigma, then their mean, standard deviation and rms, for `chooser` (the chooser's band
 alone), `wide` (the chooser's wn with Nd lowered until the decimated cutoff 0.8 Fs / (2 Nd)
 reaches the excitation's top measured on the log, identification/band_choice.py) and
-`defaults` (the pick between the two, when there is a wide band; rows say which).
+`defaults` (the pick between the two, when there is a wide band; rows say which), after
+the noise-free log's (ideal sensors) errors, the reference a bias is measured from
+(`--feedforward on|off|both`).
 
 `--cross-check` adds the two simulators side by side: the paper's prototype simulated by
 MuJoCo (`run_experiment("prototype")`, seed 1, 60 s) and the same axis (its truth, sensors,
@@ -95,13 +97,21 @@ def band_fits(log: Log) -> dict[str, Identification]:
     return fits
 
 
-def spread(families: list[str], seeds: list[int], duration: float, sweep: str = "linear"
-           ) -> None:
+def spread(families: list[str], seeds: list[int], duration: float, sweep: str = "linear",
+           feedforwards: tuple[bool, ...] = (True, False)) -> None:
     """The joint-motor errors and corrected sigmas over `seeds`, and their mean, sd, rms, in
-    the chooser's band, the wide band and the defaults' pick (`band_fits`)."""
+    the chooser's band, the wide band and the defaults' pick (`band_fits`); first the
+    noise-free log's (ideal sensors: the same for every seed), from which a bias is told: the
+    mean's distance to it against sd / sqrt(n)."""
     print(f"joint-motor spread over seeds {seeds}, {sweep} sweep: error % (corrected sigma %)")
     for name in families:
-        for feedforward in (True, False):
+        for feedforward in feedforwards:
+            clean = simulate(FAMILIES[name], 1, duration, sweep, feedforward, ideal_sensors=True)
+            for label, result in band_fits(clean).items():
+                truth = clean.truth()
+                print(f"{name:<12} {'on' if feedforward else 'off':>3} noise-free {label:<8} "
+                      + " ".join(f"{p} {100 * (result.physical[p] / truth[p] - 1):+6.2f}"
+                                 for p in PARAMS), flush=True)
             rows: dict[str, list[list[float]]] = {}
             for seed in seeds:
                 log = simulate(FAMILIES[name], seed, duration, sweep, feedforward)
@@ -183,10 +193,13 @@ def main(argv: list[str] | None = None) -> int:
                         help="joint-motor spread over these seeds ('1-6' or '1,2,5') only")
     parser.add_argument("--sweep", choices=("linear", "log"), default="linear",
                         help="the sweep of the --spread logs")
+    parser.add_argument("--feedforward", choices=("on", "off", "both"), default="both",
+                        help="velocity feed-forward of the --spread logs")
     args = parser.parse_args(argv)
     if args.spread:
         start = time.perf_counter()
-        spread(args.families.split(","), args.spread, args.duration, args.sweep)
+        ff = {"on": (True,), "off": (False,), "both": (True, False)}[args.feedforward]
+        spread(args.families.split(","), args.spread, args.duration, args.sweep, ff)
         print(f"wall time {time.perf_counter() - start:.0f} s")
         return 0
     header = (f"{'family':<12} {'f1 Hz':>6} {'JL/Jm':>6} {'ff':>3} {'sweep':<6} "

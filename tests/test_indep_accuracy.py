@@ -50,8 +50,10 @@ F1_OVER: dict[str, str] = {}   # the frequency response alone: heavy_link +11.3 
 # (the band up to the excitation's top, Nd 6 with soft's paper Butterworth at 28 Hz) soft's
 # log sweeps came out Jm -0.49 +- 0.22 %, K -0.19, JL -0.26 % (a guess, not traced: the
 # Coulomb columns, built from the filtered velocity, see the roll-off differently). Without
-# feed-forward neither heavy_link nor soft shows a resonance (generic band, no wide
-# candidate): unchanged, Jm +2.4 and +4.1 % at seed 1 (not covered by the bounds here).
+# feed-forward neither heavy_link's nor soft's link response shows a resonance; the motor
+# response's does (first_mode._from_motor: 5.92 and 3.95 Hz), so the band is designed from it
+# instead of the generic one: Jm +2.42 -> +3.02 and +4.06 -> +3.67 % at seed 1 (corrected
+# sigma 2.1 and 1.6 %; not covered by the bounds here; tests/test_indep_logsweep.py).
 JOINT_MOTOR_OVER: dict[str, str] = {}
 # the band rule's pick at seed 1 (measured; stiff_small's chooser band reaches the top already)
 BAND_USED = {"wrist": "chooser", "heavy_link": "wide", "stiff_small": "chooser",
