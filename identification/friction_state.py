@@ -30,8 +30,6 @@ import numpy as np
 
 SUBSTEPS = 32       # sub-steps a sample interval: a reversal placed to 1/32 of a sample
 MATCH_PASSES = 2    # passes shifting the drive onto the next sample's velocity
-# the expectation's nodes: start-velocity offsets [rad/s], drive offsets [rad/s^2], weights
-Nodes = tuple[np.ndarray, np.ndarray, np.ndarray]
 
 
 def _interval(u: np.ndarray, d0: np.ndarray, d1: np.ndarray, visc: float, rate: float,
@@ -61,32 +59,12 @@ def _interval(u: np.ndarray, d0: np.ndarray, d1: np.ndarray, visc: float, rate: 
     return I1, I2, u
 
 
-def _expected(u0: np.ndarray, d0: np.ndarray, d1: np.ndarray, visc: float, rate: float,
-              ts: float, held: np.ndarray, noise: Nodes | None
-              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """`_interval`, or its expectation over the `noise` nodes (the start velocity moved by
-    dv where the axis is not held at rest, the drive by da over the interval)."""
-    if noise is None:
-        return _interval(u0, d0, d1, visc, rate, ts)
-    out = [np.zeros(len(u0)) for _ in range(3)]
-    for dv, da, w in zip(*noise):
-        for acc, x in zip(out, _interval(np.where(held, u0, u0 + dv), d0 + da, d1 + da, visc,
-                                         rate, ts)):
-            acc += w * x
-    return out[0], out[1], out[2]
-
-
 def friction_integrals(v: np.ndarray, drive0: np.ndarray, drive1: np.ndarray, visc: float,
-                       rate: float, ts: float, noise: Nodes | None = None
-                       ) -> tuple[np.ndarray, np.ndarray]:
+                       rate: float, ts: float) -> tuple[np.ndarray, np.ndarray]:
     """Samples of the first and second integrals of the friction state s(t) in [-1, 1]
     (module docstring), for velocity samples v [rad/s], the drive [rad/s^2] at the start
     (drive0[k]) and end (drive1[k]) of interval k, the viscous rate visc = FV / J [1/s] and
-    rate = FS / J [rad/s^2] > 0. The second is NaN where v is. `noise` (dv [rad/s], da
-    [rad/s^2], weights): the state's expectation over the unlogged noise (`_expected`,
-    `jitter.noise_nodes`), the drive shifted so that the expected end velocity meets the
-    measured one (the noise-free one, shifted instead, moved Jm by +1.3 and +0.9 % on
-    heavy_link and soft without feed-forward, seeds 1-10)."""
+    rate = FS / J [rad/s^2] > 0. The second is NaN where v is."""
     v = np.asarray(v, dtype=float)
     u0, u1 = np.nan_to_num(v[:-1]), np.nan_to_num(v[1:])
     d0 = np.nan_to_num(np.asarray(drive0, dtype=float)[:-1])
@@ -100,14 +78,14 @@ def friction_integrals(v: np.ndarray, drive0: np.ndarray, drive1: np.ndarray, vi
     # nothing measured)
     held = np.r_[False, end[:-1] == 0] & (np.abs(d0) <= rate)
     u0 = np.where(held, 0.0, u0)
-    I1, I2, end = _expected(u0, d0, d1, visc, rate, ts, held, noise)
+    I1, I2, end = _interval(u0, d0, d1, visc, rate, ts)
     for _ in range(MATCH_PASSES):
         # only where the axis ends the interval moving as measured: an interval that ends at
         # rest says nothing of the drive (any drive inside the band holds it), and shifting it
         # onto a creeping or noisy velocity would invent a breakaway
         moving = (np.sign(end) == np.sign(u1)) & (end != 0)
         shift = shift + np.where(moving, (u1 - end) / ts, 0.0)
-        I1, I2, end = _expected(u0, d0 + shift, d1 + shift, visc, rate, ts, held, noise)
+        I1, I2, end = _interval(u0, d0 + shift, d1 + shift, visc, rate, ts)
     S1 = np.concatenate([[0.0], np.cumsum(I1)])
     S2 = np.concatenate([[0.0], np.cumsum(S1[:-1] * ts + I2)])
     S2[~np.isfinite(v)] = np.nan

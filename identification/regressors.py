@@ -17,7 +17,7 @@ linear relation survives the filtering (section 3.2).
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -25,7 +25,6 @@ from jointbench.identification.filtering import (Drive, FilterSettings, as_accel
                                                  coulomb_integrals,
                                                  decimate_parallel, derivatives, kink_corrected,
                                                  lowpass, stencil_view, zoh_align)
-from jointbench.identification.friction_state import friction_integrals
 from jointbench.identification.jitter import LogNoise, stage_column
 from jointbench.identification.log import Log, LogError
 from jointbench.identification.log_schema import PLANT_INTEGRATOR_KEY, PLANT_STEPS_KEY
@@ -66,20 +65,13 @@ def _sign(x: np.ndarray, s: FilterSettings, rate: float = 0.0,
     kink has them (`kink_corrected`, with the held drive `held` = tau / J when given) and
     placed between samples with that kink (`crossing_share`); with `drive`, the friction's
     state with its stick phases (`coulomb_integrals`) in place of sign(x). `inside` False:
-    the reversals placed linearly between samples (`_friction_models`). `noise`: the state's
-    expectation over the log's unlogged noise (identification/jitter.py), with `drive` the
-    stick-slip state's, or for a once-a-sample RK4 plant (`noise.timeconst` set) MuJoCo's
-    per-stage friction (`jitter.stage_column`) in place of everything above."""
-    if noise is not None and noise.timeconst is not None and rate > 0:
+    the reversals placed linearly between samples (`_friction_models`). `noise`: a
+    once-a-sample RK4 plant's log, whose motor state is MuJoCo's per-stage friction over the
+    log's unlogged noise (`jitter.stage_column`), in place of everything above."""
+    if noise is not None and rate > 0:
         return stage_column(x, noise, s, rate)
-    v = x
     if rate > 0:
         x = kink_corrected(x, rate, s, held=held, drive=drive, inside=inside)
-    if noise is not None and drive is not None and rate > 0 and s.stencil == 5:
-        nodes = noise.nodes(v, s)
-        S2 = friction_integrals(x, drive[0], drive[1], drive[2], rate, s.ts,
-                                None if nodes is None else (nodes.dv, nodes.da, nodes.w))[1]
-        return stencil_view(S2, s.ts, 5)
     if s.stencil == 5:
         return stencil_view(coulomb_integrals(x, s.ts, rate if inside else 0.0, drive)[1],
                             s.ts, 5)
@@ -148,9 +140,12 @@ def _friction_models(log: Log, friction: tuple[float, float] | Mapping[str, floa
     torque tau / Jm and its drive between samples, (tau[k] - K defl) / Jm at the interval's
     start and end with the viscous rate FVm / Jm, for its stick phases (`friction_state`):
     the closed loop holds the motor at its reversals (stiff_small without feed-forward: a
-    sixth of the time), that state taken over the log's unlogged torque noise
-    (identification/jitter.py: heavy_link without feed-forward, seed 1, FVm +262 -> +68 %,
-    FSm -10.6 -> -0.9 %). The link, driven by the spring alone, keeps its reversals
+    sixth of the time). That state is the noise-free one: its expectation over the log's
+    torque noise (as the once-a-sample plant's below) fixed the friction split without
+    feed-forward (heavy_link and soft, seeds 1-10: FVm +175 / +232 -> -34 / -6 %, FSm -8.8 /
+    -17.8 -> +1.8 / +0.4 %, Jm unchanged within its 2 % spread) but moved heavy_link's Jm
+    with feed-forward by +0.5 % (seeds 1-6, -0.02 -> +0.50 %; not understood, not shipped:
+    branch jit7-b). The link, driven by the spring alone, keeps its reversals
     slip-through (its stick phases, tried the same way, moved K by +1.3 % on an axis without
     feed-forward). A log whose metadata says the simulator took one RK4 step a sample
     (`substeps: 1`, MuJoCo's arm6 and prototype at the paper's rate) cannot switch its
@@ -165,18 +160,17 @@ def _friction_models(log: Log, friction: tuple[float, float] | Mapping[str, floa
     p = friction if isinstance(friction, Mapping) else {}
     K, Jm = p.get("K", 0.0), p.get("Jm", 0.0)
     tau = np.asarray(log.tau_m, dtype=float)
-    noise = LogNoise(np.asarray(log.q_m, dtype=float), _resolution(log), tau, defl, p)
     if log.meta.get(PLANT_STEPS_KEY, "").strip() == "1":
-        rk4 = "RK4" in log.meta.get(PLANT_INTEGRATOR_KEY, "")
-        if rk4 and rates[0] > 0 and Jm > 0:
-            noise = replace(noise, timeconst=log.plant_timeconst() or 0.0)
+        if "RK4" in log.meta.get(PLANT_INTEGRATOR_KEY, "") and rates[0] > 0 and Jm > 0:
+            noise = LogNoise(np.asarray(log.q_m, dtype=float), _resolution(log), tau, defl, p,
+                             log.plant_timeconst() or 0.0)
             return (rates[0], None, None, False, noise), (rates[1], None, None, False)
         return (rates[0], None, None, False), (rates[1], None, None, False)
     if not (rates[0] > 0 and K > 0):
         return (rates[0],), (rates[1],)
     nxt = np.r_[defl[1:], defl[-1:]]
     drive = ((tau - K * defl) / Jm, (tau - K * nxt) / Jm, max(p.get("FVm", 0.0), 0.0) / Jm)
-    return (rates[0], tau / Jm, drive, True, noise), (rates[1],)
+    return (rates[0], tau / Jm, drive), (rates[1],)
 
 
 def _resolution(log: Log) -> float:

@@ -100,7 +100,7 @@ def test_a_one_step_a_sample_simulator_keeps_the_linear_placement():
     without stick phases; from parameters, the motor's is MuJoCo's per-stage friction of the
     log's time constant over the log's noise (the raw positions, the encoder resolution, the
     held torque and the parameters: identification/jitter.py). Any other log (a real axis: no
-    such key) gets the sub-sample model with its stick phases, over the same noise."""
+    such key) gets the sub-sample model with its stick phases."""
     t = np.arange(50) * TS
     log = Log(t=t, q_m=np.sin(t), tau_m=np.cos(t), q=np.sin(t),
               meta={"substeps": "1", "integrator": "mjINT_RK4", "friction_timeconst_s": "0.002",
@@ -118,5 +118,4 @@ def test_a_one_step_a_sample_simulator_keeps_the_linear_placement():
     euler = replace(log, meta={"substeps": "1", "integrator": "mjINT_EULER"})
     assert _friction_models(euler, p, np.zeros(50))[0] == (3.0, None, None, False)
     motor, link = _friction_models(replace(log, meta={}), p, np.zeros(50))
-    assert motor[0] == 3.0 and len(motor) == 5 and motor[2][2] == 0.5 and link == (0.5,)
-    assert motor[3] is True and motor[4].timeconst is None
+    assert motor[0] == 3.0 and len(motor) == 3 and motor[2][2] == 0.5 and link == (0.5,)

@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 
 from jointbench.identification.filtering import FilterSettings, derivatives, lowpass
-from jointbench.identification.friction_state import friction_integrals
 from jointbench.identification.jitter import (chain_jitter, noise_nodes, stage_state,
                                               torque_noise_sweep)
 
@@ -115,24 +114,3 @@ def test_noise_nodes_have_the_pairs_moments():
     cov = np.sum(w * nodes.dv * nodes.da) / (g * sweep * sweep / TS)
     assert cov == pytest.approx(rho)
     assert noise_nodes(0.0, s) is None
-
-
-def test_friction_integrals_over_noise():
-    rate = 10.0
-    v = np.array([0.5, 0.4, 0.3])
-    d = np.full(3, 2.0)
-    # one node at zero is the noise-free state
-    zero = (np.zeros(1), np.zeros(1), np.ones(1))
-    for a, b in zip(friction_integrals(v, d, d, 0.0, rate, TS),
-                    friction_integrals(v, d, d, 0.0, rate, TS, zero)):
-        assert np.array_equal(a, b)
-    # held at rest, a drive noise that stays inside the band averages out: s = E[d] / rate;
-    # one that carries it out (here d +- 12 > rate) breaks it away both ways, and the mean
-    # state is no longer the held one
-    rest = np.zeros(3)
-    small = (np.zeros(2), np.array([-1.0, 1.0]), np.array([0.5, 0.5]))
-    S1, _ = friction_integrals(rest, d, d, 0.0, rate, TS, small)
-    assert np.diff(S1) / TS == pytest.approx([0.2, 0.2], abs=1e-12)
-    large = (np.zeros(2), np.array([-12.0, 12.0]), np.array([0.5, 0.5]))
-    S1, _ = friction_integrals(rest, d, d, 0.0, rate, TS, large)
-    assert np.all(np.abs(np.diff(S1) / TS - 0.2) > 0.05)
