@@ -152,8 +152,11 @@ def _friction_models(log: Log, friction: tuple[float, float] | Mapping[str, floa
     friction inside a sample: from rates, the reversals placed linearly between samples;
     from parameters, the motor's state is MuJoCo's per-stage soft friction of the log's
     `friction_timeconst_s` over the noise (`jitter.stage_column`; arm6 axis5, 240 s, seeds
-    1-3: FVm +5.6/+5.8/+8.4 -> -0.5/-0.7/+2.3 %). Zero where a friction or inertia is missing
-    or not positive."""
+    1-3: FVm +5.6/+5.8/+8.4 -> -0.2/-0.4/+2.7 %, sigma 1.6 %), once the previous pass has a
+    positive K: where the motor sticks that state balances the drive, the logged torque
+    included, and on a log whose motion is the noise's alone (a 1e-6 rad chirp, where the
+    first pass's K is negative) such a column would explain the torque by itself. Zero where
+    a friction or inertia is missing or not positive."""
     rates = friction if not isinstance(friction, Mapping) else tuple(
         friction[f] / friction[j] if friction.get(j, 0) > 0 and friction.get(f, 0) > 0
         else 0.0 for f, j in (("FSm", "Jm"), ("FS", "JL")))
@@ -161,7 +164,7 @@ def _friction_models(log: Log, friction: tuple[float, float] | Mapping[str, floa
     K, Jm = p.get("K", 0.0), p.get("Jm", 0.0)
     tau = np.asarray(log.tau_m, dtype=float)
     if log.meta.get(PLANT_STEPS_KEY, "").strip() == "1":
-        if "RK4" in log.meta.get(PLANT_INTEGRATOR_KEY, "") and rates[0] > 0 and Jm > 0:
+        if "RK4" in log.meta.get(PLANT_INTEGRATOR_KEY, "") and rates[0] > 0 and K > 0:
             noise = LogNoise(np.asarray(log.q_m, dtype=float), _resolution(log), tau, defl, p,
                              log.plant_timeconst() or 0.0)
             return (rates[0], None, None, False, noise), (rates[1], None, None, False)
