@@ -25,10 +25,12 @@ from jointbench.identification.filtering import (Drive, FilterSettings, as_accel
                                                  coulomb_integrals,
                                                  decimate_parallel, derivatives, kink_corrected,
                                                  lowpass, stencil_view, zoh_align)
+from jointbench.identification.jitter import LogNoise, stage_column
 from jointbench.identification.log import Log, LogError
-from jointbench.identification.log_schema import PLANT_STEPS_KEY
+from jointbench.identification.log_schema import PLANT_INTEGRATOR_KEY, PLANT_STEPS_KEY
 from jointbench.identification.parameters import JOINT_MOTOR, MOTOR_ONLY, MOTOR_ONLY_CORRECTED, RIGID
 
+MOTOR_RESOLUTION_KEY = "motor_encoder_resolution_rad"
 MODELS = ("joint-motor", "motor-only", "rigid")
 
 
@@ -55,7 +57,7 @@ def _filtered(x: np.ndarray, s: FilterSettings, nd: int) -> list[np.ndarray]:
 
 def _sign(x: np.ndarray, s: FilterSettings, rate: float = 0.0,
           held: np.ndarray | None = None, drive: Drive | None = None,
-          inside: bool = True) -> np.ndarray:
+          inside: bool = True, noise: LogNoise | None = None) -> np.ndarray:
     """sign(x) at the samples (the paper's chain), or as the 5-point stencil sees it (the
     `stencil_view` of `coulomb_integrals`: each reversal placed between samples, weighted as
     its acceleration).
@@ -63,7 +65,11 @@ def _sign(x: np.ndarray, s: FilterSettings, rate: float = 0.0,
     kink has them (`kink_corrected`, with the held drive `held` = tau / J when given) and
     placed between samples with that kink (`crossing_share`); with `drive`, the friction's
     state with its stick phases (`coulomb_integrals`) in place of sign(x). `inside` False:
-    the reversals placed linearly between samples (`_friction_models`)."""
+    the reversals placed linearly between samples (`_friction_models`). `noise`: a
+    once-a-sample RK4 plant's log, whose motor state is MuJoCo's per-stage friction over the
+    log's unlogged noise (`jitter.stage_column`), in place of everything above."""
+    if noise is not None and rate > 0:
+        return stage_column(x, noise, s, rate)
     if rate > 0:
         x = kink_corrected(x, rate, s, held=held, drive=drive, inside=inside)
     if s.stencil == 5:
@@ -134,26 +140,48 @@ def _friction_models(log: Log, friction: tuple[float, float] | Mapping[str, floa
     torque tau / Jm and its drive between samples, (tau[k] - K defl) / Jm at the interval's
     start and end with the viscous rate FVm / Jm, for its stick phases (`friction_state`):
     the closed loop holds the motor at its reversals (stiff_small without feed-forward: a
-    sixth of the time). The link, driven by the spring alone, keeps its reversals
+    sixth of the time). That state is the noise-free one: its expectation over the log's
+    torque noise (as the once-a-sample plant's below) fixed the friction split without
+    feed-forward (heavy_link and soft, seeds 1-10: FVm +175 / +232 -> -34 / -6 %, FSm -8.8 /
+    -17.8 -> +1.8 / +0.4 %, Jm unchanged within its 2 % spread) but moved heavy_link's Jm
+    with feed-forward by +0.5 % (seeds 1-6, -0.02 -> +0.50 %; not understood, not shipped:
+    branch jit7-b). The link, driven by the spring alone, keeps its reversals
     slip-through (its stick phases, tried the same way, moved K by +1.3 % on an axis without
-    feed-forward). A log whose metadata says the simulator took one step a sample
-    (`substeps: 1`, MuJoCo's arm6 at the paper's rate) cannot switch its friction inside a sample:
-    the reversals stay placed linearly between samples by the rates (the sub-sample model
-    there: arm6 axis2 Jm -0.01 -> -1.1 %). Zero where a friction or inertia is missing or
-    not positive."""
+    feed-forward). A log whose metadata says the simulator took one RK4 step a sample
+    (`substeps: 1`, MuJoCo's arm6 and prototype at the paper's rate) cannot switch its
+    friction inside a sample: from rates, the reversals placed linearly between samples;
+    from parameters, the motor's state is MuJoCo's per-stage soft friction of the log's
+    `friction_timeconst_s` over the noise (`jitter.stage_column`; arm6 axis5, 240 s, seeds
+    1-3: FVm +5.6/+5.8/+8.4 -> -0.2/-0.4/+2.7 %, sigma 1.6 %), once the previous pass has a
+    positive K: where the motor sticks that state balances the drive, the logged torque
+    included, and on a log whose motion is the noise's alone (a 1e-6 rad chirp, where the
+    first pass's K is negative) such a column would explain the torque by itself. Zero where
+    a friction or inertia is missing or not positive."""
     rates = friction if not isinstance(friction, Mapping) else tuple(
         friction[f] / friction[j] if friction.get(j, 0) > 0 and friction.get(f, 0) > 0
         else 0.0 for f, j in (("FSm", "Jm"), ("FS", "JL")))
-    if log.meta.get(PLANT_STEPS_KEY, "").strip() == "1":
-        return (rates[0], None, None, False), (rates[1], None, None, False)
     p = friction if isinstance(friction, Mapping) else {}
     K, Jm = p.get("K", 0.0), p.get("Jm", 0.0)
+    tau = np.asarray(log.tau_m, dtype=float)
+    if log.meta.get(PLANT_STEPS_KEY, "").strip() == "1":
+        if "RK4" in log.meta.get(PLANT_INTEGRATOR_KEY, "") and rates[0] > 0 and K > 0:
+            noise = LogNoise(np.asarray(log.q_m, dtype=float), _resolution(log), tau, defl, p,
+                             log.plant_timeconst() or 0.0)
+            return (rates[0], None, None, False, noise), (rates[1], None, None, False)
+        return (rates[0], None, None, False), (rates[1], None, None, False)
     if not (rates[0] > 0 and K > 0):
         return (rates[0],), (rates[1],)
-    tau = np.asarray(log.tau_m, dtype=float)
     nxt = np.r_[defl[1:], defl[-1:]]
     drive = ((tau - K * defl) / Jm, (tau - K * nxt) / Jm, max(p.get("FVm", 0.0), 0.0) / Jm)
     return (rates[0], tau / Jm, drive), (rates[1],)
+
+
+def _resolution(log: Log) -> float:
+    """The motor encoder's resolution [rad] the log's metadata gives, 0 when it gives none."""
+    try:
+        return max(float(log.meta.get(MOTOR_RESOLUTION_KEY, "0")), 0.0)
+    except ValueError:
+        return 0.0
 
 
 def motor_only(log: Log, s: FilterSettings, corrected: bool = True) -> Regressor:
