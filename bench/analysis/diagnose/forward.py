@@ -133,17 +133,21 @@ def _view(d: Diagnosis, spec: mujoco.MjSpec, disturbance: np.ndarray | None = No
                        t=r.t, q_m=r.q_m, q=r.q, tau_m=r.tau_m)
 
 
-def add_forward_view(d: Diagnosis, say: Callable[[str], None]) -> Diagnosis:
-    """Replay the nominal and (when an effect is named) the extended axis."""
+def add_forward_view(d: Diagnosis, say: Callable[[str], None],
+                     nominal_view: ForwardView | None = None) -> Diagnosis:
+    """Replay the nominal (unless `nominal_view` is its replay already) and (when an effect
+    is named) the extended axis."""
     log = d.log
     if log.q_ref is None or log.meta_float("kv") is None:
         return dataclasses.replace(d, forward_note=(
             "not replayed: the log has no q_ref column or no controller gains (kp, kv, ki) "
             "in its metadata (docs/controller.md)"))
+    fn = nominal_view
     try:
-        say("forward view: nominal replay")
-        n = replay_substeps(d, extended=False)
-        fn = _view(d, build_spec(d, extended=False, substeps=n), substeps=n)
+        if fn is None:
+            say("forward view: nominal replay")
+            n = replay_substeps(d, extended=False)
+            fn = _view(d, build_spec(d, extended=False, substeps=n), substeps=n)
     except (ReplayError, ValueError) as err:
         return dataclasses.replace(d, forward_note=f"not replayed: {err}")
     fe, note = None, ""
