@@ -85,8 +85,10 @@ def test_phase_errors_analytic():
 
 def _diagnosis(q_m: np.ndarray, off_nominal: np.ndarray, off_extended: np.ndarray,
                effect: str = "torque_ripple"):
-    view = lambda off: SimpleNamespace(q_m=q_m + off)   # noqa: E731
-    return SimpleNamespace(log=SimpleNamespace(q_m=q_m, meta={}),
+    # replays whose torque follows the logged one (forward.follows): the phase decides
+    tau = 10.0 + np.sin(np.arange(len(q_m)))
+    view = lambda off: SimpleNamespace(q_m=q_m + off, tau_m=tau + 0.1)   # noqa: E731
+    return SimpleNamespace(log=SimpleNamespace(q_m=q_m, meta={}, tau_m=tau),
                            forward_nominal=view(off_nominal),
                            forward_extended=view(off_extended),
                            causes=(SimpleNamespace(effect=effect),),
@@ -168,6 +170,22 @@ def test_gain_reason_judges_a_ripple_where_the_phase_is_kept():
     assert "worse in the forward view on the 20 segments it judges" in why
     # judged nowhere but MIN_JUDGED - 1 segments: no forward verdict
     assert gain_reason(diagnosis(np.where(seg < MIN_JUDGED - 1, small, large))) == ""
+
+
+def test_a_nominal_replay_that_follows_nothing_judges_nothing():
+    """A nominal replay not significantly closer to the logged torque than a zero torque
+    (forward.follows): the forward view cannot judge, whatever the extended replay does."""
+    from jointbench.bench.analysis.diagnose.forward import follows
+
+    rng = np.random.default_rng(6)
+    tau = 10 * np.sin(np.linspace(0, 300, N)) + rng.standard_normal(N)
+    assert follows(tau, tau + 0.5 * rng.standard_normal(N))
+    lost = rng.standard_normal(N) * np.std(tau)          # a replay unrelated to the log
+    assert not follows(tau, lost) and not follows(tau, np.zeros(N) + 1e-9)
+    d = _diagnosis(np.zeros(N), np.zeros(N), np.zeros(N), effect="offset")
+    d.forward_nominal.tau_m, d.forward_nominal.tau_rel_pct = lost, 141.0
+    scope = forward_scope(d)
+    assert not scope.judged and "the nominal's replay does not follow it" in scope.note
 
 
 def test_phase_errors_of_a_plant_that_held_the_torque_too():

@@ -19,10 +19,11 @@ from typing import Callable
 
 from jointbench.bench.analysis.diagnose.forward import add_forward_view
 from jointbench.bench.analysis.diagnose.report import write
-from jointbench.bench.analysis.diagnose.types import Diagnosis
+from jointbench.bench.analysis.diagnose.types import Diagnosis, ForwardView
 from jointbench.bench.analysis.diagnose.verdict import gain_reason, nominal_reason
 from jointbench.identification.defaults import choose_filter
-from jointbench.identification.discrepancy import NUMERICS, Candidate, Nominal, diagnose_inverse
+from jointbench.identification.discrepancy import (NUMERICS, Candidate, InverseDiagnosis, Nominal,
+                                                   diagnose_inverse)
 from jointbench.identification.discrepancy.candidates import joint_parameters
 from jointbench.identification.effects import EFFECTS
 from jointbench.identification.filtering import FilterSettings
@@ -86,17 +87,54 @@ def diagnose(log: Log, out_dir: Path | None = None, forward: bool = True,
     d = Diagnosis(log=log, settings=settings, settings_note=how, inverse=inv,
                   nominal_parameters=nom_p, extended_parameters={},
                   warnings=tuple(unit_warnings(log) + clipping_warnings(log)))
+    judged = _judged(d, forward, say)
+    left_out: list[str] = []
+    # Several causes whose extended model the forward view rejects: the later ones are left
+    # out in turn, not the whole answer (issue 15 item 2: each named cause keeps its own
+    # gain; a worse replay of the last one says nothing of the ones named before it).
+    while _replay_rejects(judged) and len(judged.inverse.causes) > 1:
+        left_out.append(f"{judged.inverse.causes[-1].effect} left out: {judged.overruled}")
+        judged = _judged(replace(d, inverse=_without_last(judged.inverse)), forward, say,
+                         judged.forward_nominal)
+    d = judged
+    if left_out and not d.overruled:
+        d = replace(d, forward_note="; ".join(n for n in (d.forward_note, *left_out) if n))
+    if out_dir is not None:
+        d = write(d, Path(out_dir), say)
+    return d
+
+
+def _judged(d: Diagnosis, forward: bool, say: Callable[[str], None],
+            nominal_view: ForwardView | None = None) -> Diagnosis:
+    """`d` with its extended parameters (every named cause, one fit), its forward view and
+    the verdict: overruled when the nominal is unphysical or the extended model worse."""
+    inv = d.inverse
     ext = extended_parameters(inv.causes[-1] if inv.causes else None, inv.nominal)
     for _, params in joint_parameters(inv.nominal, inv.causes):   # all causes, one fit
         ext.update(params)
     d = replace(d, overruled=nominal_reason(d, ext))
     d = replace(d, extended_parameters={} if d.overruled else ext)
     if forward:
-        d = add_forward_view(d, say)
+        d = add_forward_view(d, say, nominal_view)
     if not d.overruled:
         d = replace(d, overruled=gain_reason(d))
     if d.overruled:   # nothing named: no extended model
         d = replace(d, extended_parameters={})
-    if out_dir is not None:
-        d = write(d, Path(out_dir), say)
     return d
+
+
+def _replay_rejects(d: Diagnosis) -> bool:
+    """Overruled by the forward view alone: the first cause improves the inverse view and
+    the nominal is physical, but the extended model's replay is worse or does not run."""
+    c = d.inverse.named
+    return (bool(d.overruled) and c is not None and c.after_pct < c.before_pct
+            and d.forward_nominal is not None and not nominal_reason(d))
+
+
+def _without_last(inv: InverseDiagnosis) -> InverseDiagnosis:
+    """`inv` without its last named cause, and without the ambiguity notes about it (a
+    note's head "A or B:" names the cause it is about)."""
+    causes = inv.causes[:-1]
+    kept = {c.effect for c in causes}
+    notes = tuple(n for n in inv.notes if kept & set(n.split(":", 1)[0].split(" or ")))
+    return replace(inv, causes=causes, notes=notes)
