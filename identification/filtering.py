@@ -130,14 +130,21 @@ def stencil_view(S2: np.ndarray, ts: float, stencil: int = 5) -> np.ndarray:
     return derivatives(S2, ts, 2, stencil)[2]
 
 
+def held_integrals(h: np.ndarray, ts: float) -> tuple[np.ndarray, np.ndarray]:
+    """Samples of the first and second integrals of a held signal (h[k] on [t_k, t_k+1)),
+    exact between samples: S1[k+1] = S1[k] + h[k] ts, S2[k+1] = S2[k] + S1[k] ts + h[k] ts^2 / 2."""
+    h = np.asarray(h, dtype=float)
+    S1 = np.concatenate([[0.0], np.cumsum(h[:-1] * ts)])
+    S2 = np.concatenate([[0.0], np.cumsum(S1[:-1] * ts + h[:-1] * ts ** 2 / 2)])
+    return S1, S2
+
+
 def held_double_integral(tau: np.ndarray, ts: float) -> np.ndarray:
     """Samples of the double integral of the held torque (tau[k] on [t_k, t_k+1)), its mean
     taken out and added back as c t^2 / 2 would be (`stencil_view` returns it exactly)."""
     tau = np.asarray(tau, dtype=float)
     c = float(np.mean(tau)) if len(tau) else 0.0
-    r = tau - c
-    S1 = np.concatenate([[0.0], np.cumsum(r[:-1] * ts)])
-    S2 = np.concatenate([[0.0], np.cumsum(S1[:-1] * ts + r[:-1] * ts ** 2 / 2)])
+    S2 = held_integrals(tau - c, ts)[1]
     k = np.arange(len(tau)) * ts
     return S2 + c * k ** 2 / 2
 
@@ -236,20 +243,20 @@ def kink_corrected(v: np.ndarray, rate: float, s: FilterSettings, iterations: in
     if held is not None:
         h = np.asarray(held, dtype=float)
         h = h - np.mean(h)   # a constant's share passes the chain whole; its t^2 trips filtfilt
-        H1 = np.concatenate([[0.0], np.cumsum(h[:-1] * s.ts)])
-        missed = H1 - _seen_velocity(held_double_integral(h, s.ts), s)
+        H1 = held_integrals(h, s.ts)[0]
+        missed = H1 - seen_velocity(held_double_integral(h, s.ts), s)
         base = base + np.nan_to_num(missed)
     u = base
     for _ in range(iterations):
         S1, S2 = coulomb_integrals(u, s.ts, rate if inside else 0.0, drive)
-        seen = _seen_velocity(S2, s)
+        seen = seen_velocity(S2, s)
         u = np.where(np.isfinite(seen), base + rate * (seen - S1), base)   # ends: as filtered
     u = u.copy()
     u[~np.isfinite(v)] = np.nan
     return u
 
 
-def _seen_velocity(P: np.ndarray, s: FilterSettings) -> np.ndarray:
+def seen_velocity(P: np.ndarray, s: FilterSettings) -> np.ndarray:
     """D(lowpass(P)): the chain's velocity of positions P (NaN at the stencil's ends)."""
     return derivatives(lowpass(np.nan_to_num(P), s.wn, s.ts, s.m), s.ts, 1, s.stencil)[1]
 

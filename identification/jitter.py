@@ -41,7 +41,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from jointbench.identification.filtering import (FilterSettings, derivatives, lowpass,
+from jointbench.identification.filtering import (FilterSettings, held_integrals, seen_velocity,
                                                  stencil_view)
 from jointbench.identification.link_sim import FRICTION_D, FRICTION_DMAX
 
@@ -122,7 +122,7 @@ def chain_jitter(s: FilterSettings) -> tuple[float, float]:
     k = np.arange(CHAIN_SPAN)
     u = np.where(k > j, ts, 0.0)
     q = np.where(k > j, ts * ts / 2 + (k - j - 1) * ts * ts, 0.0)
-    v = derivatives(lowpass(q, s.wn, ts, s.m), ts, 1, s.stencil)[1]
+    v = seen_velocity(q, s)
     err = (u - v)[CHAIN_SPAN // 8: -CHAIN_SPAN // 8]
     norm = float(np.sqrt(np.sum(err ** 2)))
     if not norm > 0:
@@ -224,8 +224,7 @@ def stage_column(v: np.ndarray, log: LogNoise, s: FilterSettings, rate: float) -
     nodes = log.nodes(v, s)
     held = np.asarray(log.tau, dtype=float) / Jm
     h = held - np.mean(held)       # a constant's share passes the chain whole
-    H1 = np.concatenate([[0.0], np.cumsum(h[:-1] * ts)])
-    H2 = np.concatenate([[0.0], np.cumsum(H1[:-1] * ts + h[:-1] * ts ** 2 / 2)])
+    H1, H2 = held_integrals(h, ts)
     spring = (p.get("K", 0.0) * np.nan_to_num(log.defl)) / Jm
     u = base
     for i in range(STAGE_PASSES):
@@ -233,7 +232,7 @@ def stage_column(v: np.ndarray, log: LogNoise, s: FilterSettings, rate: float) -
         S1, S2 = stage_integrals(u, a0, rate, ts, log.timeconst, nodes)
         if i == STAGE_PASSES - 1:
             break
-        seen = derivatives(lowpass(H2 - rate * S2, s.wn, ts, s.m), ts, 1, s.stencil)[1]
+        seen = seen_velocity(H2 - rate * S2, s)
         u = np.where(np.isfinite(seen), base + (H1 - rate * S1) - seen, base)
     if s.stencil == 5:
         S2[~np.isfinite(v)] = np.nan
