@@ -11,11 +11,15 @@ the whole grid, feed-forward off and log sweeps included)."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
+import numpy as np
 import pytest
 
 from indep_sim import FAMILIES, simulate
 from jointbench.bench.present.identify import identify_json
+from jointbench.identification import regressors
+from jointbench.identification.filtering import decimate_parallel
 from jointbench.identification.identify import identify
 
 # measured 2026-12-01 (seed 1): what misses the issue's bounds, and by how much
@@ -182,3 +186,38 @@ def test_settings_without_a_mode_identify_as_the_defaults():
     assert given.first_mode.found
     for p in ("K", "Jm", "JL"):
         assert given.physical[p] == pytest.approx(default.physical[p], rel=1e-9), p
+
+
+def _motor_equation_crb(log, settings, truth: dict, noise_std: float) -> float:
+    """The Cramer-Rao bound of Jm [same unit] from the motor equation alone in the band of
+    `settings`: white torque noise of `noise_std` on the plant, through the torque's chain
+    (ZOH alignment, Butterworth, decimation: its variance measured on an independent white
+    draw), against the motor rows of eq. (13) built with the true parameters, sigma^2
+    (W' W)^-1 with Jm, FVm, FSm and K free (the link equation, which pins K / JL, is left
+    out, so a joint fit may do slightly better)."""
+    reg = regressors.joint_motor(log, settings, truth)
+    motor = reg.block == 0
+    W = reg.W[motor][:, [reg.names.index(n) for n in ("Jm", "FVm", "FSm", "K")]]
+    w = np.random.default_rng(12345).normal(0.0, noise_std, len(log.t))
+    e = regressors._torque(replace(log, tau_m=w), settings)
+    var = float(np.var(decimate_parallel(e, np.zeros((len(e), 1)), settings)[0]))
+    return math.sqrt(var * np.linalg.inv(W.T @ W)[0, 0])
+
+
+def test_jm_sigma_without_feedforward_is_the_log_s_information():
+    """soft without feed-forward (linear sweep, default sensors, seed 1): Jm's corrected
+    sigma (1.55 %) is what the log holds, not a failing of the fit: the Cramer-Rao bound of
+    the motor equation in the band used is 1.70 % (the wide band's 1.52 %: the excitation
+    above the chooser's band adds 10-13 % of information without feed-forward). Over seeds
+    1-10 (2026-12-01) Jm was -0.11 +- 1.72 % (mean corrected sigma 1.64 %, bound 1.77 %),
+    heavy_link seeds 1-5 +1.17 +- 2.95 % (2.31 %, bound 2.45 %): the issue's 0.5 % is under a
+    third of one sigma of a 60 s log, so it is checked against the sigma instead: the truth
+    within 3 corrected sigma, and the sigma within 25 % of the bound."""
+    log = simulate(FAMILIES["soft"], seed=1, duration=60.0, sweep="linear", feedforward=False)
+    result, truth = identify(log, "joint-motor"), log.truth()
+    for p in ("K", "Jm", "JL"):
+        z = (result.physical[p] - truth[p]) / result.physical_sigma_corrected[p]
+        assert abs(z) < 3, (p, z)
+    crb = _motor_equation_crb(log, result.settings, truth, FAMILIES["soft"].torque_noise_std)
+    ratio = result.physical_sigma_corrected["Jm"] / crb
+    assert 0.75 < ratio < 1.25, (result.physical_sigma_corrected["Jm"], crb)
