@@ -198,8 +198,9 @@ def _which(nom: Nominal, simpler: Candidate, richer: Candidate,
     it adds passes at the round's level or is material (_material). Otherwise `simpler` is
     named: with the note that the log cannot tell them apart when neither adds to the other
     at DECIDE; without it when `simpler` adds and `richer` does not (an offset the
-    asymmetry's shape cannot follow), or when both add (both are there: `richer` is tested on
-    top of `simpler` in the next round, at that round's level).
+    asymmetry's shape cannot follow); with the note that the log carries a part of each when
+    both add (`richer` is then tested on top of `simpler` in the next round, at that round's
+    level).
 
     Why DECIDE = 0.05 and not the round's ALPHA / m (the reason written before the
     batteries' counts were looked at): the round's level guards the family of "is anything
@@ -221,23 +222,28 @@ def _which(nom: Nominal, simpler: Candidate, richer: Candidate,
         return True, ""
     if richer.significant and _material(richer, simpler, physical):
         return True, _apart(simpler, richer, t, alpha, more=True)
-    if p2 < DECIDE:
+    if p2 < DECIDE <= p:
         return False, ""
-    return False, _apart(simpler, richer, t, DECIDE, t2, unphysical=not physical)
+    return False, _apart(simpler, richer, t, DECIDE, t2, unphysical=not physical,
+                         both=p < DECIDE and p2 < DECIDE)
 
 
 def _apart(simpler: Candidate, richer: Candidate, t: float, alpha: float,
-           converse: float | None = None, more: bool = False, unphysical: bool = False) -> str:
+           converse: float | None = None, more: bool = False, unphysical: bool = False,
+           both: bool = False) -> str:
     """The ambiguity note: `simpler` named (or `richer`, with `more`: it removes more than
     MATERIAL of `simpler`'s held-out residual, _material); `unphysical`: `richer` fitted on
-    top of `simpler` is not physical, whatever its t."""
+    top of `simpler` is not physical, whatever its t; `both`: each adds to the other (_which),
+    `simpler` named first."""
     back = ("" if converse is None else
             f", what {simpler.effect} adds to {richer.effect} t = {converse:.3g}")
     fit = " (an unphysical fit)" if unphysical else ""
     named = (f"{richer.effect}, which removes {100 * beyond(richer, simpler):.3g} % of what "
              f"{simpler.effect} leaves, is named" if more else
-             f"the simpler, {simpler.effect}, is named")
-    return (f"{simpler.effect} or {richer.effect}: this log cannot tell them apart "
+             f"the simpler, {simpler.effect}, is named" + (" first" if both else ""))
+    what = ("this log carries a part of each that the other cannot follow" if both else
+            "this log cannot tell them apart")
+    return (f"{simpler.effect} or {richer.effect}: {what} "
             f"({richer.effect} explains {richer.heldout_pct:.3g} % of the held-out residual, "
             f"{simpler.effect} {simpler.heldout_pct:.3g} %; what {richer.effect} adds to "
             f"{simpler.effect} has t = {t:.3g}{fit}{back}, the bar t > {t_bar(alpha):.3g}); "
