@@ -208,9 +208,9 @@ def _which(nom: Nominal, simpler: Candidate, richer: Candidate,
     ALPHA. Once one of the two is significant at that level the guard is spent, and what is
     left is which of two descriptions of one torque the log supports: an offset named for an
     asymmetric friction and an asymmetry named for an offset are errors of the same cost, so
-    the rule is symmetric (each must add to the other at the same level, the simpler is kept
-    unless the richer's own part passes and the simpler's does not), and its level is the
-    conventional one of a single test. Under the null (the richer's own part absent) the
+    the rule is symmetric (each is tested on top of the other at the same level, the
+    simpler kept unless the richer's own part passes and the simpler's does not), and its
+    level is the conventional one of a single test. Under the null (the richer's own part absent) the
     test without margin is conservative (the extra column only adds estimation variance to
     the held-out prediction): an offset is called an asymmetry with a chance under 5 %.
     The round's level asked the asymmetry's viscous part for t > 4.23, a bar for discovering
