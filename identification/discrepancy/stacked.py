@@ -36,15 +36,34 @@ class Stacked:
 
     def design(self) -> Design:
         """y, W and the column names: nominal columns, then the effects' columns."""
-        nom = self.nom
-        if self.tau is None and self.deflection is None and not self.lead:
-            y, W, names = nom.y, nom.W, nom.names
-        else:
-            y, W, names = nom.columns(self.tau, self.deflection, self.lead)
+        y, W, names = _core(self)
         if not self.extra:
             return y, W, names
         return (y, np.column_stack([W, *(c for _, c in self.extra)]),
                 names + tuple(n for n, _ in self.extra))
+
+
+# The nominal columns of the last few states (tau, deflection, lead), most recent first: every
+# trial of an effect searched on top of a state rebuilds its design, and the columns a torque
+# lag leads or a dead band rebuilds were decimated again for each (8.6 of 30 s of `diagnose`
+# on a 60 s log with a lag named). Keyed by identity, holding the arrays: never a stale hit.
+_CORES: list[tuple[tuple, Design]] = []
+_KEEP = 8
+
+
+def _core(s: Stacked) -> Design:
+    """`s`'s nominal columns (Nominal.columns with its torque, deflection and lead)."""
+    nom = s.nom
+    if s.tau is None and s.deflection is None and not s.lead:
+        return nom.y, nom.W, nom.names
+    key = (nom, s.tau, s.deflection)
+    for (k, lead), design in _CORES:
+        if lead == s.lead and all(a is b for a, b in zip(k, key)):
+            return design
+    design = nom.columns(s.tau, s.deflection, s.lead)
+    _CORES.insert(0, ((key, s.lead), design))
+    del _CORES[_KEEP:]
+    return design
 
 
 class _Rows:
