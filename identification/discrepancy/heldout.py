@@ -108,12 +108,13 @@ def scores(nom: Nominal, folds: np.ndarray, y: np.ndarray, W: np.ndarray) -> Sco
     G, c, bb = (sum(g[j] for g in grams) for j in range(3))
     x = np.linalg.lstsq(G, c, rcond=None)[0]
     full = _rss(G, c, bb, x)
-    train, held, errors = np.empty(k), np.empty(k), np.empty(len(b))
-    for f, (i, (Gf, cf, bf)) in enumerate(zip(parts, grams)):
-        x_f = np.linalg.lstsq(G - Gf, c - cf, rcond=None)[0]
-        errors[i] = b[i] - (A[i] * x_f).sum(axis=1)   # elementwise: no BLAS thread wake-up
-        held[f] = float(errors[i] @ errors[i])
-        train[f] = _rss(G - Gf, c - cf, bb - bf, x_f)
+    train, xs = np.empty(k), np.empty((k, len(x)))
+    for f, (Gf, cf, bf) in enumerate(grams):
+        xs[f] = np.linalg.lstsq(G - Gf, c - cf, rcond=None)[0]
+        train[f] = _rss(G - Gf, c - cf, bb - bf, xs[f])
+    # each row by its fold's fit, elementwise (no BLAS thread wake-up), all folds at once
+    errors = b - (A * xs[folds]).sum(axis=1)
+    held = np.array([float(errors[i] @ errors[i]) for i in parts])
     return Scores(full=full, X=x / scale, train=train, held=held, errors=errors)
 
 
