@@ -121,6 +121,7 @@ _BYTES = 64 * 2 ** 20
 
 
 def _added(nom: Nominal, key: tuple) -> tuple[tuple[str, np.ndarray], ...] | None:
+    """The columns kept for `nom` and (effect, values), or None."""
     hit = _ADDED.pop((id(nom), key), None)
     if hit is None or hit[0] is not nom:
         return None
@@ -129,6 +130,7 @@ def _added(nom: Nominal, key: tuple) -> tuple[tuple[str, np.ndarray], ...] | Non
 
 
 def _keep_added(nom: Nominal, key: tuple, cols: tuple[tuple[str, np.ndarray], ...]) -> None:
+    """Keep `cols` for `nom` and (effect, values); the least recently used go beyond _BYTES."""
     _ADDED[(id(nom), key)] = (nom, cols)
     size = sum(c.nbytes for _, cs in _ADDED.values() for _, c in cs)
     while size > _BYTES and len(_ADDED) > 1:
