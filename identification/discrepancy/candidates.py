@@ -13,8 +13,8 @@ import numpy as np
 from scipy import optimize, stats
 
 from jointbench.identification.discrepancy.heldout import (FOLDS, MATERIAL, Scores, bar,
-                                                           evidence, fold_of_rows, held_out,
-                                                           scores, t_bar)
+                                                           evidence, fitted_rss, fold_of_rows,
+                                                           held_out, scores, t_bar)
 from jointbench.identification.discrepancy.nominal import Nominal, transmitted_rms
 from jointbench.identification.discrepancy.stacked import Stacked, apply, design_many, stacked
 from jointbench.identification.effects import EFFECTS
@@ -225,7 +225,7 @@ def _refitted(nom: Nominal, ref: Reference, coupled: list[int]) -> Reference:
         def cost(w: float) -> float:
             effects[i] = (name, {**fx, c.search: float(w)})
             y, W, _ = stacked(nom, effects).design()
-            fits.append((nom.fit(y, W)[1], float(w)))
+            fits.append((fitted_rss(nom, y, W), float(w)))
             return fits[-1][0]
 
         _search(cost, c.grid(nom))
