@@ -11,11 +11,15 @@ the whole grid, feed-forward off and log sweeps included)."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
+import numpy as np
 import pytest
 
 from indep_sim import FAMILIES, simulate
 from jointbench.bench.present.identify import identify_json
+from jointbench.identification import regressors
+from jointbench.identification.filtering import decimate_parallel
 from jointbench.identification.identify import identify
 
 # measured 2026-12-01 (seed 1): what misses the issue's bounds, and by how much
@@ -129,16 +133,38 @@ def test_joint_motor_without_noise(feedforward):
         assert abs(result.physical[p] / truth[p] - 1) < 0.001, (p, result.physical[p])
 
 
-@pytest.mark.xfail(strict=True, reason="ideal sensors, no feed-forward: heavy_link Jm -0.37 %")
+def test_joint_motor_without_noise_or_feedforward_in_the_papers_band():
+    """soft (f1 = 4 Hz, within 20 % of the paper's 3.9 Hz, so the chooser gives the paper's
+    band: wn 176 rad/s, Nd 26, eq. (22)'s 3 points) without feed-forward, ideal sensors: the
+    motor sticks at most reversals (it creeps under 5 mrad/s 75 % of the time). The 3-point
+    chain's Coulomb column was sign(v), every reversal slip-through, while the 5-point one
+    had the stick phases (identification/friction_state.py): Jm -3.33 % (FVm +24 %), -10.2 %
+    at Nd 15, where the simulator's own friction state as the column gives +0.13 % (3 points)
+    and +0.000 % (5 points). With the stick phases in both chains: K -0.02, Jm -0.07, JL
+    +0.29 % (measured 2026-12-01); the issue's 0.5 %."""
+    log = simulate(FAMILIES["soft"], seed=1, duration=60.0, sweep="linear",
+                   feedforward=False, ideal_sensors=True)
+    result, truth = identify(log, "joint-motor"), log.truth()
+    assert (result.settings.Nd, result.settings.stencil) == (26, 3)
+    for p in ("K", "Jm", "JL"):
+        assert abs(result.physical[p] / truth[p] - 1) < 0.005, (p, result.physical[p])
+
+
+@pytest.mark.xfail(strict=True, reason="ideal sensors, no feed-forward: heavy_link Jm -0.25 %")
 def test_joint_motor_without_noise_sticking_motor():
     """heavy_link without feed-forward, ideal sensors: the motor sticks at most reversals
     and no statistical error is left, so what remains is the method's own bias where the
-    friction holds the drive for many samples. Measured 2026-12-01: Jm -0.37 % (FVm +10 %;
-    soft -0.31 %, balanced -0.24 % with K +0.09 %; wrist, stiff_small within 0.1 %). It grows
-    with the band (Nd 10 -> 5 with the same wn: Jm +1.24 %; Nd 20: -0.25 %); not traced
-    further (a guess: the stick phases of identification/friction_state.py are placed on the
-    filtered velocity, which the Butterworth smears across them). Strict: a fix must take
-    this case out."""
+    friction holds the drive for many samples. Measured 2026-12-01: Jm -0.25 % in the wide
+    band (Nd 6, 5 points; FVm +24 %); soft -0.07 % in the paper's band. Traced (issue 17,
+    session 8): with the simulator's own friction state (its FSm tanh(v / v_s) integrated
+    alongside the plant) as the column, Jm -0.004 %; with friction_state's Karnopp model fed
+    the true sample velocities and the true drive, -0.39 %: the model, not its inputs. The
+    simulator's Coulomb friction is smoothed over v_s = 1 mrad/s and the motor creeps under
+    5 v_s 65 % of the time, where the true state is tanh(v / v_s), 0.19 rms away from the
+    balance drive / rate that a stick model gives; the same axis simulated with v_s = 0.1
+    mrad/s comes out within 0.02 % (K -0.000, Jm -0.011, JL -0.001 %, FVm +0.2 %). A
+    measured log does not say its friction law near zero speed; not fixed. Strict: a fix
+    must take this case out."""
     log = simulate(FAMILIES["heavy_link"], seed=1, duration=60.0, sweep="linear",
                    feedforward=False, ideal_sensors=True)
     result, truth = identify(log, "joint-motor"), log.truth()
@@ -160,3 +186,38 @@ def test_settings_without_a_mode_identify_as_the_defaults():
     assert given.first_mode.found
     for p in ("K", "Jm", "JL"):
         assert given.physical[p] == pytest.approx(default.physical[p], rel=1e-9), p
+
+
+def _motor_equation_crb(log, settings, truth: dict, noise_std: float) -> float:
+    """The Cramer-Rao bound of Jm [same unit] from the motor equation alone in the band of
+    `settings`: white torque noise of `noise_std` on the plant, through the torque's chain
+    (ZOH alignment, Butterworth, decimation: its variance measured on an independent white
+    draw), against the motor rows of eq. (13) built with the true parameters, sigma^2
+    (W' W)^-1 with Jm, FVm, FSm and K free (the link equation, which pins K / JL, is left
+    out, so a joint fit may do slightly better)."""
+    reg = regressors.joint_motor(log, settings, truth)
+    motor = reg.block == 0
+    W = reg.W[motor][:, [reg.names.index(n) for n in ("Jm", "FVm", "FSm", "K")]]
+    w = np.random.default_rng(12345).normal(0.0, noise_std, len(log.t))
+    e = regressors._torque(replace(log, tau_m=w), settings)
+    var = float(np.var(decimate_parallel(e, np.zeros((len(e), 1)), settings)[0]))
+    return math.sqrt(var * np.linalg.inv(W.T @ W)[0, 0])
+
+
+def test_jm_sigma_without_feedforward_is_the_log_s_information():
+    """soft without feed-forward (linear sweep, default sensors, seed 1): Jm's corrected
+    sigma (1.55 %) is what the log holds, not a failing of the fit: the Cramer-Rao bound of
+    the motor equation in the band used is 1.70 % (the wide band's 1.52 %: the excitation
+    above the chooser's band adds 10-13 % of information without feed-forward). Over seeds
+    1-10 (2026-12-01) Jm was -0.11 +- 1.72 % (mean corrected sigma 1.64 %, bound 1.77 %),
+    heavy_link seeds 1-5 +1.17 +- 2.95 % (2.31 %, bound 2.45 %): the issue's 0.5 % is under a
+    third of one sigma of a 60 s log, so it is checked against the sigma instead: the truth
+    within 3 corrected sigma, and the sigma within 25 % of the bound."""
+    log = simulate(FAMILIES["soft"], seed=1, duration=60.0, sweep="linear", feedforward=False)
+    result, truth = identify(log, "joint-motor"), log.truth()
+    for p in ("K", "Jm", "JL"):
+        z = (result.physical[p] - truth[p]) / result.physical_sigma_corrected[p]
+        assert abs(z) < 3, (p, z)
+    crb = _motor_equation_crb(log, result.settings, truth, FAMILIES["soft"].torque_noise_std)
+    ratio = result.physical_sigma_corrected["Jm"] / crb
+    assert 0.75 < ratio < 1.25, (result.physical_sigma_corrected["Jm"], crb)
