@@ -80,7 +80,7 @@ def _sign(x: np.ndarray, s: FilterSettings, rate: float = 0.0,
     if drive is not None and rate > 0 and inside:
         # the stick phases as eq. (22)'s chain sees them: sign(x) takes every reversal as
         # slip-through, and without feed-forward the motor sticks at most of them (soft,
-        # ideal sensors, the paper's band: Jm -3.33 -> -0.12 %). The view loses two more
+        # ideal sensors, the paper's band: Jm -3.33 -> -0.07 %). The view loses two more
         # samples than sign(x) at each end: those take the nearest state (a sign there would
         # be a step the decimation spreads over the first rows), so the passes keep their rows
         state = stencil_view(coulomb_integrals(x, s.ts, rate, drive)[1], s.ts, 3)
