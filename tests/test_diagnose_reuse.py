@@ -2,7 +2,7 @@
 log) gives exactly what computing again gives, bit for bit:
 
 - the nominal columns of a lagged or dead-band state (stacked._core), the decimated columns an
-  effect adds at a given value (stacked._ADDED), both only for the very Nominal they came from;
+  effect adds at a given value (stacked._added), both kept on the very Nominal they came from;
 - a spring column's link row as the negative of its motor row (signals.stack);
 - every fold's held-out errors in one pass (heldout.scores), against the per-fold loop;
 - the coupled-width refit's RSS from the normal equations (heldout.fitted_rss), against the
@@ -10,6 +10,8 @@ log) gives exactly what computing again gives, bit for bit:
 """
 
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 import pytest
@@ -60,9 +62,11 @@ def test_reused_designs_are_the_designs(log, monkeypatch):
         assert a[2] == b[2] and np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
     # another Nominal of the same log (same values, another object) reuses nothing of it
     other = nominal(log, settings)
-    assert all(n is not other for n, _ in st._ADDED.values())
+    assert not other.memo and nom.memo["added"] and nom.memo["cores"]
     _designs(other)
-    assert any(n is other for n, _ in st._ADDED.values())
+    assert other.memo["added"].keys() == nom.memo["added"].keys()
+    # a replaced copy (another weighting, say) starts with nothing kept
+    assert not dataclasses.replace(nom, weights=2 * nom.weights).memo
 
 
 def test_a_spring_columns_link_row_is_exactly_the_decimated_negative(log):

@@ -4,7 +4,7 @@ its columns, its block-weighted least squares and the extended designs effects b
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -94,6 +94,9 @@ class Nominal:
     reference_rms: tuple[float, ...]   # per block: RMS of what the block predicts
     sig: Signals
     link_friction: bool = True         # FS sign(q') among the columns (logs with q)
+    # What diagnose's searches reuse between trials on this very model (discrepancy.stacked):
+    # not an input, not compared, and fresh in a dataclasses.replace copy (init=False).
+    memo: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def residual(self) -> np.ndarray:

@@ -43,11 +43,11 @@ class Stacked:
                 names + tuple(n for n, _ in self.extra))
 
 
-# The nominal columns of the last few states (tau, deflection, lead), most recent first: every
-# trial of an effect searched on top of a state rebuilds its design, and the columns a torque
-# lag leads or a dead band rebuilds were decimated again for each (8.6 of 30 s of `diagnose`
-# on a 60 s log with a lag named). Keyed by identity, holding the arrays: never a stale hit.
-_CORES: list[tuple[tuple, Design]] = []
+# The nominal columns of the last few states (tau, deflection, lead), most recent first, kept
+# on the Nominal (its `memo`): every trial of an effect searched on top of a state rebuilds its
+# design, and the columns a torque lag leads or a dead band rebuilds were decimated again for
+# each (8.6 of 30 s of `diagnose` on a 60 s log with a lag named). Keyed by identity, holding
+# the arrays: never a stale hit.
 _KEEP = 8
 
 
@@ -56,13 +56,14 @@ def _core(s: Stacked) -> Design:
     nom = s.nom
     if s.tau is None and s.deflection is None and not s.lead:
         return nom.y, nom.W, nom.names
-    key = (nom, s.tau, s.deflection)
-    for (k, lead), design in _CORES:
+    cores = nom.memo.setdefault("cores", [])
+    key = (s.tau, s.deflection)
+    for (k, lead), design in cores:
         if lead == s.lead and all(a is b for a, b in zip(k, key)):
             return design
     design = nom.columns(s.tau, s.deflection, s.lead)
-    _CORES.insert(0, ((key, s.lead), design))
-    del _CORES[_KEEP:]
+    cores.insert(0, ((key, s.lead), design))
+    del cores[_KEEP:]
     return design
 
 
@@ -111,30 +112,31 @@ def apply(base: Stacked, effect: str, fixed: dict) -> tuple[Stacked, Design]:
     return dataclasses.replace(rows.after, effects=effects), d
 
 
-# The decimated columns an effect added (extend) with given values, by nominal: they depend on
-# the log's signals and those values alone (identification.effects: `design` reads `rows.sig`,
-# `rows.value` of the nominal and `fixed`), and every round of `diagnose` searches the same grid
-# again on top of the causes named, as do the parsimony checks (two thirds of the ripple's and
-# the hardening's decimations on a 60 s log). Least recently used first out, at most _BYTES.
-_ADDED: dict[tuple, tuple[Nominal, tuple[tuple[str, np.ndarray], ...]]] = {}
+# The decimated columns an effect added (extend) with given values, kept on the Nominal (its
+# `memo`): they depend on the log's signals and those values alone (identification.effects:
+# `design` reads `rows.sig`, `rows.value` of the nominal and `fixed`), and every round of
+# `diagnose` searches the same grid again on top of the causes named, as do the parsimony
+# checks (two thirds of the ripple's and the hardening's decimations on a 60 s log). Least
+# recently used first out beyond _BYTES; they go with the Nominal.
 _BYTES = 64 * 2 ** 20
 
 
 def _added(nom: Nominal, key: tuple) -> tuple[tuple[str, np.ndarray], ...] | None:
-    """The columns kept for `nom` and (effect, values), or None."""
-    hit = _ADDED.pop((id(nom), key), None)
-    if hit is None or hit[0] is not nom:
-        return None
-    _ADDED[(id(nom), key)] = hit   # most recent last
-    return hit[1]
+    """The columns kept on `nom` for (effect, values), or None."""
+    kept = nom.memo.setdefault("added", {})
+    hit = kept.pop(key, None)
+    if hit is not None:
+        kept[key] = hit   # most recent last
+    return hit
 
 
 def _keep_added(nom: Nominal, key: tuple, cols: tuple[tuple[str, np.ndarray], ...]) -> None:
-    """Keep `cols` for `nom` and (effect, values); the least recently used go beyond _BYTES."""
-    _ADDED[(id(nom), key)] = (nom, cols)
-    size = sum(c.nbytes for _, cs in _ADDED.values() for _, c in cs)
-    while size > _BYTES and len(_ADDED) > 1:
-        _, cs = _ADDED.pop(next(iter(_ADDED)))
+    """Keep `cols` on `nom` for (effect, values); the least recently used go beyond _BYTES."""
+    kept = nom.memo.setdefault("added", {})
+    kept[key] = cols
+    size = sum(c.nbytes for cs in kept.values() for _, c in cs)
+    while size > _BYTES and len(kept) > 1:
+        cs = kept.pop(next(iter(kept)))
         size -= sum(c.nbytes for _, c in cs)
 
 
