@@ -9,7 +9,8 @@ visibility, not by the detector's thresholds.
 Every case runs at the paper's rate (350.87 Hz), cycling over the places (bench prototype,
 arm6 axis2 and axis4; independent families balanced, soft, wrist, pendulum) and over velocity
 feedforward on/off x torque noise on/off. Writes OUT/cases.json and OUT/cases.csv (model,
-joint, seed, effects, strengths, visibilities, named), OUT/summary.txt (confusion table,
+joint, seed, effects, strengths, visibilities, named; the distinguishing visibility of every
+effect that reduces to another: bench.campaign.detection.distinguishing_visibility), OUT/summary.txt (confusion table,
 detection curve, 95 % visibility per effect) and the detection-curve figure.
 """
 
@@ -30,11 +31,14 @@ sys.path.insert(0, str(ROOT / "tests"))
 
 from indep_battery import INDEP_PLACES, IndepRunner  # noqa: E402
 
+import numpy as np  # noqa: E402
+
 from jointbench.bench.campaign.battery import (BENCH_PLACES, BenchRunner, Spec,  # noqa: E402
-                                               plan, run_spec)
-from jointbench.bench.campaign.detection import (BINS, curve, found_above, right,  # noqa: E402
+                                               draw_strength, plan, run_spec)
+from jointbench.bench.campaign.detection import (BINS, curve,  # noqa: E402
+                                                 distinguishing_visibility, found_above, right,
                                                  summary_lines)
-from jointbench.identification.effects import NONE  # noqa: E402
+from jointbench.identification.effects import EFFECTS, NONE  # noqa: E402
 from jointbench.identification.log_write import atomic_write_text  # noqa: E402
 from jointbench.identification.output import finite_json  # noqa: E402
 
@@ -56,6 +60,32 @@ def named_causes(d) -> list[str]:
     return [] if d.named_cause == NONE else [d.named_cause]
 
 
+def distinguishing(spec: Spec, outcome) -> list[float | None]:
+    """Each hidden effect's distinguishing visibility (bench.campaign.detection.
+    distinguishing_visibility: the part of its change the effect it reduces to cannot take),
+    alone, from noise-free runs; None for an effect that reduces to no other. Reporting only:
+    two more simulations per such effect, nothing the case's draw or diagnosis sees."""
+    p = spec.place
+    runner = _RUNNERS[p.source]
+    tau_max, f1, K = runner.scales(p)
+    clean = _CACHE[(p, spec.feedforward)]   # run_spec's noise-free clean command
+
+    def tau(effect: tuple) -> np.ndarray:
+        return runner.log(p, (effect,), spec.seed, spec.feedforward, False).tau_m
+
+    found: list[float | None] = []
+    for k, (name, strength, options) in enumerate(zip(spec.effects, outcome.strengths,
+                                                      outcome.options)):
+        reduced = EFFECTS[name].reduces_to
+        if not reduced:
+            found.append(None)
+            continue
+        s, o = draw_strength(reduced, np.random.default_rng([spec.seed, k]), tau_max, f1, K)
+        found.append(distinguishing_visibility(clean, tau((name, strength, options)),
+                                              tau((reduced, s, o)), f1, runner.rate_hz))
+    return found
+
+
 def run_one(spec: Spec) -> dict:
     """One case: strengths by visibility, the log, its diagnosis; a JSON-ready record."""
     from jointbench.bench.analysis.diagnose import diagnose
@@ -65,14 +95,15 @@ def run_one(spec: Spec) -> dict:
            "joint": p.joint or "", "family": p.family, "seed": spec.seed,
            "feedforward": spec.feedforward, "noise": spec.noise, "effects": list(spec.effects),
            "targets": list(spec.targets), "strengths": [], "options": [], "visibilities": [],
-           "combined": 0.0, "simulations": 0, "named": [], "ambiguity": [], "verdict": "",
-           "error": ""}
+           "combined": 0.0, "simulations": 0, "distinguishing": [], "named": [],
+           "ambiguity": [], "verdict": "", "error": ""}
     t0 = time.perf_counter()
     try:
         out = run_spec(spec, _RUNNERS[p.source], _CACHE)
         rec.update(strengths=list(out.strengths), options=[dict(o) for o in out.options],
                    visibilities=list(out.visibilities), combined=out.combined,
-                   simulations=sum(len(s.tried) for s in out.searches) + 1)
+                   simulations=sum(len(s.tried) for s in out.searches) + 1,
+                   distinguishing=distinguishing(spec, out))
         t1 = time.perf_counter()
         d = diagnose(out.log)
         rec.update(named=named_causes(d), ambiguity=list(d.ambiguities), verdict=d.verdict,
@@ -86,6 +117,8 @@ def run_one(spec: Spec) -> dict:
 def _line(rec: dict) -> str:
     what = ",".join(f"{e}={s:.4g}" for e, s in zip(rec["effects"], rec["strengths"])) or NONE
     vis = ",".join(f"{100 * v:.1f}" for v in rec["visibilities"]) or "-"
+    apart = [f"{100 * v:.1f}" for v in rec.get("distinguishing", ()) if v is not None]
+    vis += f" (apart {','.join(apart)})" if apart else ""
     named = ",".join(rec["named"]) or NONE
     mark = "error: " + rec["error"] if rec["error"] else ("" if right(rec) else "<-- miss")
     cond = ("ff" if rec["feedforward"] else "no-ff") + (" noise" if rec["noise"] else " quiet")
@@ -99,7 +132,7 @@ def _csv(records: list[dict]) -> str:
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(["index", "kind", "source", "model", "joint", "seed", "feedforward", "noise",
                 "effects", "strengths", "targets_pct", "visibilities_pct", "combined_pct",
-                "named", "right", "ambiguity", "error"])
+                "named", "right", "ambiguity", "error", "distinguishing_pct"])
     for r in records:
         w.writerow([r["index"], r["kind"], r["source"], r["model"], r["joint"], r["seed"],
                     r["feedforward"], r["noise"], ";".join(r["effects"]),
@@ -107,7 +140,9 @@ def _csv(records: list[dict]) -> str:
                     ";".join(f"{100 * t:.2f}" for t in r["targets"]),
                     ";".join(f"{100 * v:.2f}" for v in r["visibilities"]),
                     f"{100 * r['combined']:.2f}", ";".join(r["named"]), right(r),
-                    " | ".join(r.get("ambiguity", [])), r["error"]])
+                    " | ".join(r.get("ambiguity", [])), r["error"],
+                    ";".join("" if v is None else f"{100 * v:.2f}"
+                             for v in r.get("distinguishing", []))])
     return buf.getvalue()
 
 

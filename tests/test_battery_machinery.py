@@ -108,6 +108,43 @@ def test_a_miss_with_the_hidden_effect_as_stated_alternative_is_counted_apart():
     assert not alternative_stated(hit) and right(hit) and not right(miss)   # never counted right
     text = "\n".join(summary_lines([miss, wrong, hit]))
     assert "named right: 1/3" in text and "(ambiguity): 1" in text
+    assert "cannot separate" not in text          # no distinguishing visibility recorded
+
+
+def test_a_stated_ambiguity_the_log_cannot_resolve_is_counted_on_its_own_line():
+    """bench.campaign.detection.inseparable_stated: a miss that states the hidden effect as
+    the alternative counts on the second line only where its distinguishing visibility is
+    under SEPARABLE (5 %); the first line (named right) is unchanged."""
+    from jointbench.bench.campaign.detection import inseparable_stated
+    amb = ["offset or asymmetric_friction: this log cannot tell them apart"]
+    low = {"kind": "single", "effects": ["asymmetric_friction"], "visibilities": [0.2],
+           "named": ["offset"], "ambiguity": amb, "family": "x", "distinguishing": [0.012]}
+    high = dict(low, distinguishing=[0.08])
+    hit = dict(low, named=["asymmetric_friction"], ambiguity=[])
+    other = {"kind": "single", "effects": ["backlash"], "visibilities": [0.2],
+             "named": ["backlash"], "family": "x", "distinguishing": [None]}
+    assert inseparable_stated(low) and not inseparable_stated(high)
+    assert not inseparable_stated(hit) and not inseparable_stated(other)
+    text = "\n".join(summary_lines([low, high, hit, other]))
+    assert "at visibility >= 5 % named right: 2/4" in text
+    assert ("2 named right, 1 stated ambiguity between two effects the log cannot separate "
+            "(distinguishing visibility < 5 %), of 4 (75 % together)") in text
+
+
+def test_distinguishing_visibility_is_what_the_reduced_effect_cannot_take():
+    """An effect's change = a constant (what an offset takes) + an in-band sine of amplitude
+    B; the reduced effect's change a constant of another size: the distinguishing visibility
+    is the sine's alone, B / A for a clean sine of amplitude A; a change the reduced effect
+    takes whole has none."""
+    from jointbench.bench.campaign.detection import distinguishing_visibility
+    rate, f1 = 350.87, 5.0
+    t = np.arange(20000) / rate
+    clean = 2.0 * np.sin(2 * math.pi * 1.0 * t)
+    effect = clean + 0.7 + 0.1 * np.sin(2 * math.pi * 3.0 * t)
+    d = distinguishing_visibility(clean, effect, clean - 0.25, f1, rate)
+    assert d == pytest.approx(0.05, rel=5e-3)
+    assert visibility(clean, effect, f1, rate) > 0.3 * math.sqrt(2)   # the whole change
+    assert distinguishing_visibility(clean, clean + 0.7, clean + 0.1, f1, rate) < 1e-3
 
 
 # ---- the independent simulator's effects ----

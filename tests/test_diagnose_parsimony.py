@@ -40,3 +40,48 @@ def test_the_note_says_which_is_named_and_why():
     assert note.endswith("hardening, which removes 35 % of what backlash leaves, is named")
     note = _apart(back, hard, 41.2, 1.25e-4, unphysical=True)
     assert "t = 41.2 (an unphysical fit)" in note and note.endswith("the simpler, backlash, is named")
+
+
+def _established(effect, share):
+    # significant at a first round's level (8 effects: 1.25e-4)
+    return Candidate(effect=effect, testable=True, heldout_pct=share, t_stat=9.0,
+                     p_heldout=1e-9, alpha=1.25e-4)
+
+
+@pytest.mark.parametrize("t_asym,t_offset,named,note", [
+    (3.67, 1.14, "asymmetric_friction", ""),      # its viscous part passes, the offset's not
+    (1.26, 3.61, "offset", ""),                   # the offset's own part passes
+    (-0.40, 0.20, "offset", "cannot tell them apart"),   # neither: the simpler, stated
+    (2.50, 2.50, "offset", "carries a part of each"),   # both: stated, the asymmetry
+    #                                                     tested again in the next round
+    (5.00, 2.50, "asymmetric_friction", ""),      # its part passes the round's own level
+])
+def test_offset_or_asymmetry_is_a_two_way_choice_at_its_own_level(monkeypatch, t_asym,
+                                                                   t_offset, named, note):
+    """inverse._which: once one of the two is established, the asymmetric friction is named
+    when what it adds to the offset passes at DECIDE (one-sided 5 %: t > 1.71 on the 26
+    degrees of freedom of 40 segments) and what the offset adds to it does not; the same
+    answer whichever of the two explains more (ranked first). _on_top is replaced by the
+    t values given (from the seed-2026 battery's misses, docs/effects.md)."""
+    from scipy import stats
+
+    from jointbench.identification.discrepancy import inverse
+    from jointbench.identification.discrepancy.heldout import SEGMENTS, dof, t_bar
+
+    assert t_bar(inverse.DECIDE) == pytest.approx(1.706, abs=1e-3)
+    given = {"asymmetric_friction": t_asym, "offset": t_offset}
+
+    def on_top(nom, richer, simpler, m):
+        return given[richer.effect], float(stats.t.sf(given[richer.effect], dof(SEGMENTS))), True
+
+    monkeypatch.setattr(inverse, "_on_top", on_top)
+    off, asym = _established("offset", 40.0), _established("asymmetric_friction", 40.2)
+    for ranked in ([off, asym], [asym, off]):
+        order, why = inverse._simplest_first(list(ranked), None, 8)
+        assert order[0].effect == named and (note in why if note else why == "")
+    if note:
+        assert "the bar t > 1.71" in why and "the simpler, offset, is named" in why
+    # an asymmetry that is not significant on its own is never named for an established offset
+    weak = Candidate(effect="asymmetric_friction", testable=True, heldout_pct=40.2,
+                     p_heldout=0.01, alpha=1.25e-4)
+    assert inverse._simplest_first([off, weak], None, 8)[0][0].effect == "offset"

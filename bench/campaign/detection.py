@@ -4,19 +4,44 @@ which an effect is found 95 % of the time (issue 14, item 3).
 
 A record is one case as benchmarks/battery.py writes it: a dict with `kind` ("clean",
 "single", "pair"), `effects` (hidden names), `visibilities` (each effect's, ratios), `named`
-(the causes diagnose named, in order) and `family`.
+(the causes diagnose named, in order) and `family`; and `distinguishing` (each effect's
+distinguishing visibility, distinguishing_visibility; None for an effect that reduces to no
+other), when the battery recorded it.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from jointbench.bench.campaign.visibility import VISIBILITY_BAND, visibility
 from jointbench.identification.effects import EFFECTS, NONE
+from jointbench.identification.filtering import lowpass
 
 BINS = (0.03, 0.05, 0.10, 0.20, 0.40)   # visibility bin edges (ratios); the last bin is open
 FOUND_SHARE = 0.95                      # "found 95 % of the time"
 MIN_CASES = 3                           # cases at or above a visibility to claim the share
 PAIR_VISIBLE = 0.10                     # a two-effect case counts when both effects reach it
+SEPARABLE = 0.05                        # distinguishing visibility under which a log is not
+#                                         counted as able to separate an effect from the one
+#                                         it reduces to (the battery's bar for "visible")
+
+
+def distinguishing_visibility(tau_clean: np.ndarray, tau_effect: np.ndarray,
+                              tau_reduced: np.ndarray, f1_hz: float, rate_hz: float) -> float:
+    """The in-band visibility (bench.campaign.visibility, a ratio) of the part of an effect's
+    change of the noise-free command that the effect it reduces to (registry `reduces_to`)
+    cannot take: tau_effect - tau_clean less its least-squares multiple, in band, of
+    tau_reduced - tau_clean, the change the reduced effect makes at some strength (its change
+    taken as proportional to its strength: an offset's constant load). For an asymmetric
+    friction on the bench that is its viscous part a FVm |qm'| less its mean, as the closed
+    loop shows it; on a tanh friction law its creep region besides. [N m] commands on the
+    same ticks; f1 [Hz], rate [Hz]."""
+    a = np.asarray(tau_clean, float)
+    da, db = np.asarray(tau_effect, float) - a, np.asarray(tau_reduced, float) - a
+    wn, ts = 2 * np.pi * VISIBILITY_BAND * f1_hz, 1.0 / rate_hz
+    la, lb = lowpass(da, wn, ts), lowpass(db, wn, ts)
+    c = float(la @ lb) / float(lb @ lb) if float(lb @ lb) > 0 else 0.0
+    return visibility(a, a + da - c * db, f1_hz, rate_hz)
 
 
 def first_named(record: dict) -> str:
@@ -38,6 +63,14 @@ def alternative_stated(record: dict) -> bool:
     the hidden one (the record's `ambiguity` texts name it): honest, not right."""
     return (record["kind"] == "single" and not right(record)
             and any(record["effects"][0] in a for a in record.get("ambiguity", ())))
+
+
+def inseparable_stated(record: dict) -> bool:
+    """A single-effect miss that states the hidden effect as the alternative (ambiguity) on
+    a log that cannot separate it from the effect it reduces to: its distinguishing
+    visibility (distinguishing_visibility) under SEPARABLE. Not counted as right."""
+    d = (record.get("distinguishing") or [None])[0]
+    return alternative_stated(record) and d is not None and d < SEPARABLE
 
 
 def confusion(records: list[dict]) -> tuple[list[str], np.ndarray]:
@@ -117,6 +150,12 @@ def summary_lines(records: list[dict]) -> list[str]:
         amb = sum(alternative_stated(r) for r in at5)
         lines.append(f"  of the misses, answered with the hidden effect as the stated "
                      f"alternative (ambiguity): {amb}")
+        if any("distinguishing" in r for r in at5):
+            apart = sum(inseparable_stated(r) for r in at5)
+            lines.append(f"single-effect cases at visibility >= 5 %: {k} named right, {apart} "
+                         f"stated ambiguity between two effects the log cannot separate "
+                         f"(distinguishing visibility < {100 * SEPARABLE:g} %), of {len(at5)} "
+                         f"({100 * (k + apart) / len(at5):.0f} % together)")
     pairs = [r for r in records if r["kind"] == "pair"]
     if pairs:
         one = sum(bool(set(r["effects"]) & set(r["named"])) for r in pairs)

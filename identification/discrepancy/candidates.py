@@ -13,9 +13,9 @@ import numpy as np
 from scipy import optimize, stats
 
 from jointbench.identification.discrepancy.heldout import (FOLDS, MATERIAL, Scores, bar,
-                                                           evidence, fold_of_rows, held_out,
-                                                           scores, t_bar)
-from jointbench.identification.discrepancy.nominal import Nominal
+                                                           evidence, fitted_rss, fold_of_rows,
+                                                           held_out, scores, t_bar)
+from jointbench.identification.discrepancy.nominal import Nominal, transmitted_rms
 from jointbench.identification.discrepancy.stacked import Stacked, apply, design_many, stacked
 from jointbench.identification.effects import EFFECTS
 from jointbench.identification.effects.base import Design, Effect
@@ -145,12 +145,13 @@ def _evaluate(nom: Nominal, ref: Reference, e: Effect, fixed: dict,
     dof = n - n0 - k
     F = ((rss0 - rss) / k) / (rss / dof) if rss > 0 and dof > 0 else np.inf
     p = float(stats.f.sf(F, k, dof)) if np.isfinite(F) else 0.0
-    res_before = ref.residual
+    y0, W0, names0 = ref.base.design()
+    res_before = y0 - W0 @ ref.scores.X
     rows = nom.block == block
     pred_change = (res_before - res_after)[rows]
     size = 100 * float(np.sqrt(np.mean(pred_change ** 2))) / nom.reference_rms[block]
     errors = held_out(records, ref.folds)
-    acts = acts_in(nom, ref.base.design(), (y, W, names))
+    acts = acts_in(nom, (y0, W0, names0), (y, W, names))
     ev = evidence(ref.scores.errors, errors, len(nom.sig.index), acts)
     values = dict(zip(names, X))
     why = e.check({**fixed, **values}, nom) if e.check else ""   # fitted and searched values
@@ -160,8 +161,8 @@ def _evaluate(nom: Nominal, ref: Reference, e: Effect, fixed: dict,
                      explained_pct=100 * (rss0 - rss) / rss0,
                      heldout_pct=ev.explained_pct, t_stat=ev.t, p_heldout=ev.p,
                      alpha=ref.alpha, delta_bic=float(bic0 - bic1), p_value=p, size_pct=size,
-                     before_pct=nom.relative_error_pct(res_before, block),
-                     after_pct=_own_error_pct(nom, res_after, block, W, X, names), block=block,
+                     before_pct=_own_error_pct(nom, res_before, block, W0, ref.scores.X),
+                     after_pct=_own_error_pct(nom, res_after, block, W, X), block=block,
                      X=tuple(float(x) for x in X), names=tuple(names), fixed=fixed,
                      base=under.effects, acts=acts)
 
@@ -181,17 +182,15 @@ def acts_in(nom: Nominal, reference: Design, extended: Design) -> tuple[int, ...
 
 
 def _own_error_pct(nom: Nominal, residual: np.ndarray, block: int, W: np.ndarray,
-                   X: np.ndarray, names: Sequence[str]) -> float:
-    """The inverse view's error of `block` for an extended model: the link equation's residual
-    over the model's own spring torque (its K times its stiffness column), as the nominal's is
-    over the nominal's. (Over the nominal's, a nominal that shrinks the homogeneous link
-    equation towards 0 = 0, K = 779 where the spring has 2.0e4 under a large spring damping,
-    makes every model that restores K look worse.)"""
-    if block != 1 or "K" not in names:
+                   X: np.ndarray) -> float:
+    """The inverse view's error of `block` for a model (the reference or an extended one):
+    the link equation's residual over the model's own transmitted torque (nominal.
+    transmitted_rms), as the nominal's is over the nominal's. (Over the nominal's, a nominal
+    that shrinks the homogeneous link equation towards 0 = 0, K = 779 where the spring has
+    2.0e4 under a large spring damping, makes every model that restores K look worse.)"""
+    if block != 1:
         return nom.relative_error_pct(residual, block)
-    rows = nom.block == 1
-    k = list(names).index("K")
-    spring = float(np.sqrt(np.mean((W[rows, k] * X[k]) ** 2)))
+    spring = transmitted_rms(W, X, nom.block)
     return 100.0 * nom.block_rms(residual, 1) / spring if spring > 0 else float("nan")
 
 
@@ -226,7 +225,7 @@ def _refitted(nom: Nominal, ref: Reference, coupled: list[int]) -> Reference:
         def cost(w: float) -> float:
             effects[i] = (name, {**fx, c.search: float(w)})
             y, W, _ = stacked(nom, effects).design()
-            fits.append((nom.fit(y, W)[1], float(w)))
+            fits.append((fitted_rss(nom, y, W), float(w)))
             return fits[-1][0]
 
         _search(cost, c.grid(nom))

@@ -4,7 +4,7 @@ its columns, its block-weighted least squares and the extended designs effects b
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -94,6 +94,9 @@ class Nominal:
     reference_rms: tuple[float, ...]   # per block: RMS of what the block predicts
     sig: Signals
     link_friction: bool = True         # FS sign(q') among the columns (logs with q)
+    # What diagnose's searches reuse between trials on this very model (discrepancy.stacked):
+    # not an input, not compared, and fresh in a dataclasses.replace copy (init=False).
+    memo: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def residual(self) -> np.ndarray:
@@ -184,12 +187,26 @@ def nominal(log: Log, settings: FilterSettings, link_friction: bool = True) -> N
 
 def _reference_rms(y: np.ndarray, W: np.ndarray, X: np.ndarray, block: np.ndarray,
                    names: tuple[str, ...]) -> list[float]:
-    """Per block, the RMS of what it predicts: the measured torque; the spring torque K (qm - q)."""
+    """Per block, the RMS of what it predicts: the measured torque; the transmitted torque
+    (transmitted_rms: the spring torque K (qm - q) of the nominal)."""
     ref = [float(np.sqrt(np.mean(y[block == 0] ** 2)))]
     if (block == 1).any():
-        K = X[names.index("K")]
-        ref.append(float(np.sqrt(np.mean((K * W[block == 1, names.index("K")]) ** 2))))
+        ref.append(transmitted_rms(W, X, block))
     return ref
+
+
+def transmitted_rms(W: np.ndarray, X: np.ndarray, block: np.ndarray) -> float:
+    """RMS over the link rows of the torque the transmission carries from the motor to the
+    link: the columns that act in both equations (action and reaction, eqs. 5-6), the spring
+    K (qm - q) and what an effect adds to it (a spring damping D (qm' - q'), a hardening's
+    second spring). The link equation is homogeneous (0 = ...), so its residual means
+    something only against a torque of the same model: with a spring damping as large as
+    the spring's stiffness times the mode, the damping carries most of that torque, and a
+    residual over the spring part alone read 185 % for a model that removed 88 % of the
+    held-out residual (prototype, D = 2.9e4 N m s/rad)."""
+    motor, link = block == 0, block == 1
+    both = np.any(W[motor] != 0, axis=0) & np.any(W[link] != 0, axis=0)
+    return float(np.sqrt(np.mean((W[link][:, both] @ X[both]) ** 2)))
 
 
 def with_parameters(nom: Nominal, X: np.ndarray) -> Nominal:

@@ -36,15 +36,35 @@ class Stacked:
 
     def design(self) -> Design:
         """y, W and the column names: nominal columns, then the effects' columns."""
-        nom = self.nom
-        if self.tau is None and self.deflection is None and not self.lead:
-            y, W, names = nom.y, nom.W, nom.names
-        else:
-            y, W, names = nom.columns(self.tau, self.deflection, self.lead)
+        y, W, names = _core(self)
         if not self.extra:
             return y, W, names
         return (y, np.column_stack([W, *(c for _, c in self.extra)]),
                 names + tuple(n for n, _ in self.extra))
+
+
+# The nominal columns of the last few states (tau, deflection, lead), most recent first, kept
+# on the Nominal (its `memo`): every trial of an effect searched on top of a state rebuilds its
+# design, and the columns a torque lag leads or a dead band rebuilds were decimated again for
+# each (8.6 of 30 s of `diagnose` on a 60 s log with a lag named). Keyed by identity, holding
+# the arrays: never a stale hit.
+_KEEP = 8
+
+
+def _core(s: Stacked) -> Design:
+    """`s`'s nominal columns (Nominal.columns with its torque, deflection and lead)."""
+    nom = s.nom
+    if s.tau is None and s.deflection is None and not s.lead:
+        return nom.y, nom.W, nom.names
+    cores = nom.memo.setdefault("cores", [])
+    key = (s.tau, s.deflection)
+    for (k, lead), design in cores:
+        if lead == s.lead and all(a is b for a, b in zip(k, key)):
+            return design
+    design = nom.columns(s.tau, s.deflection, s.lead)
+    cores.insert(0, ((key, s.lead), design))
+    del cores[_KEEP:]
+    return design
 
 
 class _Rows:
@@ -55,18 +75,21 @@ class _Rows:
         self.base = base
         self.after = base
         self.sig = base.nom.sig
+        self.added: tuple[tuple[str, np.ndarray], ...] | None = None   # by extend alone
 
     def value(self, name: str) -> float:
         return self.base.nom.value(name)
 
     def extend(self, *columns: Column) -> Design:
         cols = tuple((n, stack(self.sig, m, li)) for n, m, li in columns)
+        self.added = cols
         self.after = dataclasses.replace(self.base, extra=self.base.extra + cols)
         return self.after.design()
 
     def columns(self, tau: np.ndarray | None = None,
                 deflection: np.ndarray | None = None, lead: float | None = None) -> Design:
         b = self.base
+        self.added = None   # its columns depend on the state it rebuilds: never reused
         self.after = dataclasses.replace(
             b, tau=b.tau if tau is None else tau,
             deflection=b.deflection if deflection is None else deflection,
@@ -76,10 +99,45 @@ class _Rows:
 
 def apply(base: Stacked, effect: str, fixed: dict) -> tuple[Stacked, Design]:
     """`base` with one more effect (nonlinear values `fixed`), and its design."""
+    effects = base.effects + ((effect, dict(fixed)),)
+    key = (effect, tuple(sorted(fixed.items())))
+    added = _added(base.nom, key)
+    if added is not None:
+        after = dataclasses.replace(base, extra=base.extra + added, effects=effects)
+        return after, after.design()
     rows = _Rows(base)
     d = EFFECTS[effect].design(rows, fixed)
-    after = dataclasses.replace(rows.after, effects=base.effects + ((effect, dict(fixed)),))
-    return after, d
+    if rows.added is not None:
+        _keep_added(base.nom, key, rows.added)
+    return dataclasses.replace(rows.after, effects=effects), d
+
+
+# The decimated columns an effect added (extend) with given values, kept on the Nominal (its
+# `memo`): they depend on the log's signals and those values alone (identification.effects:
+# `design` reads `rows.sig`, `rows.value` of the nominal and `fixed`), and every round of
+# `diagnose` searches the same grid again on top of the causes named, as do the parsimony
+# checks (two thirds of the ripple's and the hardening's decimations on a 60 s log). Least
+# recently used first out beyond _BYTES; they go with the Nominal.
+_BYTES = 64 * 2 ** 20
+
+
+def _added(nom: Nominal, key: tuple) -> tuple[tuple[str, np.ndarray], ...] | None:
+    """The columns kept on `nom` for (effect, values), or None."""
+    kept = nom.memo.setdefault("added", {})
+    hit = kept.pop(key, None)
+    if hit is not None:
+        kept[key] = hit   # most recent last
+    return hit
+
+
+def _keep_added(nom: Nominal, key: tuple, cols: tuple[tuple[str, np.ndarray], ...]) -> None:
+    """Keep `cols` on `nom` for (effect, values); the least recently used go beyond _BYTES."""
+    kept = nom.memo.setdefault("added", {})
+    kept[key] = cols
+    size = sum(c.nbytes for cs in kept.values() for _, c in cs)
+    while size > _BYTES and len(kept) > 1:
+        cs = kept.pop(next(iter(kept)))
+        size -= sum(c.nbytes for _, c in cs)
 
 
 def stacked(nom: Nominal, effects: Sequence[tuple[str, dict]]) -> Stacked:

@@ -1,0 +1,119 @@
+"""What `diagnose` reuses between the trials of its searches (issue 14: under 10 s per 60 s
+log) gives exactly what computing again gives, bit for bit:
+
+- the nominal columns of a lagged or dead-band state (stacked._core), the decimated columns an
+  effect adds at a given value (stacked._added), both kept on the very Nominal they came from;
+- a spring column's link row as the negative of its motor row (signals.stack);
+- every fold's held-out errors in one pass (heldout.scores), against the per-fold loop;
+- the coupled-width refit's RSS from the normal equations (heldout.fitted_rss), against the
+  SVD least squares to rounding.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from jointbench.bench.analysis.diagnose.run import diagnosis_settings
+from jointbench.bench.campaign.battery import Case, run_case
+from jointbench.identification.defaults import PAPER_RATE
+from jointbench.identification.discrepancy import nominal
+from jointbench.identification.discrepancy import stacked as st
+from jointbench.identification.discrepancy.heldout import fitted_rss, fold_of_rows, scores
+from jointbench.identification.discrepancy.signals import stack
+
+TRIALS = (("backlash", {"backlash_rad": 2e-4}), ("hardening", {"deflection_rad": 1e-3}),
+          ("hardening", {"deflection_rad": 2e-3}), ("torque_ripple", {"ripple_period_rad": 0.01}),
+          ("torque_lag", {"lag_s": 2e-3}), ("spring_damping", {}))
+
+
+@pytest.fixture(scope="module")
+def log():
+    # a prototype log with a lag (the state every later trial is built on) and a backlash
+    return run_case(Case(0, "prototype", None, PAPER_RATE, 11, "backlash", 0.001),
+                    duration=20.0)
+
+
+def _designs(nom):
+    """Every trial's design on top of a lagged state, each computed twice (the second from
+    what the first left)."""
+    base, _ = st.apply(st.Stacked(nom), "torque_lag", {"lag_s": 1e-3})
+    return [st.apply(base, name, fixed)[1] for _ in range(2) for name, fixed in TRIALS]
+
+
+def _nothing_reused(monkeypatch):
+    monkeypatch.setattr(st, "_core", lambda s: (s.nom.y, s.nom.W, s.nom.names) if (
+        s.tau is None and s.deflection is None and not s.lead) else
+        s.nom.columns(s.tau, s.deflection, s.lead))
+    monkeypatch.setattr(st, "_added", lambda nom, key: None)
+    monkeypatch.setattr(st, "_keep_added", lambda nom, key, cols: None)
+
+
+def test_reused_designs_are_the_designs(log, monkeypatch):
+    settings, _ = diagnosis_settings(log)
+    nom = nominal(log, settings)
+    reused = _designs(nom)
+    with monkeypatch.context() as m:
+        _nothing_reused(m)
+        fresh = _designs(nom)
+    for a, b in zip(reused, fresh):
+        assert a[2] == b[2] and np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
+    # another Nominal of the same log (same values, another object) reuses nothing of it
+    other = nominal(log, settings)
+    assert not other.memo and nom.memo["added"] and nom.memo["cores"]
+    _designs(other)
+    assert other.memo["added"].keys() == nom.memo["added"].keys()
+    # a replaced copy (another weighting, say) starts with nothing kept
+    assert not dataclasses.replace(nom, weights=2 * nom.weights).memo
+
+
+def test_a_spring_columns_link_row_is_exactly_the_decimated_negative(log):
+    settings, _ = diagnosis_settings(log)
+    sig = nominal(log, settings).sig
+    d = sig.qm - sig.q
+    n = len(sig.index)
+    col = stack(sig, d, -d)
+    assert np.array_equal(col[n:], sig.dec(-d)) and np.array_equal(col[:n], sig.dec(d))
+    # a link row that is not the negative is decimated on its own
+    for link in (2 * d, d, np.abs(d)):
+        assert np.array_equal(stack(sig, d, link)[n:], sig.dec(link))
+
+
+def _scores_by_fold(nom, folds, y, W):
+    """heldout.scores' held-out errors as it computed them before: fold by fold."""
+    w = nom.weights
+    A, b = W * w[:, None], y * w
+    scale = np.linalg.norm(A, axis=0)
+    scale[scale == 0] = 1.0
+    A = A / scale
+    parts = [np.flatnonzero(folds == f) for f in range(int(folds.max()) + 1)]
+    grams = [(A[i].T @ A[i], A[i].T @ b[i]) for i in parts]
+    G, c = (sum(g[j] for g in grams) for j in range(2))
+    errors = np.empty(len(b))
+    for i, (Gf, cf) in zip(parts, grams):
+        x_f = np.linalg.lstsq(G - Gf, c - cf, rcond=None)[0]
+        errors[i] = b[i] - (A[i] * x_f).sum(axis=1)
+    return errors
+
+
+def test_heldout_errors_in_one_pass_are_the_per_fold_ones(log):
+    settings, _ = diagnosis_settings(log)
+    nom = nominal(log, settings)
+    folds = fold_of_rows(nom)
+    y, W, _ = st.apply(st.Stacked(nom), "hardening", {"deflection_rad": 1e-3})[1]
+    s = scores(nom, folds, y, W)
+    assert np.array_equal(s.errors, _scores_by_fold(nom, folds, y, W))
+    assert np.array_equal(s.held, [s.errors[folds == f] @ s.errors[folds == f]
+                                   for f in range(len(s.held))])
+
+
+def test_fitted_rss_is_the_least_squares_rss(log):
+    settings, _ = diagnosis_settings(log)
+    nom = nominal(log, settings)
+    for name, fixed in TRIALS:
+        y, W, _ = st.apply(st.Stacked(nom), name, fixed)[1]
+        # the normal equations of the unit-norm columns (condition numbers under 1e3 here)
+        # against the SVD: the same minimum to well under a millionth
+        assert fitted_rss(nom, y, W) == pytest.approx(nom.fit(y, W)[1], rel=1e-7)
