@@ -13,8 +13,16 @@ of K, Jm, JL (the fit's own autocorrelation-consistent covariance) is the smalle
 unless, when the wide one is the more precise, the two estimates lie more than 3 sigmas of
 their difference apart on any of K, Jm, JL (`CONSISTENCY_Z`; Hausman's test: both fit the
 same log, so the difference of two unbiased estimates has the variance |sigma_a^2 -
-sigma_b^2|): one of them is then biased, which no precision can settle, and the chooser's
-band stays with a warning. (A root-sum-square bound was too lenient: on the prototype the
+sigma_b^2|): one of them is then biased, which no precision can settle alone, and the
+chooser's band stays with a warning, unless the measured first mode settles it
+(`mode_gap`): the chooser's band was designed for the mode the frequency response measured
+(the fits' arbiter, independent of both), and a chooser's fit whose two-mass model puts the
+mode more than MODE_DISAGREEMENT from it, while the wide fit's holds it within that, has
+missed its own design; the wide band is then kept, still with the warning. (Soft axis
+without link Coulomb friction nor velocity feed-forward, issue 17: the motor sticks at most
+reversals of the chooser's 5.4 Hz band, the instruments predicted linearly from q_ref cannot
+follow, and the chooser's fit put K at -51.5 % (mode 3.24 Hz against the measured 3.97 Hz);
+the wide band's is +0.8 % (3.96 Hz).) (A root-sum-square bound was too lenient: on the prototype the
 wide band won near-ties, 0.17 against 0.18 %, with K 0.22 % off the chooser's estimate, and
 200 campaign runs lost coverage, K 91.5 -> 73.5 %.) No threshold is tuned on test cases:
 the 1 % budgets are the chooser's, the 3 sigma the suite's. Pure numerics; the fits come
@@ -39,6 +47,7 @@ PRECISION_PARAMS = ("K", "Jm", "JL")
 # deviations of their difference (`disagreement`) are not both unbiased: the usual 3 sigma
 # of the test suite.
 CONSISTENCY_Z = 3.0
+MODE_DISAGREEMENT = 0.2   # relative gap between the two f1 estimates that voids the band
 WELCH_SEGMENT_S = 8.0   # Welch segments for the excitation's spectrum (0.125 Hz), as first_mode
 
 Fit = TypeVar("Fit")
@@ -171,15 +180,26 @@ def disagreement(a: tuple[dict, dict], b: tuple[dict, dict]) -> tuple[str, float
     return name, z[name]
 
 
+def mode_gap(physical: dict[str, float], f1_hz: float | None) -> float:
+    """|f1_hz / f - 1| for the two-mass model's first mode f = sqrt(K (1/Jm + 1/JL)) / 2 pi
+    of `physical`; inf when f1_hz is not given or K, Jm, JL are not all positive."""
+    K, Jm, JL = (physical.get(n, math.nan) for n in PRECISION_PARAMS)
+    if f1_hz is None or not (K > 0 and Jm > 0 and JL > 0):
+        return math.inf
+    return abs(f1_hz / (math.sqrt(K * (1 / Jm + 1 / JL)) / (2 * math.pi)) - 1)
+
+
 def choose_band(log: Log, chosen: Fit, fit: Callable[[FilterSettings], Fit],
-                estimate: Callable[[Fit], tuple[dict, dict] | None]
-                ) -> tuple[Fit, BandChoice]:
+                estimate: Callable[[Fit], tuple[dict, dict] | None],
+                f1_hz: float | None = None) -> tuple[Fit, BandChoice]:
     """The rule: fit the wide candidate (`wide_settings` of the chooser's fit `chosen`) with
     `fit`; keep the fit whose largest relative corrected sigma of K, Jm, JL (`max_rel_sigma`
     of `estimate(fit)`: (physical, corrected sigma), None when not a joint-motor fit) is the
     smaller, unless, when that is the wide one, the two estimates lie more than CONSISTENCY_Z
     sigmas of their difference apart on any of K, Jm, JL (`disagreement`): then the
-    chooser's, and a warning. The chooser's fit also
+    chooser's, and a warning; the wide one, and the warning, when the chooser's model puts
+    the first mode more than MODE_DISAGREEMENT from the measured `f1_hz` [Hz] and the wide
+    one's within it (`mode_gap`). The chooser's fit also
     stays when there is no wider band or its fit fails (ValueError and subclasses, the
     identification's errors)."""
     base_est = estimate(chosen)
@@ -210,8 +230,14 @@ def choose_band(log: Log, chosen: Fit, fit: Callable[[FilterSettings], Fit],
     if z > CONSISTENCY_Z:
         text = (f"the wide band ({label}) puts {name} at {other_est[0][name]:.4g} against "
                 f"{base_est[0][name]:.4g} in the chooser's band, {z:.1f} sigma of their "
-                f"difference apart: one of them is biased; the chooser's band kept")
-        return chosen, replace(keep, reason="chooser's band: " + text, warning=text)
+                f"difference apart: one of them is biased; ")
+        gaps = [mode_gap(e[0], f1_hz) for e in (base_est, other_est)]
+        if not gaps[0] > MODE_DISAGREEMENT >= gaps[1]:
+            text += "the chooser's band kept"
+            return chosen, replace(keep, reason="chooser's band: " + text, warning=text)
+        text += (f"the wide band kept: its model puts the first mode {100 * gaps[1]:.2g} % "
+                 f"from the measured {f1_hz:.4g} Hz, the chooser's {100 * gaps[0]:.2g} %")
+        return other, BandChoice("wide", alt, settings, rel, top, "wide band: " + text, text)
     return other, BandChoice(
         "wide", alt, settings, rel, top,
         f"wide band ({label}): largest relative corrected sigma of K, Jm, JL "

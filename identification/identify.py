@@ -13,7 +13,7 @@ from jointbench.identification import link_fit, regressors
 from jointbench.identification.checks import check_excitation, check_signals
 from jointbench.identification.estimate import LSResult, NotIdentifiable, block_weighted, least_squares
 from jointbench.identification.band_checks import band_warnings
-from jointbench.identification.band_choice import BandChoice, choose_band
+from jointbench.identification.band_choice import MODE_DISAGREEMENT, BandChoice, choose_band
 from jointbench.identification.defaults import choose_filter, is_paper_prototype, stencil_for
 from jointbench.identification.first_mode import (FirstMode, given_first_mode,
                                                   measure_first_mode)
@@ -147,7 +147,7 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
     result = _identify(log, model, settings, notes, f1)
     if chooser and result.model == "joint-motor" and f1 is not None:   # a mode found
         result, band = choose_band(log, result, lambda s: _identify(log, model, s, [], f1),
-                                   _joint_motor_estimate)
+                                   _joint_motor_estimate, f1)
         settings = result.settings
         why = stencil_for(settings)[1] if band.used == "wide" else why
         warnings += [band.warning] if band.warning else []
@@ -169,9 +169,6 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
 
 def _joint_motor_estimate(r: Identification) -> tuple[dict, dict] | None:
     return (r.physical, r.physical_sigma_corrected) if r.model == "joint-motor" else None
-
-
-MODE_DISAGREEMENT = 0.2   # relative gap between the two f1 estimates that voids the band
 
 
 def model_first_mode(result: Identification, measured: FirstMode) -> tuple[FirstMode, str]:
