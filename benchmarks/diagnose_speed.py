@@ -1,0 +1,59 @@
+"""`diagnose` time per log (issue 14: under 10 s per 60 s log), on cases of the discrepancy
+battery (benchmarks/battery.py): each case's log is made by the battery's runner (strength by
+visibility), then `diagnose(log)` is timed alone in this process, wall and CPU.
+
+    .venv/bin/python benchmarks/diagnose_speed.py [--duration 60] [--seed 2026] [CASE ...]
+
+Default cases: a clean log, single effects and the slowest two-effect kinds of the seed-2026
+run (indices of `benchmarks/battery.py`'s plan).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+import battery  # noqa: E402
+
+from jointbench.bench.campaign.battery import plan, run_spec  # noqa: E402
+
+CASES = (0, 60, 65, 89, 93, 96, 100, 102)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("cases", type=int, nargs="*", default=list(CASES))
+    ap.add_argument("--duration", type=float, default=60.0, help="log length [s] (default 60)")
+    ap.add_argument("--seed", type=int, default=2026)
+    args = ap.parse_args(argv)
+    from jointbench.bench.analysis.diagnose import diagnose
+
+    specs = plan(battery.PLACES, 8, 24, 20, args.seed)
+    battery._init(args.duration)
+    print(f"diagnose on {args.duration:g} s logs (battery seed {args.seed})")
+    worst = 0.0
+    for i in args.cases:
+        if not 0 <= i < len(specs):
+            print(f"case {i}: no such case (0-{len(specs) - 1})", file=sys.stderr)
+            return 2
+        s = specs[i]
+        out = run_spec(s, battery._RUNNERS[s.place.source], battery._CACHE)
+        w0, c0 = time.perf_counter(), time.process_time()
+        d = diagnose(out.log)
+        wall, cpu = time.perf_counter() - w0, time.process_time() - c0
+        worst = max(worst, wall)
+        what = "+".join(s.effects) or "clean"
+        named = ",".join(battery.named_causes(d)) or "none"
+        print(f"#{i:3d} {s.place.family:16s} {what:30s} -> {named:28s} wall {wall:5.1f} s, "
+              f"CPU {cpu:5.1f} s")
+    print(f"slowest: {worst:.1f} s per {args.duration:g} s log")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
