@@ -31,8 +31,12 @@ def test_soft_axis_without_link_coulomb_nor_feedforward():
                    feedforward=False)
     result, truth = identify(log, "joint-motor"), log.truth()
     assert result.band.used == "wide", result.band.reason
-    # the bands' disagreement is still said (one of them is biased)
-    assert any("one of them is biased; the wide band kept" in w for w in result.warnings)
+    # Before the 3-point chain took the motor's stick phases (regressors.py) the chooser's band
+    # put K at -51.5 % here, 4.7 sigmas of their difference from the wide band, and the
+    # measured first mode had to decide (the stand-in fits below test that rule). With them the
+    # chooser's largest relative sigma is 7.5 % and the two agree within 2.0 sigmas of their
+    # difference: the wide band wins on precision, and the chooser's is not kept.
+    assert not any("the chooser's band kept" in w for w in result.warnings), result.warnings
     for p in ("K", "Jm", "JL"):
         z = (result.physical[p] - truth[p]) / result.physical_sigma_corrected[p]
         assert abs(z) < 3, (p, result.physical[p], z)
