@@ -10,8 +10,9 @@ Every case runs at the paper's rate (350.87 Hz), cycling over the places (bench 
 arm6 axis2 and axis4; independent families balanced, soft, wrist, pendulum) and over velocity
 feedforward on/off x torque noise on/off. Writes OUT/cases.json and OUT/cases.csv (model,
 joint, seed, effects, strengths, visibilities, named; the distinguishing visibility of every
-effect that reduces to another: bench.campaign.detection.distinguishing_visibility), OUT/summary.txt (confusion table,
-detection curve, 95 % visibility per effect) and the detection-curve figure.
+effect that reduces to another: bench.campaign.detection.distinguishing_visibility),
+OUT/summary.txt (confusion table, detection curve, 95 % visibility per effect) and the
+detection-curve figure.
 """
 
 from __future__ import annotations

@@ -39,7 +39,8 @@ def test_the_note_says_which_is_named_and_why():
     assert note.startswith("backlash or hardening: this log cannot tell them apart")
     assert note.endswith("hardening, which removes 35 % of what backlash leaves, is named")
     note = _apart(back, hard, 41.2, 1.25e-4, unphysical=True)
-    assert "t = 41.2 (an unphysical fit)" in note and note.endswith("the simpler, backlash, is named")
+    assert "t = 41.2 (an unphysical fit)" in note
+    assert note.endswith("the simpler, backlash, is named")
 
 
 def _established(effect, share):

@@ -210,8 +210,8 @@ def _which(nom: Nominal, simpler: Candidate, richer: Candidate,
     asymmetric friction and an asymmetry named for an offset are errors of the same cost, so
     the rule is symmetric (each is tested on top of the other at the same level, the
     simpler kept unless the richer's own part passes and the simpler's does not), and its
-    level is the conventional one of a single test. Under the null (the richer's own part absent) the
-    test without margin is conservative (the extra column only adds estimation variance to
+    level is the conventional one of a single test. Under the null (the richer's own part
+    absent) the test without margin is conservative (the extra column only adds estimation variance to
     the held-out prediction): an offset is called an asymmetry with a chance under 5 %.
     The round's level asked the asymmetry's viscous part for t > 4.23, a bar for discovering
     an effect, where only the choice between two established descriptions was at stake."""
