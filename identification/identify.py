@@ -20,7 +20,7 @@ from jointbench.identification.first_mode import (FirstMode, given_first_mode,
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.instruments import instrument_log
 from jointbench.identification.log import Log, LogError
-from jointbench.identification.physical import InversionError, PhysicalResult, invert_motor_only, table3
+from jointbench.identification.physical import InversionError, invert_motor_only, table3
 from jointbench.identification.saturation import exclude_clipped  # clipped torque rows out
 
 MODEL_CHOICES = ("joint-motor", "motor-only", "motor-only-printed", "rigid", "auto")
@@ -316,6 +316,7 @@ def _place_reversals(log: Log, settings: FilterSettings, reg: regressors.Regress
     by an amount that grows with FS / J, and Jm with them (stiff_small, f1 = 20 Hz at 17.5
     samples a period: Jm +3.83 % with them, +2.99 % with the crossings alone, +0.38 % now;
     +0.00 % with ideal sensors)."""
+    rates = (0.0, 0.0)
     for _ in range(REVERSAL_PASSES):
         p = {n: ls.value(n) for n in ls.names if n not in ls.unidentifiable}
         rates = reversal_rates(p)
@@ -326,6 +327,8 @@ def _place_reversals(log: Log, settings: FilterSettings, reg: regressors.Regress
             return reg, ls
         reg = again
         ls = block_weighted(reg.W, reg.y, reg.names, reg.block, time=reg.index, instruments=Z)
+    if not any(rates):
+        return reg, ls
     notes.append(f"Coulomb reversals placed by the identified FSm / Jm = {rates[0]:.4g} and "
                  f"FS / JL = {rates[1]:.4g} (the filtered velocity's zero crossings come late "
                  f"by the friction's kink; {REVERSAL_PASSES} passes)")

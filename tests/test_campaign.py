@@ -22,7 +22,6 @@ from jointbench.bench.campaign.run import run_campaign
 from jointbench.bench.campaign.scatter import scattered_factors, scattered_mjcf
 from jointbench.bench.campaign.settings import CampaignError, RunSettings
 from jointbench.bench.campaign.spec import CampaignSpec
-from jointbench.bench.campaign.summary import summarize
 from jointbench.bench.campaign.table import CampaignTable, read_table
 from jointbench.bench.campaign.executors import LocalExecutor, SerialExecutor
 from jointbench.identification.summary import coverage, parameter_stats, wilson_interval
@@ -278,7 +277,7 @@ def test_cli_bad_input_exit_2(argv, message, tmp_path, capsys):
 
 
 def test_scattered_model_round_trip_and_truth_follows(tmp_path):
-    from jointbench.models import find_axes, load_model
+    from jointbench.models import load_model
     from jointbench.models.truth import axis_truth
 
     def truth_of(path):

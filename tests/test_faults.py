@@ -113,7 +113,7 @@ def test_single_sine_does_not_identify_the_flexible_models(sine_run, tmp_path, c
     for model, need in (("joint-motor", 2), ("motor-only", 3)):
         rc, out, err = cli(["identify", str(path), "--model", model], capsys)
         assert rc == 2 and out == ""
-        assert f"sine.csv: the motion excites about 1.1 frequency line(s)" in err
+        assert "sine.csv: the motion excites about 1.1 frequency line(s)" in err
         assert f"the {model} model needs at least {need}" in err
         assert "Jm, FVm, K in the motor equation" in err or "X1 ... X6" in err
     # the rigid model (J, FV: one frequency is enough) is what auto falls back to

@@ -6,13 +6,11 @@ design-filter (the loader and identify: tests/test_faults.py)."""
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import os
 import signal
 import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -24,8 +22,7 @@ from hypothesis import strategies as st
 from jointbench.bench.campaign.settings import CampaignError, RunSettings
 from jointbench.bench.campaign.spec import CampaignSpec
 from jointbench.bench.sim.experiment import run_experiment
-from jointbench.identification.log import format_log, read_log, write_log
-from jointbench.identification.saturation import MAX_CLIPPED_SHARE, clipped_samples
+from jointbench.identification.log import read_log, write_log
 from jointbench.models import model_path
 from test_faults_output import run
 

@@ -4,7 +4,6 @@ same path; what cannot be converted is refused with exit 2 naming the file, line
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import replace
 from pathlib import Path
@@ -15,7 +14,7 @@ import pytest
 from jointbench.bench.cli import main
 from jointbench.identification.identify import identify
 from jointbench.identification.log import read_log, write_log
-from jointbench.identification.log_import import ImportSpec, convert, parse_raw, read_raw
+from jointbench.identification.log_import import ImportSpec, convert, parse_raw
 from jointbench.identification.regressors import PLANT_STEPS_KEY
 
 N, KT, CPR = 100.0, 0.5, 2**17  # prototype gear ratio, torque constant [N m/A], counts per turn

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from jointbench.bench.sim.axes import build_experiment_model, full_qpos
-from jointbench.models import ModelStructureError, find_axes, load_model
+from jointbench.models import ModelStructureError, load_model
 from jointbench.models.truth import axis_truth
 
 TABLE1 = {"Jm": 174.7996, "K": 20341.0458, "JL": 47.4458, "FSm": 41.4254, "FVm": 235.9100,

@@ -8,8 +8,7 @@ import io
 import math
 from pathlib import Path
 
-from jointbench.bench.campaign.survey import (ACCURACY_BAR_PCT, SURVEYED, Estimate, JointSurvey,
-                                              Survey)
+from jointbench.bench.campaign.survey import ACCURACY_BAR_PCT, Estimate, JointSurvey, Survey
 from jointbench.identification.output import finite_json, pct_error
 from jointbench.identification.parameters import FRICTIONS, STIFFNESS_AND_INERTIAS, units
 
