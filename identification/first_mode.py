@@ -29,6 +29,8 @@ FMIN_HZ = 0.5           # below, friction dominates the response of a chirp expe
 MIN_PEAK_RATIO = 2.0    # a resonance: |H| f^2 at the peak over its level across the band
 GAP_HZ = 1.0            # a gap this wide in the coherent bins ends the excited band
 MIN_BINS = 8            # coherent bins needed around the mode for the fit
+CONSISTENCY_Z = 3.0     # link and motor modes this many sigmas apart: one of them is biased
+ZETA_MAX = 1.0          # a second-order pair of damping ratio 1 or more is two real poles
 
 
 @dataclass(frozen=True)
@@ -84,7 +86,7 @@ def _nan(why: str) -> tuple[float, float, str]:
     return math.nan, math.nan, why
 
 
-def _fit(resp: _Response, motor: bool) -> tuple[float, float, str]:
+def _fit(resp: _Response, motor: bool, checks: bool = True) -> tuple[float, float, str]:
     """(f1, its fit standard deviation, '') or (nan, nan, why).
 
     The peak of |G| (above the antiresonance dip for the motor response) locates the mode
@@ -92,7 +94,10 @@ def _fit(resp: _Response, motor: bool) -> tuple[float, float, str]:
     antiresonance zero having added 180 deg): a resonance's phase passes 90 deg at its
     undamped frequency whatever its damping (the arm's, from Coulomb friction, reaches
     zeta ~ 0.2, which puts the magnitude peak 4 % low). A weighted straight line through the
-    phases within 40 deg of the target gives the crossing between bins."""
+    phases within 40 deg of the target gives the crossing between bins. `checks` (off for
+    the half-records `_measure` takes the spread from: the whole record has accepted the
+    mode) rejects a link peak off the mass line (`_off_mass_line`) and an overdamped
+    crossing (`_overdamped`)."""
     f, good = resp.f, np.flatnonzero(resp.ok)
     gaps = np.flatnonzero(np.diff(f[good]) > GAP_HZ)
     good = good[:gaps[0] + 1] if len(gaps) else good   # the excited band: no stray bins above
@@ -122,6 +127,8 @@ def _fit(resp: _Response, motor: bool) -> tuple[float, float, str]:
     low = good[(f[good] >= 0.4 * f[dip if motor else k]) & (f[good] <= 0.6 * f[dip if motor else k])]
     if len(low) and not motor:   # below the dip the antiresonance's own phase dominates
         lead = np.angle(np.sum(resp.G[low] / np.abs(resp.G[low])))
+        if checks and not abs(lead) < np.pi / 2:
+            return _nan(_off_mass_line(f[k], lead))
         target += float(lead * np.mean(f[low]) / f[k])
     win = search[(f[search] >= 0.7 * f[k]) & (f[search] <= 1.4 * f[k])]
     phase = np.unwrap(np.angle(resp.G[win]))
@@ -139,11 +146,38 @@ def _fit(resp: _Response, motor: bool) -> tuple[float, float, str]:
     if not coef[1] < 0:
         return _nan(f"the phase rises through the peak at {f[k]:.3g} Hz: no resonance")
     f1 = float(f[k] + (target - coef[0]) / coef[1])
+    why = _overdamped(f1, float(coef[1])) if checks else ""
+    if why:
+        return _nan(why)
     res = (phase[near] - A @ coef) * w
     cov = np.linalg.inv((A * w[:, None]).T @ (A * w[:, None])) * max(
         float(res @ res) / max(1, near.sum() - 2), 1.0)
     g = np.array([-1.0, -(target - coef[0]) / coef[1]]) / coef[1]   # d f1 / d coef
     return f1, float(np.sqrt(g @ cov @ g)), ""
+
+
+def _off_mass_line(f_peak: float, lead: float) -> str:
+    """Why a link peak whose flat band below is off the mass line is no first mode. Below the
+    mode the flattened link response is the mass line 1 / (Jm + JL), real and positive,
+    turned by the friction's lead atan(c / (w J)) (under 90 deg) or a delay's small lag: a
+    phase of 90 deg or more there is another resonance below (a pendulum's gravity mode
+    sqrt(MY g / (Jm + JL)): issue 15, a damped hardening pendulum measured at 1.39 Hz for 6)."""
+    return (f"the link response below its peak at {f_peak:.3g} Hz is off the mass line (phase "
+            f"{np.degrees(lead):+.0f} deg at 0.4-0.6 times the peak; friction leads it by "
+            "less than 90 deg): the peak is not the first mode (a resonance below it?)")
+
+
+def _overdamped(f1: float, slope: float) -> str:
+    """Why the phase crossing at `f1` [Hz], falling at `-slope` [rad/Hz], is no resonance, or
+    "". A second-order pair's phase falls through its crossing at 1 / (zeta f1) rad/Hz; at a
+    damping ratio zeta of ZETA_MAX (1) or more it is two real poles, no mode: such a shallow
+    crossing is the slow turn of a response between two bands (issue 15's 1.39 Hz for the
+    6 Hz of a damped hardening pendulum fell at 0.16 rad/Hz, zeta 4.5)."""
+    zeta = -1.0 / (f1 * slope)
+    if zeta < ZETA_MAX:
+        return ""
+    return (f"the phase falls through the crossing at {f1:.3g} Hz at only {-slope:.2g} rad/Hz, "
+            f"a damping ratio {zeta:.2g} (a mode has under {ZETA_MAX:g}): no resonance")
 
 
 def _sharp_crossing(resp: _Response, k: int, target: float) -> float | None:
@@ -174,9 +208,33 @@ def measure_first_mode(log: Log) -> FirstMode:
     interleaved sets of non-overlapping Welch segments (each set covers the whole record, so
     both see the chirp cross the mode) and the bin width / sqrt(12). `found` is False, with
     the reason in `note`, when no resonance stands out of the coherent band (a rigid axis, too
-    little excitation)."""
+    little excitation). With `q`, a link mode is cross-checked against the motor response's
+    (`_cross_checked`): when the two disagree, `sigma_hz` covers both."""
     mode = _measure(log, motor=log.q is None)
-    return mode if mode.found or log.q is None else _from_motor(log, mode)
+    if log.q is None:
+        return mode
+    return _cross_checked(mode, _measure(log, motor=True)) if mode.found else \
+        _from_motor(log, mode)
+
+
+def _cross_checked(link: FirstMode, motor: FirstMode) -> FirstMode:
+    """`link` with its sigma widened when the motor response's mode `motor` (the same mode,
+    seen through another output) lies more than CONSISTENCY_Z sigmas of their difference
+    from it: one of the two is biased and nothing in the log says which (seed-7 battery,
+    clean independent logs: wrist without feed-forward, link 12.96 +- 0.10 Hz, motor
+    11.32 Hz; pendulum, link 6.98 +- 0.10 Hz, motor 6.20 Hz; truths 12 and 6), so the
+    difference enters the sigma whole, sqrt(sigma^2 + d^2), which covers either being right.
+    f1 stays the link's: the band is designed from it as before."""
+    if not motor.found:
+        return link
+    d, sd = link.f1_hz - motor.f1_hz, math.hypot(link.sigma_hz, motor.sigma_hz)
+    if not abs(d) > CONSISTENCY_Z * sd:
+        return link
+    sigma = math.hypot(link.sigma_hz, d)
+    return replace(link, sigma_hz=sigma, note=(
+        f"{link.note}; DISAGREES with the motor response q_m/tau_m ({motor.f1_hz:.4g} +- "
+        f"{motor.sigma_hz:.2g} Hz, {abs(d) / sd:.1f} sigma apart): sigma widened to "
+        f"{sigma:.2g} Hz to cover both"))
 
 
 def _from_motor(log: Log, link: FirstMode) -> FirstMode:
@@ -210,7 +268,7 @@ def _measure(log: Log, motor: bool) -> FirstMode:
     if why:
         return FirstMode(math.nan, math.nan, method, False, why)
     half = nperseg // 2
-    parts = [_fit(_response(v[sl], o[sl], t[sl], fs, nperseg // 2, 0, indirect), motor)[0]
+    parts = [_fit(_response(v[sl], o[sl], t[sl], fs, nperseg // 2, 0, indirect), motor, False)[0]
              for sl in (slice(0, n - half), slice(half, n))
              for v, o, t in [(x, out, log.tau_m)]]
     spread = abs(parts[0] - parts[1]) / 2 if all(np.isfinite(parts)) else math.nan
