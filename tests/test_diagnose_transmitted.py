@@ -40,8 +40,9 @@ def damped_with_backlash():
 
 def test_a_large_spring_damping_beside_a_backlash_is_named_with_it(damped_with_backlash):
     d = damped_with_backlash
-    # the nominal alone is no physical axis (JL < 0): the causes make it one
-    assert d.nominal_parameters["JL"] < 0
+    # the nominal alone is no physical axis (JL 0.09 kg m^2 where the clean log's nominal
+    # has 47; below 0 before the motor constant was estimated beside it): the causes make it one
+    assert d.nominal_parameters["JL"] < 1.0
     assert d.verdict == "named", d.reason
     first, second = d.causes
     assert (first.effect, second.effect) == ("spring_damping", "backlash")
