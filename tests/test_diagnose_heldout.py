@@ -167,6 +167,30 @@ def test_segment_t_is_calibrated_and_sees_an_effect_in_a_band_of_the_sweep():
     assert plain < t_bar(bar(8)) < segment_t(l)[0]
 
 
+def test_segment_test_is_calibrated_on_errors_as_a_chirp_leaves_them():
+    """The segment test (segment_log_ratios, segment_t) where neither model is better, on
+    errors shaped as the bench's are: e0 = n + a, e1 = n + b (a, b independent and alike),
+    534 instants (a 40 s prototype log's decimated count), rows correlated 0.3 (AR(1)), the
+    loudness rising by a factor of 55 along the sweep. Its one-sided p-value falls under 5 %
+    in 5 % of 1000 draws within 3 binomial sd, 2.1 % (measured 6.3 % here; 4.9 % under 5 %
+    and 1.0 % under 1 % over 4000 draws at another seed), and with the MATERIAL margin
+    (evidence) far less often (0.4 %)."""
+    from scipy import signal
+    from jointbench.identification.discrepancy.heldout import segment_log_ratios, segment_t
+    rng = np.random.default_rng(4)
+    n, draws = 534, 1000
+    loud = np.exp(np.linspace(0.0, 4.0, n))
+    plain, margin = [], []
+    for _ in range(draws):
+        noise, a, b = (signal.lfilter([np.sqrt(1 - 0.3 ** 2)], [1, -0.3], rng.normal(size=n))
+                       * loud for _ in range(3))
+        e0, e1 = noise + 0.3 * a, noise + 0.3 * b
+        plain.append(segment_t(segment_log_ratios(e0, e1, n))[1])
+        margin.append(evidence(e0, e1, n).p)
+    assert abs(np.mean(np.array(plain) < 0.05) - 0.05) < 0.021
+    assert np.mean(np.array(margin) < 0.05) < np.mean(np.array(plain) < 0.05)
+
+
 def test_forward_veto_only_when_the_replay_is_worse_beyond_its_spread():
     """bench.analysis.diagnose.verdict.forward_worse at the veto's level ALPHA: a replay 1 %
     worse in RMS on a log whose torque noise is white is no evidence (expected t 1.4 with 500
