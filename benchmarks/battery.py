@@ -3,7 +3,7 @@ logs of the bench and of the independent simulator, every strength set by its in
 visibility, not by the detector's thresholds.
 
     .venv/bin/python benchmarks/battery.py [--out battery_out] [--jobs 2] [--per-effect 8]
-        [--clean 24] [--pairs 20] [--seed 2026] [--duration 40] [--figure docs/figures/detection.png]
+        [--clean 24] [--pairs 28] [--seed 2026] [--duration 40] [--figure docs/figures/detection.png]
     .venv/bin/python benchmarks/battery.py --from battery_out/cases.json   # summary, figure again
 
 Every case runs at the paper's rate (350.87 Hz), cycling over the places (bench prototype,
@@ -185,7 +185,9 @@ def main(argv=None) -> int:
     ap.add_argument("--jobs", type=int, default=1, help="worker processes (default 1)")
     ap.add_argument("--per-effect", type=int, default=8)
     ap.add_argument("--clean", type=int, default=24)
-    ap.add_argument("--pairs", type=int, default=20)
+    # issue 15 asks >= 20 pairs with both visibilities >= 10 %; a drawn target of 10-40 % can
+    # land under 10 % (1 of 20 did at seed 2026), so 28 leave room
+    ap.add_argument("--pairs", type=int, default=28)
     ap.add_argument("--seed", type=int, default=2026)
     ap.add_argument("--duration", type=float, default=40.0, help="log length [s] (default 40)")
     ap.add_argument("--figure", default="docs/figures/detection.png",
