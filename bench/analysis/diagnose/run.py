@@ -20,7 +20,8 @@ from typing import Callable
 from jointbench.bench.analysis.diagnose.forward import add_forward_view
 from jointbench.bench.analysis.diagnose.report import write
 from jointbench.bench.analysis.diagnose.types import Diagnosis, ForwardView
-from jointbench.bench.analysis.diagnose.verdict import gain_reason, nominal_reason
+from jointbench.bench.analysis.diagnose.verdict import (clipped_reason, gain_reason,
+                                                        nominal_reason)
 from jointbench.identification.defaults import choose_filter
 from jointbench.identification.discrepancy import (NUMERICS, Candidate, InverseDiagnosis, Nominal,
                                                    diagnose_inverse)
@@ -117,7 +118,7 @@ def _judged(d: Diagnosis, forward: bool, say: Callable[[str], None],
     if forward:
         d = add_forward_view(d, say, nominal_view)
     if not d.overruled:
-        d = replace(d, overruled=gain_reason(d))
+        d = replace(d, overruled=gain_reason(d) or clipped_reason(d))
     if d.overruled:   # nothing named: no extended model
         d = replace(d, extended_parameters={})
     return d

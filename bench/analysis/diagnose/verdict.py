@@ -24,6 +24,11 @@ answer is then "inconclusive", with the reason.
   (torque_ripple) is judged only on the segments where both replays keep its phase
   (bench.analysis.diagnose.forward.forward_scope); on fewer than a quarter of them the
   forward view cannot judge it, and the diagnosis says so (`forward_note`).
+- **"None" from a small part of the experiment.** Rows within reach of a clipped torque sample
+  are left out (identification.saturation). When no effect passes and the rows left are under
+  half of the experiment's, "none" would speak for the whole experiment from the minority of
+  it (a torque lag that drives the loop into its limit keeps 60 of its 40 s log's rows):
+  the answer is "inconclusive", with the share.
 """
 
 from __future__ import annotations
@@ -36,6 +41,7 @@ from jointbench.identification.discrepancy.heldout import ALPHA, segment_sums, s
 from jointbench.identification.sanity import mislabel_reason
 
 DEGREES = "look like degrees"   # identification.log.unit_warnings' words for that warning
+USABLE_MIN = 0.5   # "none" needs at least half of the experiment's rows (a majority of it)
 
 
 def _unphysical(p: dict[str, float]) -> str:
@@ -121,3 +127,14 @@ def forward_worse(tau: np.ndarray, nominal: np.ndarray, extended: np.ndarray,
     h1 = segment_sums((np.asarray(extended) - tau) ** 2)
     ok = (h0 > 0) & (h1 > 0) & (True if keep is None else keep)
     return segment_t(np.log(h1[ok] / h0[ok]))
+
+
+def clipped_reason(d: Diagnosis) -> str:
+    """Why "none" cannot be said of this log ("" when it can, or when a cause is named): the
+    rows left after the clipped torque's are under USABLE_MIN of the experiment's."""
+    keep = d.inverse.nominal.sig.keep
+    if d.inverse.causes or keep is None or not len(keep) or keep.mean() >= USABLE_MIN:
+        return ""
+    return (f"only {int(keep.sum())} of {len(keep)} regression rows "
+            f"({100 * keep.mean():.3g} %) are out of reach of the clipped torque samples: no "
+            f"effect passes on them, which does not say that the experiment has none")
