@@ -27,7 +27,7 @@ answer is then "inconclusive", with the reason.
 - **"None" from a small part of the experiment.** Rows within reach of a clipped torque sample
   are left out (identification.saturation). When no effect passes and the rows left are under
   half of the experiment's, "none" would speak for the whole experiment from the minority of
-  it (a torque lag that drives the loop into its limit keeps 60 of its 40 s log's rows):
+  it (a torque lag that drives the loop into its limit leaves 60 of a 40 s log's 820 rows):
   the answer is "inconclusive", with the share.
 """
 
