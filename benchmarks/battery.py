@@ -10,7 +10,8 @@ Every case runs at the paper's rate (350.87 Hz), cycling over the places (bench 
 arm6 axis2 and axis4; independent families balanced, soft, wrist, pendulum) and over velocity
 feedforward on/off x torque noise on/off. Writes OUT/cases.json and OUT/cases.csv (model,
 joint, seed, effects, strengths, visibilities, named; the distinguishing visibility of every
-effect that reduces to another: bench.campaign.detection.distinguishing_visibility),
+effect that reduces to another: bench.campaign.detection.distinguishing_visibility; the share
+of torque samples at the limit, identification.saturation.clipped_samples),
 OUT/summary.txt (confusion table, detection curve, 95 % visibility per effect) and the
 detection-curve figure.
 """
@@ -42,6 +43,7 @@ from jointbench.bench.campaign.detection import (BINS, curve,  # noqa: E402
 from jointbench.identification.effects import EFFECTS, NONE  # noqa: E402
 from jointbench.identification.log_write import atomic_write_text  # noqa: E402
 from jointbench.identification.output import finite_json  # noqa: E402
+from jointbench.identification.saturation import clipped_samples  # noqa: E402
 
 PLACES = (*BENCH_PLACES, *INDEP_PLACES)
 _RUNNERS: dict = {}
@@ -96,8 +98,8 @@ def run_one(spec: Spec) -> dict:
            "joint": p.joint or "", "family": p.family, "seed": spec.seed,
            "feedforward": spec.feedforward, "noise": spec.noise, "effects": list(spec.effects),
            "targets": list(spec.targets), "strengths": [], "options": [], "visibilities": [],
-           "combined": 0.0, "simulations": 0, "distinguishing": [], "named": [],
-           "ambiguity": [], "verdict": "", "error": ""}
+           "combined": 0.0, "clipped_pct": 0.0, "simulations": 0, "distinguishing": [],
+           "named": [], "ambiguity": [], "verdict": "", "error": ""}
     t0 = time.perf_counter()
     try:
         out = run_spec(spec, _RUNNERS[p.source], _CACHE)
@@ -105,6 +107,8 @@ def run_one(spec: Spec) -> dict:
                    visibilities=list(out.visibilities), combined=out.combined,
                    simulations=sum(len(s.tried) for s in out.searches) + 1,
                    distinguishing=distinguishing(spec, out))
+        # reporting only: a hidden effect may drive the loop into its torque limit
+        rec["clipped_pct"] = 100 * clipped_samples(out.log).share
         t1 = time.perf_counter()
         d = diagnose(out.log)
         rec.update(named=named_causes(d), ambiguity=list(d.ambiguities), verdict=d.verdict,
@@ -133,7 +137,7 @@ def _csv(records: list[dict]) -> str:
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(["index", "kind", "source", "model", "joint", "seed", "feedforward", "noise",
                 "effects", "strengths", "targets_pct", "visibilities_pct", "combined_pct",
-                "named", "right", "ambiguity", "error", "distinguishing_pct"])
+                "named", "right", "ambiguity", "error", "distinguishing_pct", "clipped_pct"])
     for r in records:
         w.writerow([r["index"], r["kind"], r["source"], r["model"], r["joint"], r["seed"],
                     r["feedforward"], r["noise"], ";".join(r["effects"]),
@@ -143,7 +147,8 @@ def _csv(records: list[dict]) -> str:
                     f"{100 * r['combined']:.2f}", ";".join(r["named"]), right(r),
                     " | ".join(r.get("ambiguity", [])), r["error"],
                     ";".join("" if v is None else f"{100 * v:.2f}"
-                             for v in r.get("distinguishing", []))])
+                             for v in r.get("distinguishing", [])),
+                    f"{r.get('clipped_pct', 0.0):.3g}"])
     return buf.getvalue()
 
 

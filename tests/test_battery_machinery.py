@@ -131,6 +131,20 @@ def test_a_stated_ambiguity_the_log_cannot_resolve_is_counted_on_its_own_line():
             "(distinguishing visibility < 5 %), of 4 (75 % together)") in text
 
 
+def test_cases_whose_torque_clips_are_listed_with_their_share_and_outcome():
+    """A hidden effect can drive the loop into its torque limit (battery seed 2026 #62: a lag
+    on the pendulum, 21 % of the samples at tau_max): the summary lists those cases, the
+    counts above them are unchanged."""
+    hit = {"index": 3, "kind": "single", "effects": ["offset"], "visibilities": [0.2],
+           "named": ["offset"], "family": "x"}
+    cut = dict(hit, index=7, effects=["torque_lag"], named=[], clipped_pct=21.4)
+    quiet = dict(hit, index=9, clipped_pct=0.0)
+    text = "\n".join(summary_lines([hit, cut, quiet]))
+    assert "at visibility >= 5 % named right: 2/3" in text
+    assert "(clipped samples): #7 21 % (missed)" in text and "#9" not in text
+    assert "clipped" not in "\n".join(summary_lines([hit, quiet]))
+
+
 def test_distinguishing_visibility_is_what_the_reduced_effect_cannot_take():
     """An effect's change = a constant (what an offset takes) + an in-band sine of amplitude
     B; the reduced effect's change a constant of another size: the distinguishing visibility

@@ -156,6 +156,11 @@ def summary_lines(records: list[dict]) -> list[str]:
                          f"stated ambiguity between two effects the log cannot separate "
                          f"(distinguishing visibility < {100 * SEPARABLE:g} %), of {len(at5)} "
                          f"({100 * (k + apart) / len(at5):.0f} % together)")
+        clipped = [r for r in at5 if r.get("clipped_pct", 0.0) > 0]
+        if clipped:
+            lines.append("  of these, logs with torque at its limit (clipped samples): "
+                         + ", ".join(f"#{r['index']} {r['clipped_pct']:.2g} % "
+                                     f"({'right' if right(r) else 'missed'})" for r in clipped))
     pairs = [r for r in records if r["kind"] == "pair"]
     if pairs:
         one = sum(bool(set(r["effects"]) & set(r["named"])) for r in pairs)
