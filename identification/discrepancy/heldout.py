@@ -153,13 +153,16 @@ def _rss(G: np.ndarray, c: np.ndarray, bb: float, x: np.ndarray) -> float:
     return float(bb - 2 * x @ c + x @ G @ x)
 
 
+def preferred(records: list[Scores]) -> np.ndarray:
+    """The trial (index into `records`) each fold's training rows prefer: least RSS."""
+    return np.argmin(np.array([r.train for r in records]), axis=0)
+
+
 def held_out(records: list[Scores], folds: np.ndarray) -> np.ndarray:
     """Each row's held-out error at the trial (of a searched effect) its fold's training rows
     prefer."""
-    train = np.array([r.train for r in records])
-    best = np.argmin(train, axis=0)
     out = np.empty(len(folds))
-    for f, j in enumerate(best):
+    for f, j in enumerate(preferred(records)):
         rows = folds == f
         out[rows] = records[j].errors[rows]
     return out

@@ -27,6 +27,7 @@ import numpy as np
 from jointbench.identification.discrepancy.candidates import Candidate, candidate, reference
 from jointbench.identification.discrepancy.heldout import (ALPHA, MATERIAL, segment_log_ratios,
                                                            segment_t, t_bar)
+from jointbench.identification.discrepancy.lag_band import LagBand, second_view
 from jointbench.identification.discrepancy.nominal import Nominal, nominal
 from jointbench.identification.effects import EFFECTS, NONE
 from jointbench.identification.filtering import FilterSettings
@@ -93,11 +94,15 @@ def _model(causes: tuple[Candidate, ...]) -> tuple[tuple[str, dict], ...]:
 
 
 def _round(nom: Nominal, names: list[str], causes: tuple[Candidate, ...],
-           m: int) -> tuple[list[Candidate], str]:
+           band: LagBand) -> tuple[list[Candidate], str]:
     """One round: the candidates ranked, the one to name first at the top, and a note when
-    the log cannot tell a richer candidate from it ("" otherwise: _simplest_first)."""
-    ref = reference(nom, _model(causes), m=m)
-    return _simplest_first(_rank([candidate(nom, name, ref) for name in names]), nom, m)
+    the log cannot tell a richer candidate from it ("" otherwise: _simplest_first). Holm's m
+    counts the lag's second test in the wide band (lag_band) when it can run."""
+    m = len(names) + band.tests(names)
+    model = _model(causes)
+    ref = reference(nom, model, m=m)
+    cands = [second_view(band, candidate(nom, name, ref), model) for name in names]
+    return _simplest_first(_rank(cands), nom, m)
 
 
 def _better(worse: Candidate | np.ndarray, better: Candidate, n: int) -> tuple[float, float]:
@@ -265,8 +270,8 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
             first.append(Candidate(effect=name, testable=False, reason=WHY_IN_NOMINAL))
         else:
             names.append(name)
-    m = len(names)
-    ranked, note = _round(nom, names, (), m)
+    band = LagBand(log, settings, link_friction)
+    ranked, note = _round(nom, names, (), band)
     causes: tuple[Candidate, ...] = ()
     notes: tuple[tuple[str, str], ...] = ()   # (the cause it is about, the note)
     round_ = ranked
@@ -274,7 +279,7 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
         causes += (round_[0],)
         notes += ((round_[0].effect, note),) if note else ()
         rest = [c.effect for c in round_[1:]]
-        round_, note = _round(nom, rest, causes, len(rest)) if rest else ([], "")   # Holm
+        round_, note = _round(nom, rest, causes, band) if rest else ([], "")   # Holm
     causes, notes = _pruned(nom, causes, notes)
     # the first round's ranking, with the first named cause at the top
     top = [c for c in ranked if causes and c.effect == causes[0].effect] or ranked[:1]

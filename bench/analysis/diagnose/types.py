@@ -159,6 +159,8 @@ def _candidate_json(c: Candidate, prismatic: bool = False) -> dict:
                     "parameters": axis_keys(c.parameters, prismatic)})
         if c.unphysical:
             out["unphysical"] = c.unphysical
+        if c.second is not None:   # the lag's test in the wide band (discrepancy.lag_band)
+            out["second_view"] = c.second.to_json(c.alpha)
     else:
         out["reason"] = c.reason
     return out

@@ -1,0 +1,116 @@
+"""A second view of `torque_lag` in a band that reaches the excitation's top (issue 14).
+
+**Why the lag alone.** A first-order lag T shifts the applied torque's phase by about w T:
+its evidence grows with frequency, by physics. The chooser's band (identification.defaults:
+decimated cutoff about 1.4 f1) keeps only the bottom of a sweep that runs far above the first
+mode, so on a low-f1 axis a lag shows in the few segments of the chirp's top part (seed-2026
+battery #60, soft family f1 = 4 Hz: 0.15 rad at the 5.4 Hz cutoff, 0.8 rad at the sweep's
+30 Hz; fitted at 4.58 ms for 4.39 and explaining 27 % of the held-out residual, with t = 3.07
+against the bar 4.23). The other effects act at low speed, small deflection or at the mode,
+which the chooser's band holds; moving the whole diagnosis to the wide band was a wash
+(README, branch `wide8`).
+
+**The band** is identification.band_choice.wide_settings's, as identify's band rule uses it:
+the chooser's Butterworth, the decimation lowered until the decimated cutoff reaches the
+least of the excitation's top measured on the log, the 5-point stencil's 1 % top and the
+Butterworth's flat band; with the diagnosis's 3-point differences. The nominal is identified
+again there, the causes named so far are applied with their values, and the lag is searched
+and tested exactly as in the chooser's band (identification.discrepancy.heldout).
+
+**The level.** The hypothesis "no lag" is then tested twice, so a round that tests m effects
+runs m + 1 tests and Holm's step-down divides ALPHA by m + 1 (inverse.diagnose_inverse: the
+bar of every effect of the round, t > 4.27 for 9 tests instead of 4.23 for 8): on a log
+without any unmodelled effect the chance of naming one stays under ALPHA, whatever the two
+tests' dependence (Bonferroni).
+
+**The guard.** The wide band also holds what the two-mass nominal misses up there (higher
+modes of a real arm at 15-19 Hz, the sensors' and the sampling's own phase), and a lag column
+takes up any phase the model lacks. A true lag is one time constant in every band; a phase
+the model misses above the chooser's band pulls the wide band's T alone. So the wide view
+only confirms (SecondView.confirms) a lag that the chooser's band fits physically with a
+positive held-out share (Candidate.significant's other conditions), whose wide fit is
+physical too, and whose two time constants agree within CONSISTENCY_Z (band_choice's 3
+sigma) of their root-sum-square spread, each spread the delete-a-fold jackknife of the ten
+folds' preferred values (Candidate.fold_values): this log's own statistics, no threshold
+set on a battery. (Root-sum-square ignores that both bands fit the same log, which makes the
+difference's true spread smaller: the agreement it asks is the lenient one; the level above
+does not rest on it.)
+
+**Ranking** is unchanged: the candidates are ranked on the chooser's band's numbers (held-
+out share, t), and the named lag's value and gain are the chooser's band's; the wide view
+only decides whether the lag is significant.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from jointbench.identification.band_choice import CONSISTENCY_Z, wide_settings
+from jointbench.identification.discrepancy.candidates import (Candidate, SecondView, candidate,
+                                                              reference)
+from jointbench.identification.discrepancy.nominal import Nominal, nominal
+from jointbench.identification.filtering import FilterSettings
+from jointbench.identification.log import Log
+
+LAG = "torque_lag"
+
+
+class LagBand:
+    """The wide band of one log (None when the chooser's band already reaches the
+    excitation's top, or no top is found) and its nominal, identified on first use."""
+
+    def __init__(self, log: Log, settings: FilterSettings, link_friction: bool = True):
+        wide, _, why = wide_settings(log, settings)
+        self.settings = None if wide is None else replace(wide, stencil=settings.stencil)
+        self.label = "" if wide is None else (
+            f"wide band (Nd {wide.Nd}, decimated cutoff {wide.decimated_cutoff_hz:.3g} Hz: "
+            f"{why})")
+        self._log, self._link_friction = log, link_friction
+        self._nominal: Nominal | None = None
+
+    def tests(self, names: list[str] | tuple[str, ...]) -> int:
+        """How many tests this view adds to a round testing `names` (Holm's m)."""
+        return int(self.settings is not None and LAG in names)
+
+    def nominal(self) -> Nominal:
+        if self._nominal is None:
+            self._nominal = nominal(self._log, self.settings, self._link_friction)
+        return self._nominal
+
+
+def jackknife(values: tuple[float, ...]) -> float:
+    """The delete-a-group jackknife's standard error of an estimate from the k fold fits'
+    values (each on all folds but one): sqrt((k - 1) / k sum (v_f - mean)^2); inf for none."""
+    v = np.asarray(values, float)
+    if len(v) < 2:
+        return math.inf
+    return float(np.sqrt((len(v) - 1) / len(v) * np.sum((v - v.mean()) ** 2)))
+
+
+def second_view(band: LagBand, c: Candidate,
+                causes: tuple[tuple[str, dict], ...]) -> Candidate:
+    """`c` with the wide band's view (Candidate.second) when it is a torque lag that the
+    chooser's band fits physically with a positive held-out share but does not find
+    significant, and the log has a wide band; `c` itself otherwise. `causes`: the named
+    causes with their values (the round's reference)."""
+    if (c.effect != LAG or band.settings is None or not c.testable or c.unphysical
+            or not c.heldout_pct > 0 or c.significant):
+        return c
+    try:
+        nom = band.nominal()
+        w = candidate(nom, LAG, reference(nom, causes))
+    except (ValueError, ArithmeticError, np.linalg.LinAlgError):
+        return c   # no second view (LogError is a ValueError: too short for the band)
+    tc, tw = c.fixed["lag_s"], w.fixed["lag_s"]
+    sc, sw = jackknife(c.fold_values), jackknife(w.fold_values)
+    spread = math.hypot(sc, sw)
+    agree = abs(tw - tc) <= CONSISTENCY_Z * spread
+    detail = (f"lag {1e3 * tw:.3g} +- {1e3 * sw:.2g} ms against {1e3 * tc:.3g} +- "
+              f"{1e3 * sc:.2g} ms in the chooser's band ("
+              + ("within" if agree else "more than") + f" {CONSISTENCY_Z:g} sigma)")
+    return replace(c, second=SecondView(
+        band=band.label, heldout_pct=w.heldout_pct, t_stat=w.t_stat, p_heldout=w.p_heldout,
+        value=tw, agree=agree, detail=detail, unphysical=w.unphysical))
