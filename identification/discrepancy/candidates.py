@@ -64,7 +64,7 @@ class Candidate:
     heldout_pct: float = 0.0         # out of sample: share of the held-out RSS it removes
     t_stat: float = 0.0              # t: held-out share above MATERIAL (heldout)
     p_heldout: float = 1.0           # its one-sided p-value
-    alpha: float = 0.0               # the bar p_heldout must pass (Bonferroni level)
+    alpha: float = 0.0               # its hypothesis' level in the round (Holm)
     delta_bic: float = 0.0           # BIC(reference) - BIC(extended): > 0 favours the effect
     p_value: float = 1.0             # F-test of the added terms
     size_pct: float = 0.0            # RMS change of its block's prediction, % of the block
@@ -83,16 +83,22 @@ class Candidate:
     # the searched value each fold's training rows prefer (a searched effect; its spread)
     fold_values: tuple[float, ...] = ()
     second: SecondView | None = None   # a second band's test (lag_band), when one was run
+    views: int = 1   # the tests its hypothesis is split over (lag_band: 2), each at alpha / views
+
+    @property
+    def level(self) -> float:
+        """The bar each of its tests must pass: its hypothesis' level over its views."""
+        return self.alpha / self.views
 
     @property
     def confirmed(self) -> bool:
-        """Significant in the second band's view (SecondView.confirms) at the same level."""
-        return self.second is not None and self.second.confirms(self.alpha)
+        """Significant in the second band's view (SecondView.confirms) at its level."""
+        return self.second is not None and self.second.confirms(self.level)
 
     @property
     def significant(self) -> bool:
         return (self.testable and not self.unphysical and self.heldout_pct > 0
-                and (self.p_heldout < self.alpha or self.confirmed))
+                and (self.p_heldout < self.level or self.confirmed))
 
     @property
     def why_not(self) -> str:
@@ -105,7 +111,7 @@ class Candidate:
             return (f"held out ({FOLDS} folds), it explains {self.heldout_pct:.3g} % of the "
                     f"residual; that it explains more than {100 * MATERIAL:g} % has t = "
                     f"{self.t_stat:.3g} (p = {self.p_heldout:.3g}); the bar is p < "
-                    f"{self.alpha:.2g} (t > {t_bar(self.alpha):.3g})"
+                    f"{self.level:.2g} (t > {t_bar(self.level):.3g})"
                     + (f"; {self.second_note}" if self.second else ""))
         return ""
 

@@ -96,9 +96,9 @@ def _model(causes: tuple[Candidate, ...]) -> tuple[tuple[str, dict], ...]:
 def _round(nom: Nominal, names: list[str], causes: tuple[Candidate, ...],
            band: LagBand) -> tuple[list[Candidate], str]:
     """One round: the candidates ranked, the one to name first at the top, and a note when
-    the log cannot tell a richer candidate from it ("" otherwise: _simplest_first). Holm's m
-    counts the lag's second test in the wide band (lag_band) when it can run."""
-    m = len(names) + band.tests(names)
+    the log cannot tell a richer candidate from it ("" otherwise: _simplest_first); the lag
+    tested in the wide band too (lag_band)."""
+    m = len(names)
     model = _model(causes)
     ref = reference(nom, model, m=m)
     cands = [second_view(band, candidate(nom, name, ref), model) for name in names]
