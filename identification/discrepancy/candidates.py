@@ -6,7 +6,7 @@ BIC, the F-test and the practical size are reported beside it as information."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable, Sequence
 
 import numpy as np
@@ -14,13 +14,40 @@ from scipy import optimize, stats
 
 from jointbench.identification.discrepancy.heldout import (FOLDS, MATERIAL, Scores, bar,
                                                            evidence, fitted_rss, fold_of_rows,
-                                                           held_out, scores, t_bar)
+                                                           held_out, preferred, scores, t_bar)
 from jointbench.identification.discrepancy.nominal import Nominal, transmitted_rms
 from jointbench.identification.discrepancy.stacked import Stacked, apply, design_many, stacked
 from jointbench.identification.effects import EFFECTS
 from jointbench.identification.effects.base import Design, Effect
 
 BIC_MIN = 10.0          # "very strong" evidence on Kass and Raftery's scale (information only)
+
+
+@dataclass(frozen=True)
+class SecondView:
+    """The same effect tested again in a second band (identification.discrepancy.lag_band:
+    a torque lag in a band reaching the excitation's top), against the same causes: its
+    held-out share, t and p there, its searched value and whether that value agrees with the
+    first band's within their spreads (`agree`); `unphysical` as Candidate's."""
+
+    band: str
+    heldout_pct: float
+    t_stat: float
+    p_heldout: float
+    value: float
+    agree: bool
+    detail: str            # the two values and their spreads, for the report
+    unphysical: str = ""
+
+    def confirms(self, alpha: float) -> bool:
+        return (not self.unphysical and self.agree and self.heldout_pct > 0
+                and self.p_heldout < alpha)
+
+    def to_json(self, alpha: float) -> dict:
+        """What `diagnose --json` lists under a candidate's "second_view"."""
+        return {"band": self.band, "heldout_pct": self.heldout_pct, "t": self.t_stat,
+                "p_heldout": self.p_heldout, "value": self.value, "agree": self.agree,
+                "unphysical": self.unphysical, "confirms": self.confirms(alpha)}
 
 
 @dataclass(frozen=True)
@@ -37,7 +64,7 @@ class Candidate:
     heldout_pct: float = 0.0         # out of sample: share of the held-out RSS it removes
     t_stat: float = 0.0              # t: held-out share above MATERIAL (heldout)
     p_heldout: float = 1.0           # its one-sided p-value
-    alpha: float = 0.0               # the bar p_heldout must pass (Bonferroni level)
+    alpha: float = 0.0               # its hypothesis' level in the round (Holm)
     delta_bic: float = 0.0           # BIC(reference) - BIC(extended): > 0 favours the effect
     p_value: float = 1.0             # F-test of the added terms
     size_pct: float = 0.0            # RMS change of its block's prediction, % of the block
@@ -53,11 +80,25 @@ class Candidate:
     fixed: dict = field(default_factory=dict)   # values the effect's columns are built with
     base: tuple[tuple[str, dict], ...] = ()     # causes named before it, as its fit has them
     acts: tuple[int, ...] = ()   # the equation blocks its columns change (acts_in); () all
+    # the searched value each fold's training rows prefer (a searched effect; its spread)
+    fold_values: tuple[float, ...] = ()
+    second: SecondView | None = None   # a second band's test (lag_band), when one was run
+    views: int = 1   # the tests its hypothesis is split over (lag_band: 2), each at alpha / views
+
+    @property
+    def level(self) -> float:
+        """The bar each of its tests must pass: its hypothesis' level over its views."""
+        return self.alpha / self.views
+
+    @property
+    def confirmed(self) -> bool:
+        """Significant in the second band's view (SecondView.confirms) at its level."""
+        return self.second is not None and self.second.confirms(self.level)
 
     @property
     def significant(self) -> bool:
         return (self.testable and not self.unphysical and self.heldout_pct > 0
-                and self.p_heldout < self.alpha)
+                and (self.p_heldout < self.level or self.confirmed))
 
     @property
     def why_not(self) -> str:
@@ -70,8 +111,20 @@ class Candidate:
             return (f"held out ({FOLDS} folds), it explains {self.heldout_pct:.3g} % of the "
                     f"residual; that it explains more than {100 * MATERIAL:g} % has t = "
                     f"{self.t_stat:.3g} (p = {self.p_heldout:.3g}); the bar is p < "
-                    f"{self.alpha:.2g} (t > {t_bar(self.alpha):.3g})")
+                    f"{self.level:.2g} (t > {t_bar(self.level):.3g})"
+                    + (f"; {self.second_note}" if self.second else ""))
         return ""
+
+    @property
+    def second_note(self) -> str:
+        """What the second band's view said ("" when none was run)."""
+        v = self.second
+        if v is None:
+            return ""
+        verdict = "confirms it" if self.confirmed else "does not confirm it"
+        return (f"in the {v.band} it explains {v.heldout_pct:.3g} % with t = {v.t_stat:.3g}"
+                f" (p = {v.p_heldout:.3g}), {v.detail}"
+                + (f", unphysical ({v.unphysical})" if v.unphysical else "") + f": {verdict}")
 
     @property
     def gain(self) -> float:
@@ -293,7 +346,10 @@ def candidate(nom: Nominal, effect: str, ref: Reference | None = None) -> Candid
             fixed = e.reference(_Fitted(nom, names, records[-1].X))
             records.clear()
             cost(None)
-    return _evaluate(nom, ref, e, fixed, records, under)
+    c = _evaluate(nom, ref, e, fixed, records, under)
+    if not e.search:
+        return c
+    return replace(c, fold_values=tuple(float(trials[j][0]) for j in preferred(records)))
 
 
 class _Fitted:

@@ -58,7 +58,10 @@ m the number of effects its round tests (identification.discrepancy.inverse: Hol
 Bonferroni): on a log without any unmodelled effect the chance that any effect is named is at
 most about ALPHA = 0.1 %, whatever the log's length, noise or sample rate. The level is set
 from that rate alone. (With the 8 effects a log with q tests in the first round the bar is
-t > 4.23, 7 in the second t > 4.18; 4 effects without q, t > 3.97.)
+t > 4.23, 7 in the second t > 4.18; 4 effects without q, t > 3.97.) A torque lag on a log
+whose excitation runs above the chooser's band is tested in that wider band too, each of its
+two tests at half its level (identification.discrepancy.lag_band: t > 4.50 in a first round
+of 8).
 
 Among the significant effects the named one explains the most of the held-out residual,
 100 (1 - sum e1^2 / sum e0^2).
@@ -153,13 +156,16 @@ def _rss(G: np.ndarray, c: np.ndarray, bb: float, x: np.ndarray) -> float:
     return float(bb - 2 * x @ c + x @ G @ x)
 
 
+def preferred(records: list[Scores]) -> np.ndarray:
+    """The trial (index into `records`) each fold's training rows prefer: least RSS."""
+    return np.argmin(np.array([r.train for r in records]), axis=0)
+
+
 def held_out(records: list[Scores], folds: np.ndarray) -> np.ndarray:
     """Each row's held-out error at the trial (of a searched effect) its fold's training rows
     prefer."""
-    train = np.array([r.train for r in records])
-    best = np.argmin(train, axis=0)
     out = np.empty(len(folds))
-    for f, j in enumerate(best):
+    for f, j in enumerate(preferred(records)):
         rows = folds == f
         out[rows] = records[j].errors[rows]
     return out

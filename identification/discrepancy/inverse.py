@@ -9,8 +9,10 @@ carry stays under about ALPHA. The effects the log does not carry are all among 
 until one of them is named, so the round where that would first happen tests each at ALPHA / m
 or less, m at least their number. (A bar of ALPHA / (every test run so far), 15 tests in the
 second round of a log with q, 7 of one without, asked EMPS's offset for t > 4.18 where it has
-3.93; Holm asks 3.86.) The named cause of a round is, among the significant
-ones, the one that explains the most of the held-out residual, unless a simpler significant
+3.93; Holm asks 3.86.) A torque lag's hypothesis is tested in two bands on a log with a wide
+band, each test at half its level (identification.discrepancy.lag_band). The named cause of a
+round is, among the significant ones, the one that explains the most of the held-out
+residual, unless a simpler significant
 one explains it as well: the richer is then named only if what it adds to the simpler is
 significant (_simplest_first), and the answer says when the log cannot tell them apart;
 between an effect and the one it reduces to (an asymmetric friction and an offset) the choice,
@@ -27,6 +29,7 @@ import numpy as np
 from jointbench.identification.discrepancy.candidates import Candidate, candidate, reference
 from jointbench.identification.discrepancy.heldout import (ALPHA, MATERIAL, segment_log_ratios,
                                                            segment_t, t_bar)
+from jointbench.identification.discrepancy.lag_band import LagBand, second_view
 from jointbench.identification.discrepancy.nominal import Nominal, nominal
 from jointbench.identification.effects import EFFECTS, NONE
 from jointbench.identification.filtering import FilterSettings
@@ -93,11 +96,15 @@ def _model(causes: tuple[Candidate, ...]) -> tuple[tuple[str, dict], ...]:
 
 
 def _round(nom: Nominal, names: list[str], causes: tuple[Candidate, ...],
-           m: int) -> tuple[list[Candidate], str]:
+           band: LagBand) -> tuple[list[Candidate], str]:
     """One round: the candidates ranked, the one to name first at the top, and a note when
-    the log cannot tell a richer candidate from it ("" otherwise: _simplest_first)."""
-    ref = reference(nom, _model(causes), m=m)
-    return _simplest_first(_rank([candidate(nom, name, ref) for name in names]), nom, m)
+    the log cannot tell a richer candidate from it ("" otherwise: _simplest_first); the lag
+    tested in the wide band too (lag_band)."""
+    m = len(names)
+    model = _model(causes)
+    ref = reference(nom, model, m=m)
+    cands = [second_view(band, candidate(nom, name, ref), model) for name in names]
+    return _simplest_first(_rank(cands), nom, m)
 
 
 def _better(worse: Candidate | np.ndarray, better: Candidate, n: int) -> tuple[float, float]:
@@ -265,8 +272,8 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
             first.append(Candidate(effect=name, testable=False, reason=WHY_IN_NOMINAL))
         else:
             names.append(name)
-    m = len(names)
-    ranked, note = _round(nom, names, (), m)
+    band = LagBand(log, settings, link_friction)
+    ranked, note = _round(nom, names, (), band)
     causes: tuple[Candidate, ...] = ()
     notes: tuple[tuple[str, str], ...] = ()   # (the cause it is about, the note)
     round_ = ranked
@@ -274,7 +281,7 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
         causes += (round_[0],)
         notes += ((round_[0].effect, note),) if note else ()
         rest = [c.effect for c in round_[1:]]
-        round_, note = _round(nom, rest, causes, len(rest)) if rest else ([], "")   # Holm
+        round_, note = _round(nom, rest, causes, band) if rest else ([], "")   # Holm
     causes, notes = _pruned(nom, causes, notes)
     # the first round's ranking, with the first named cause at the top
     top = [c for c in ranked if causes and c.effect == causes[0].effect] or ranked[:1]

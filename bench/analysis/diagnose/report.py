@@ -195,6 +195,8 @@ def summary_text(d: Diagnosis) -> str:
         L.append(f"{c.effect:20s} {'yes' if c.significant else 'no':>7s} "
                  f"{c.heldout_pct:10.1f} {c.t_stat:7.2f} {c.explained_pct:11.1f} "
                  f"{c.delta_bic:10.1f} {c.size_pct:7.2f}  {pars}")
+    L += [f"second view of {c.effect}: {c.second_note}" for c in d.inverse.candidates
+          if c.second is not None]
     L += ["", f"named cause: {d.named_cause}" + (" (inconclusive)" if d.overruled else "")]
     if len(d.causes) > 1:
         L += [f"named causes: {', '.join(c.effect for c in d.causes)}"]

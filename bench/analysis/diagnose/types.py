@@ -153,12 +153,14 @@ def _candidate_json(c: Candidate, prismatic: bool = False) -> dict:
     out = {"effect": c.effect, "significant": c.significant, "testable": c.testable}
     if c.testable:
         out.update({"heldout_pct": c.heldout_pct, "t": c.t_stat, "p_heldout": c.p_heldout,
-                    "alpha": c.alpha, "explained_pct": c.explained_pct, "score": c.delta_bic,
+                    "alpha": c.level, "explained_pct": c.explained_pct, "score": c.delta_bic,
                     "p_value": c.p_value, "size_pct": c.size_pct,
                     "before_pct": c.before_pct, "after_pct": c.after_pct,
                     "parameters": axis_keys(c.parameters, prismatic)})
         if c.unphysical:
             out["unphysical"] = c.unphysical
+        if c.second is not None:   # the lag's test in the wide band (discrepancy.lag_band)
+            out["second_view"] = c.second.to_json(c.level)
     else:
         out["reason"] = c.reason
     return out
