@@ -314,7 +314,10 @@ def test_offset_named_over_an_asymmetry_that_explains_less_states_the_ambiguity(
     friction) an offset of 3 N m explains 30.9 % of the held-out residual and an asymmetric
     friction 30.3 %; neither adds significantly to the other (t -0.58 and 0.93 measured), so
     the offset is named with the note. (The note used to come only when the asymmetry
-    explained more: such logs answered `offset` with none.)"""
+    explained more: such logs answered `offset` with none.) With the asymmetry's split
+    searched (issue 14) its best split here is all Coulomb, the offset while the motor moves:
+    it explains the same share, to rounding (48.648 % both), and the offset is still named.
+    """
     from indep_sim import FAMILIES, simulate
     from jointbench.identification.discrepancy.heldout import t_bar
     from jointbench.identification.discrepancy.inverse import DECIDE
@@ -323,7 +326,7 @@ def test_offset_named_over_an_asymmetry_that_explains_less_states_the_ambiguity(
                  forward=False)
     assert d.named_cause == "offset" and [c.effect for c in d.causes] == ["offset"]
     share = {c.effect: c.heldout_pct for c in d.inverse.candidates}
-    assert share["offset"] > share["asymmetric_friction"]
+    assert share["asymmetric_friction"] <= share["offset"] + 1e-9
     (note,) = d.ambiguities
     assert note.startswith("offset or asymmetric_friction: this log cannot tell them apart")
     t = float(note.split("adds to offset has t = ")[1].split(",")[0])

@@ -36,6 +36,11 @@ def extend(spec: mujoco.MjSpec, axis: str, p: dict, K: float) -> None:
     # The drive-chain friction of a two-mass axis; the whole axis's of a rigid one (K = 0).
     FVm = positive_part(p, "FVm") if K else positive_part(p, "FV")
     FSm = positive_part(p, "FSm") if K else positive_part(p, "FS")
+    a = p["asymmetry"]
+    if a and "viscous_asymmetry" in p:
+        # the direction-dependent part's own split (identification.effects.
+        # asymmetric_friction): a (FVm' |qmd| + FSm') = a_v FVm |qmd| + a_c FSm
+        FVm, FSm = FVm * p["viscous_asymmetry"] / a, FSm * p["coulomb_asymmetry"] / a
     spec.add_numeric(name=f"{axis}_{NUMERIC}", data=[p["asymmetry"], FVm, FSm])
 
 

@@ -339,9 +339,8 @@ def candidate(nom: Nominal, effect: str, ref: Reference | None = None) -> Candid
     else:
         cost(None)
         if e.reference:
-            # the values it is built with (asymmetric friction: the friction it scales) from
-            # the fit with it, not from the nominal that lacked it: once more (a fixed point
-            # in one step on the bench; the nominal's FSm absorbs part of an asymmetry)
+            # the values it is built with from the fit with it, not from the nominal that
+            # lacked it: once more (a fixed point in one step on the bench)
             names = apply(ref.base, e.name, fixed)[1][2]
             fixed = e.reference(_Fitted(nom, names, records[-1].X))
             records.clear()
