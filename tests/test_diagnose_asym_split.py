@@ -61,3 +61,19 @@ def test_an_offset_adds_nothing_to_it(case84):
     _, inv = case84
     offset = next(c for c in inv.candidates if c.effect == "offset")
     assert offset.significant and "offset" not in [c.effect for c in inv.causes]
+
+
+def test_a_coulomb_part_beyond_the_coulomb_friction_is_unphysical():
+    """identification.effects.asymmetric_friction.check: FS (1 +- a_c) >= 0 in both
+    directions; a larger Coulomb part is a constant torque beside the friction (an offset),
+    and beside a named offset the constant splits at will (no check there)."""
+    from types import SimpleNamespace
+
+    from jointbench.identification.effects.asymmetric_friction import check
+    rows = SimpleNamespace(sig=SimpleNamespace(has_link=True))
+    v = {"FSm": 4.0, "FS_ref": 4.0, "viscous_share": 0.5}
+    assert check({**v, "a": -1.8}, rows) == ""           # a_c = -0.9: each direction > 0
+    why = check({**v, "a": -2.4}, rows)                   # a_c = -1.2
+    assert "exceeds the fitted Coulomb friction 4" in why
+    assert check({**v, "a": -2.4, "offset": -1.0}, rows) == ""
+    assert check({**v, "a": 0.1, "FSm": -0.5}, rows) != ""

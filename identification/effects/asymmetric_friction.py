@@ -73,11 +73,28 @@ def params(values: dict, fixed: dict, rows: Rows) -> dict[str, float]:
             "coulomb_asymmetry": float(ds / fs) if fs else 0.0}
 
 
+def check(v: dict, rows: Rows) -> str:
+    """Each direction's Coulomb friction stays positive, FS (1 +- a_c) >= 0: a Coulomb part of
+    the direction-dependent torque larger than the fitted Coulomb friction itself is not an
+    asymmetry of that friction but a constant torque beside it (an offset; seed-2026 battery
+    #111, an offset -2.0 N m beside an asymmetry -0.93 on arm6: fitted alone, coulomb_asymmetry
+    -1.46)."""
+    if "offset" in v:
+        # beside an offset the constant splits between the two at will while the motor moves
+        return ""
+    fs = v[_names(rows)[1]]
+    ds = v["a"] * (1 - v.get("viscous_share", 0.5)) * v["FS_ref"]
+    if fs > 0 and abs(ds) <= fs:
+        return ""
+    return (f"its Coulomb part {ds:.4g} exceeds the fitted Coulomb friction {fs:.4g}: one "
+            "direction's friction would be negative (a constant torque beside it is an offset)")
+
+
 EFFECT = Effect(
     "asymmetric_friction", "asymmetry", "", "",
     "viscous and Coulomb friction that differ with the direction of motion",
     needs_link=False, rigid_axis=False, block=0, k=2, design=design,
-    params=params, reference=reference, search="viscous_share", grid=grid,
+    params=params, reference=reference, search="viscous_share", grid=grid, check=check,
     # While the motor moves, the Coulomb part of the asymmetry, a FSm, is a constant torque:
     # an offset. The viscous part a FVm |qm'| is what tells the two apart.
     reduces_to="offset")
