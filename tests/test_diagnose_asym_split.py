@@ -77,3 +77,34 @@ def test_a_coulomb_part_beyond_the_coulomb_friction_is_unphysical():
     assert "exceeds the fitted Coulomb friction 4" in why
     assert check({**v, "a": -2.4, "offset": -1.0}, rows) == ""
     assert check({**v, "a": 0.1, "FSm": -0.5}, rows) != ""
+
+
+def test_beside_an_offset_the_asymmetry_keeps_the_reference_split():
+    """asymmetric_friction.design: beside an offset column the Coulomb part is collinear with
+    it while the motor moves, so the searched share gives way to the (1 + a s) law's split
+    (theta = 1/2 of the reference's FV_ref |qm'| and FS_ref); alone, the searched share is used."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from jointbench.identification.effects.asymmetric_friction import design, params
+    qmd = np.array([0.5, -1.0, 2.0, -0.25])
+
+    class Fake:
+        sig = SimpleNamespace(qmd=qmd, has_link=True, sl=slice(None))
+
+        def __init__(self, names):
+            self.names = names
+
+        def extend(self, *cols):
+            return None, np.column_stack([c[1] for c in cols]), self.names + ("a",)
+
+    fixed = {"FV_ref": 2.0, "FS_ref": 3.0, "viscous_share": 0.0}
+    alone = design(Fake(("Jm",)), fixed)[1][:, 0]
+    beside = design(Fake(("Jm", "offset")), fixed)[1][:, 0]
+    assert np.allclose(alone, 3.0)                                  # theta = 0: Coulomb alone
+    assert np.allclose(beside, 0.5 * 2.0 * np.abs(qmd) + 0.5 * 3.0)
+    fit = {"FVm": 2.0, "FSm": 3.0, "a": 0.2}
+    assert params({**fit, "offset": 1.0}, fixed, Fake(()))["viscous_asymmetry"] == \
+        pytest.approx(0.1)
+    assert params(fit, fixed, Fake(()))["viscous_asymmetry"] == 0.0

@@ -26,6 +26,7 @@ from jointbench.identification.effects.base import Design, Effect, Rows, sign0
 # FV_ref, FS_ref): 0 a constant while moving, 1/2 the reference's own split, 1 viscous alone;
 # the viscous-to-Coulomb ratio relative to the reference's, theta / (1 - theta), is 0, 1/8,
 # 1/4, 1/2, 1, 2, 4, 8 and infinite.
+OFFSET = "offset"     # the column of identification.effects.offset
 SHARES = np.array([0.0, 1 / 9, 1 / 5, 1 / 3, 1 / 2, 2 / 3, 4 / 5, 8 / 9, 1.0])
 
 
@@ -48,12 +49,26 @@ def _magnitudes(rows: Rows) -> tuple[np.ndarray, np.ndarray]:
     return np.abs(np.nan_to_num(qmd)), np.abs(sign0(qmd))
 
 
+def _share(fixed: dict, beside_offset: bool) -> float:
+    # Beside an offset the Coulomb part is collinear with it while the motor moves (at
+    # theta -> 0 exactly): the split between the two is then arbitrary, and a fit on top of
+    # an offset could hand the asymmetry any Coulomb part (seed-2026 battery #111: a replay
+    # of that fit diverged in 6 ms). There the asymmetry keeps the (1 + a s) law's tie to the
+    # viscous part, the reference's split, and the offset takes the free constant.
+    return 0.5 if beside_offset else fixed.get("viscous_share", 0.5)
+
+
 def design(rows: Rows, fixed: dict) -> Design:
     # The extra torque a (theta FV_ref |qm'| + (1 - theta) FS_ref |sign qm'|), motor side.
-    qmd, theta = rows.sig.qmd, fixed.get("viscous_share", 0.5)
-    col = (theta * fixed["FV_ref"] * np.abs(np.nan_to_num(qmd))
-           + (1 - theta) * fixed["FS_ref"] * np.abs(sign0(qmd)))
-    return rows.extend(("a", col, None))
+    qmd = rows.sig.qmd
+    v, s = np.abs(np.nan_to_num(qmd)), np.abs(sign0(qmd))
+
+    def extended(theta: float) -> Design:
+        col = theta * fixed["FV_ref"] * v + (1 - theta) * fixed["FS_ref"] * s
+        return rows.extend(("a", col, None))
+
+    out = extended(_share(fixed, False))
+    return extended(0.5) if OFFSET in out[2] and _share(fixed, False) != 0.5 else out
 
 
 def params(values: dict, fixed: dict, rows: Rows) -> dict[str, float]:
@@ -63,7 +78,7 @@ def params(values: dict, fixed: dict, rows: Rows) -> dict[str, float]:
     itself it is a, whatever the split of O); `viscous_asymmetry` and `coulomb_asymmetry`,
     E's parts over O's (a and a for that law)."""
     fv, fs = (values[n] for n in _names(rows))
-    a, theta = values["a"], fixed.get("viscous_share", 0.5)
+    a, theta = values["a"], _share(fixed, OFFSET in values)
     dv, ds = a * theta * fixed["FV_ref"], a * (1 - theta) * fixed["FS_ref"]
     v, s = _magnitudes(rows)
     odd = fv * v + fs * s
@@ -79,7 +94,7 @@ def check(v: dict, rows: Rows) -> str:
     asymmetry of that friction but a constant torque beside it (an offset; seed-2026 battery
     #111, an offset -2.0 N m beside an asymmetry -0.93 on arm6: fitted alone, coulomb_asymmetry
     -1.46)."""
-    if "offset" in v:
+    if OFFSET in v:
         # beside an offset the constant splits between the two at will while the motor moves
         return ""
     fs = v[_names(rows)[1]]
