@@ -3,8 +3,8 @@
 
 The inverse view fits the direction-dependent part with its own viscous-to-Coulomb split: the
 extra torque a (theta FV_ref |qm'| + (1 - theta) FS_ref), theta searched in [0, 1]. The
-(1 + a s) law has theta = 1/2 with the true FVm, FSm; but the split of the motor friction into FVm and FSm is what a log
-identifies worst (independent simulator's soft family, clean logs of the seed-7 battery: FVm
+(1 + a s) law has theta = 1/2 with the true FVm, FSm; but the split of the motor friction
+into FVm and FSm is what a log identifies worst (independent simulator's soft family, clean logs of the seed-7 battery: FVm
 4.0-8.3 for 3.0, FSm 10.4-11.0 for 12, the error coming from the rows of the chirp near and
 above the mode), and the same error in the column's ratio leaves a part of the asymmetry that
 an offset takes up (seed-7 battery #84: with the nominal's ratio, what an offset adds to the
@@ -21,12 +21,12 @@ from __future__ import annotations
 import numpy as np
 
 from jointbench.identification.effects.base import Design, Effect, Rows, sign0
+from jointbench.identification.effects.offset import COLUMN as OFFSET
 
 # The viscous part's share theta of the direction-dependent torque (scaled by the reference's
 # FV_ref, FS_ref): 0 a constant while moving, 1/2 the reference's own split, 1 viscous alone;
 # the viscous-to-Coulomb ratio relative to the reference's, theta / (1 - theta), is 0, 1/8,
 # 1/4, 1/2, 1, 2, 4, 8 and infinite.
-OFFSET = "offset"     # the column of identification.effects.offset
 SHARES = np.array([0.0, 1 / 9, 1 / 5, 1 / 3, 1 / 2, 2 / 3, 4 / 5, 8 / 9, 1.0])
 
 
@@ -67,8 +67,9 @@ def design(rows: Rows, fixed: dict) -> Design:
         col = theta * fixed["FV_ref"] * v + (1 - theta) * fixed["FS_ref"] * s
         return rows.extend(("a", col, None))
 
-    out = extended(_share(fixed, False))
-    return extended(0.5) if OFFSET in out[2] and _share(fixed, False) != 0.5 else out
+    theta = _share(fixed, False)
+    out = extended(theta)
+    return extended(_share(fixed, True)) if OFFSET in out[2] and theta != 0.5 else out
 
 
 def params(values: dict, fixed: dict, rows: Rows) -> dict[str, float]:
@@ -98,7 +99,7 @@ def check(v: dict, rows: Rows) -> str:
         # beside an offset the constant splits between the two at will while the motor moves
         return ""
     fs = v[_names(rows)[1]]
-    ds = v["a"] * (1 - v.get("viscous_share", 0.5)) * v["FS_ref"]
+    ds = v["a"] * (1 - _share(v, False)) * v["FS_ref"]
     if fs > 0 and abs(ds) <= fs:
         return ""
     return (f"its Coulomb part {ds:.4g} exceeds the fitted Coulomb friction {fs:.4g}: one "
