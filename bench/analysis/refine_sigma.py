@@ -43,8 +43,7 @@ def withdraw_when_unmoved(theta: dict[str, float], start: dict[str, float],
     """A refinement that ends within one least-squares corrected sigma of its start on every
     parameter has found nothing the least squares did not: its Jacobian sigma (the output
     error's curvature, which assumes the replay is the robot) is then withdrawn for the least
-    squares' corrected one, and a note says so (arm6 axis2 at the paper rate: the refinement
-    moved Jm by 0.0005 %, and its white sigma put the truth 50 sigma away)."""
+    squares' corrected one, and a note says so."""
     moved = [n for n in sigma if not abs(theta[n] - start[n]) <= ls_sigma_c.get(n, math.nan)]
     if moved:
         return sigma, sigma_c, []

@@ -24,9 +24,8 @@ NOMINAL_RIGID = RIGID[:3]   # J FV FS: the offset is the `offset` effect
 # second difference reads q'' + T^2 / 12 q(4) + ..., an error of 0.4 % of the spring torque at
 # 12 Hz at the paper's rate. A free column q(4) carries it, so that no effect is credited with it:
 # without it a dead band of a few tenths of a mrad "explains" half the residual of an exactly
-# linear axis (tests/indep_sim.py's wrist, frictionless, ideal sensors). (The same column in
-# the motor equation removed the error there too, but it took K 11 % off on a log with a
-# third of its rows clipped out: it is left out.) Numerics, not physics: never reported.
+# linear axis (tests/indep_sim.py's wrist, frictionless, ideal sensors). The motor equation
+# gets no such column: on a log with rows clipped out it trades with K. Numerics, not physics: never reported.
 NUMERICS = ("d4q",)
 
 
