@@ -1,6 +1,6 @@
 """The one output layer: every file and folder a command writes is checked and written here.
 
-Rules (issue 16):
+Rules:
 - a target that exists and is not a regular file (a device node, a FIFO, a socket, a folder,
   a symbolic link) is refused: `OutputError`, exit status 2;
 - a file jointbench did not write is never replaced. Ours are the logs and campaign tables,

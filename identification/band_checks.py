@@ -1,4 +1,4 @@
-"""Honest checks of a band against the first mode (issue 17): is the rate high enough for the
+"""Honest checks of a band against the first mode: is the rate high enough for the
 mode with the chosen differentiator (eq. 29), and does the band hold the mode."""
 
 from __future__ import annotations

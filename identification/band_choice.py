@@ -1,4 +1,4 @@
-"""The band of the joint-motor fit chosen by the log's own precision (issue 17).
+"""The band of the joint-motor fit chosen by the log's own precision.
 
 Two candidates: the chooser's band (`defaults.choose_filter`: decimated cutoff about 1.4 f1)
 and a wide one, the chooser's Butterworth with the decimation lowered until the decimated
@@ -18,15 +18,10 @@ chooser's band stays with a warning, unless the measured first mode settles it
 (`mode_gap`): the chooser's band was designed for the mode the frequency response measured
 (the fits' arbiter, independent of both), and a chooser's fit whose two-mass model puts the
 mode more than MODE_DISAGREEMENT from it, while the wide fit's holds it within that, has
-missed its own design; the wide band is then kept, still with the warning. (Soft axis
-without link Coulomb friction nor velocity feed-forward, issue 17, before the 3-point chain
-took the motor's stick phases (regressors._sign): the motor sticks at most reversals of the
-chooser's 5.4 Hz band, the instruments predicted linearly from q_ref could not follow, and
-the chooser's fit put K at -51.5 % (mode 3.24 Hz against the measured 3.97 Hz); the wide
-band's is +0.8 % (3.96 Hz). With the stick phases the two agree there.) (A root-sum-square
-bound was too lenient: on the prototype the wide band won near-ties, 0.17 against 0.18 %,
-with K 0.22 % off the chooser's estimate, and 200 campaign runs lost coverage, K 91.5 ->
-73.5 %.) No threshold is tuned on test cases:
+missed its own design; the wide band is then kept, still with the warning. The
+difference's variance is Hausman's, not a root-sum-square bound, which is too lenient: it
+lets the wide band win near-ties whose K differs from the chooser's. No threshold is tuned
+on test cases:
 the 1 % budgets are the chooser's, the 3 sigma the suite's. Pure numerics; the fits come
 from a callable.
 """

@@ -64,7 +64,7 @@ def stencil_for(s: FilterSettings, nd: int = 4) -> tuple[int, str]:
     cutoff stays under 1 %, else the 5-point stencil (distortion (wT)^4 / 30 per derivative).
     nd = 4, the highest derivative any model takes (motor-only). Why 1 %: the distortion grows
     as w^2, so at the mode (the cutoff is about 1.385 f1) it is about half of it, 0.5 %; the
-    sinc distortion at f1 biases K and Jm by about 0.4 times itself (0.47 % -> 0.2 %, see
+    sinc distortion at f1 biases K and Jm by about 0.4 times itself (0.2 % for 0.47 %, see
     design_rate_hz), so 1 % at the cutoff keeps that bias near 0.2 %, inside the 0.5 % the
     joint-motor model is asked for. The prototype at 350.87 Hz (cutoff 5.4 Hz) has 0.62 %."""
     x = 2 * np.pi * s.decimated_cutoff_hz * s.ts
@@ -88,7 +88,7 @@ def nd_from_f1(rate_hz: float, f1_hz: float) -> int:
     """Decimation factor placing the decimated cutoff 0.8 Fs / (2 Nd) at 5.4 / 3.9 f1, the
     paper's ratio of cutoff to first mode (section 4: 0.8 x 350.87 / (2 x 5.4) = 25.99 gives
     its Nd = 26), so that the band holds the mode; rounded down instead when rounding would
-    put the cutoff under MIN_CUTOFF_OVER_F1 f1 (few decimation steps: 2.4 -> 2 at 1.66 f1)."""
+    put the cutoff under MIN_CUTOFF_OVER_F1 f1 (few decimation steps: 2.4 rounds down to 2 at 1.66 f1)."""
     from jointbench.identification.band_checks import MIN_CUTOFF_OVER_F1
 
     x = 0.8 * rate_hz / (2 * f1_hz * 5.4 / 3.9)

@@ -234,8 +234,7 @@ def kink_corrected(v: np.ndarray, rate: float, s: FilterSettings, iterations: in
     zero-order-hold drive). Its steps at every sample are the velocity's other kinks: a stiff
     velocity loop answers a reversal within a sample, and the filter averages that answer
     into the crossing too. Its share the chain misses, H1 - D(lowpass(H2)) (H1, H2 its first
-    and second integrals), is added like the friction's (stiff_small's crossings: 0.05 ->
-    0.00 sample late on average). `drive`: the friction's share taken with its stick phases
+    and second integrals), is added like the friction's. `drive`: the friction's share taken with its stick phases
     (`coulomb_integrals`). `inside` False: the crossings placed linearly between samples (a
     plant that switches its friction once a sample, `regressors.joint_motor`)."""
     v = np.asarray(v, dtype=float)

@@ -1,4 +1,4 @@
-"""The first mode f1 of an axis measured from its log (issue 17), for the band of section 3.2.
+"""The first mode f1 of an axis measured from its log, for the band of section 3.2.
 
 With the link position `q` the link response q / tau_m = K / (s^2 (Jm JL s^2 + K (Jm + JL)))
 (eqs. 5-6, undamped) is used: |H| f^2 is flat with a single peak at the mode
@@ -161,7 +161,7 @@ def _off_mass_line(f_peak: float, lead: float) -> str:
     mode the flattened link response is the mass line 1 / (Jm + JL), real and positive,
     turned by the friction's lead atan(c / (w J)) (under 90 deg) or a delay's small lag: a
     phase of 90 deg or more there is another resonance below (a pendulum's gravity mode
-    sqrt(MY g / (Jm + JL)): issue 15, a damped hardening pendulum measured at 1.39 Hz for 6)."""
+    sqrt(MY g / (Jm + JL)), which a damped hardening pendulum can show well below its mode)."""
     return (f"the link response below its peak at {f_peak:.3g} Hz is off the mass line (phase "
             f"{np.degrees(lead):+.0f} deg at 0.4-0.6 times the peak; friction leads it by "
             "less than 90 deg): the peak is not the first mode (a resonance below it?)")
@@ -171,8 +171,7 @@ def _overdamped(f1: float, slope: float) -> str:
     """Why the phase crossing at `f1` [Hz], falling at `-slope` [rad/Hz], is no resonance, or
     "". A second-order pair's phase falls through its crossing at 1 / (zeta f1) rad/Hz; at a
     damping ratio zeta of ZETA_MAX (1) or more it is two real poles, no mode: such a shallow
-    crossing is the slow turn of a response between two bands (issue 15's 1.39 Hz for the
-    6 Hz of a damped hardening pendulum fell at 0.16 rad/Hz, zeta 4.5)."""
+    crossing is the slow turn of a response between two bands."""
     zeta = -1.0 / (f1 * slope)
     if zeta < ZETA_MAX:
         return ""
@@ -220,11 +219,9 @@ def measure_first_mode(log: Log) -> FirstMode:
 def _cross_checked(link: FirstMode, motor: FirstMode) -> FirstMode:
     """`link` with its sigma widened when the motor response's mode `motor` (the same mode,
     seen through another output) lies more than CONSISTENCY_Z sigmas of their difference
-    from it: one of the two is biased and nothing in the log says which (seed-7 battery,
-    clean independent logs: wrist without feed-forward, link 12.96 +- 0.10 Hz, motor
-    11.32 Hz; pendulum, link 6.98 +- 0.10 Hz, motor 6.20 Hz; truths 12 and 6), so the
-    difference enters the sigma whole, sqrt(sigma^2 + d^2), which covers either being right.
-    f1 stays the link's: the band is designed from it as before."""
+    from it: one of the two is biased and nothing in the log says which, so the difference
+    enters the sigma whole, sqrt(sigma^2 + d^2), which covers either being right. f1 stays
+    the link's: the band is designed from it."""
     if not motor.found:
         return link
     d, sd = link.f1_hz - motor.f1_hz, math.hypot(link.sigma_hz, motor.sigma_hz)
@@ -242,7 +239,7 @@ def _from_motor(log: Log, link: FirstMode) -> FirstMode:
     mode damped by the friction flattens |q / tau_m| f^2 to a bump (the independent
     simulator without velocity feed-forward: 1.3-1.8 times its median level, the 2 it needs),
     while q_m / tau_m still has its antiresonance dip under it, whose depth the motor test
-    measures (heavy_link, soft: found within 2.6 % of the truth). Not found by either: the
+    measures. Not found by either: the
     link's reason and the motor's."""
     motor = _measure(log, motor=True)
     if not motor.found:

@@ -5,10 +5,8 @@ drive cannot overcome FS the axis sticks instead: the friction then balances the
 anywhere in [-FS, FS], for as long as the drive stays inside that band. Without velocity
 feed-forward, or near the antiresonance (the motor a node of the mode, the spring force
 sweeping through the friction band within a sample), such stick phases recur at every
-reversal: on the independent simulator's stiff_small axis without feed-forward (17.5 samples
-a period) a sixth of the time, and a sign column, every reversal taken as slip-through,
-leaves Jm +2.2 % (ideal sensors, true parameters; +0.07 % with this state; the whole chain:
-tests/test_indep_accuracy.py::test_joint_motor_without_noise).
+reversal, and a sign column, every reversal taken as slip-through, biases Jm (the whole
+chain: tests/test_indep_accuracy.py::test_joint_motor_without_noise).
 
 `friction_integrals` integrates, within every sample interval independently, the one-mass
 equation J v' = J (drive(t) - visc v) - FS s(t) with s the friction state (Karnopp: s =
@@ -73,9 +71,7 @@ def friction_integrals(v: np.ndarray, drive0: np.ndarray, drive1: np.ndarray, vi
     I1, I2, end = _interval(u0, d0, d1, visc, rate, ts)
     # an axis that ended the last interval at rest with the drive still inside the band stays
     # at rest (Karnopp): the velocity measured there is creep or the reconstruction's error,
-    # and starting from it would slip for part of the interval (without feed-forward, ideal
-    # sensors: soft's Jm -1.35 -> -0.31 %; carrying the rest on over more passes changed
-    # nothing measured)
+    # and starting from it would slip for part of the interval, which biases Jm
     held = np.r_[False, end[:-1] == 0] & (np.abs(d0) <= rate)
     u0 = np.where(held, 0.0, u0)
     I1, I2, end = _interval(u0, d0, d1, visc, rate, ts)

@@ -138,8 +138,8 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
         notes += choice.notes
     else:
         # given settings without a mode: the mode is still measured on the log, for the
-        # instruments' resolution and the band checks (without it the instruments took 8 s
-        # Welch segments: stiff_small, log sweep, Jm -41 % silently, +0.52 % with it)
+        # instruments' resolution and the band checks (without it the instruments' Welch
+        # segments are too long for a sweep, and Jm is silently wrong)
         mode = first_mode or (given_first_mode(f1_hz) if f1_hz is not None
                               else measure_first_mode(log))
         why = f"given: {settings.stencil} points"
@@ -239,7 +239,7 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
         reg, ls = _place_reversals(log, settings, reg, ls, Z, notes)
     elif model == "motor-only":
         # least squares: the torque's own derivatives are columns here, and instruments
-        # predicted for them are weak (prototype seed 5: K -1.7 % against -0.7 %)
+        # predicted for them are weak and bias K more than least squares does
         reg = exclude_clipped(regressors.motor_only(log, settings, corrected=True), log)
         ls = least_squares(reg.W, reg.y, reg.names)
     elif model == "motor-only-printed":
@@ -313,9 +313,7 @@ def _place_reversals(log: Log, settings: FilterSettings, reg: regressors.Regress
     (`filtering.kink_corrected`), placed inside the sample interval with the kink
     (`filtering.crossing_share`), and the motor's stick phases, where the friction holds the
     drive instead of +-FSm (`friction_state`). The filtered velocity's own crossings come late
-    by an amount that grows with FS / J, and Jm with them (stiff_small, f1 = 20 Hz at 17.5
-    samples a period: Jm +3.83 % with them, +2.99 % with the crossings alone, +0.38 % now;
-    +0.00 % with ideal sensors)."""
+    by an amount that grows with FS / J, and Jm with them."""
     rates = (0.0, 0.0)
     for _ in range(REVERSAL_PASSES):
         p = {n: ls.value(n) for n in ls.names if n not in ls.unidentifiable}

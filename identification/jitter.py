@@ -1,4 +1,4 @@
-"""The Coulomb friction the motor feels under the log's own noise (issues 15 and 17).
+"""The Coulomb friction the motor feels under the log's own noise.
 
 The closed loop's torque noise is not logged. Held over a sample interval it changes the
 motor's velocity by n T / Jm within the interval, and the velocity at the interval's start
@@ -18,18 +18,15 @@ Everything comes from the log, no width tuned:
   of it ahead), from the chain's filter and stencil alone;
 - `noise_nodes`: Gauss-Hermite nodes of the pair (start-velocity miss, interval noise).
 The friction's state is then averaged over the nodes with the plant's own one-interval law.
-Shipped for a simulator taking one RK4 step a sample (`substeps: 1`, the bench's MuJoCo logs):
+Used for a simulator taking one RK4 step a sample (`substeps: 1`, the bench's MuJoCo logs):
 `stage_state`, MuJoCo's soft friction-loss constraint evaluated at each of the step's four
 stages (the same as mujoco.mj_step on a single rotor to 1e-6). Its position update weights the
-stages (1, 1, 1, 0) / 3, its velocity update (1, 2, 2, 1) / 6: a column holding the velocity's
-weights on the positions left FVm -2.6 % (arm6 axis5, ideal sensors, the true velocities and
-drive); with the position's, -0.09 % (sigma 0.05 %). Without noise MuJoCo's step is itself a
-staircase, zero friction for |u| < rate T / 2 at zero drive, which a sign column (linear
-reversals) read as FVm +1.9 %.
+stages (1, 1, 1, 0) / 3, its velocity update (1, 2, 2, 1) / 6: the column takes the position's
+weights, since the logged positions are what the regressor sees (the velocity's bias FVm).
+Without noise MuJoCo's step is itself a staircase, zero friction for |u| < rate T / 2 at zero
+drive, which a sign column (linear reversals) would read as viscous friction.
 
-For a continuous plant the same expectation over `friction_state.friction_integrals`' stick-slip
-state (branch jit7-b) fixed the friction split of the independent simulator without
-feed-forward but moved heavy_link's Jm with feed-forward by +0.5 %; not shipped (regressors).
+A continuous plant keeps the noise-free stick-slip state of `friction_state` (regressors).
 
 Pure numpy.
 """
@@ -84,10 +81,8 @@ def torque_noise_sweep(v: np.ndarray, raw: np.ndarray, tau: np.ndarray, defl: np
     the reversals (where sign is not the friction's state). The model's own error in z (a
     continuous plant's acceleration is not constant on an interval; the chain's deflection)
     is smooth: z_k+1 - z_k = n_k+2 - n_k keeps the white noise, variance 2 sd(n)^2, and drops
-    most of it (the independent simulator's heavy_link and soft without noise give 9 and 5 %
-    of their noisy logs' figure; z itself gave 82 and 93 %); the quantiser's share
-    (2 Jm / T^2)^2 20 resolution^2 / 12 is removed. Against the simulators' own noise, seed 1
-    (true parameters): heavy_link -0.04 %, soft +2.4 %, arm6 axis5 +2.1 %, axis2 +1.8 %."""
+    most of it; the quantiser's share
+    (2 Jm / T^2)^2 20 resolution^2 / 12 is removed."""
     Jm = p.get("Jm", 0.0)
     if not Jm > 0:
         return 0.0

@@ -21,8 +21,7 @@ joint-motor model places them) come from the previous round. The reference's ins
 (identification/instruments.py) then replace least squares for the last passes. A gravity the
 data cannot tell from zero is left out (it trades with K). JL = K / a, FV = b JL, FS = c JL.
 The link is stepped as the log's plant steps it (`link_stepper`): a simulator taking one RK4
-step a sample switches the link friction at its stages, not inside the interval (arm6 axis1 at
-the paper's rate: K -0.45 -> -0.28 %, FV -33 -> -2.5 %, FS +7.9 -> +1.9 %).
+step a sample switches the link friction at its stages, not inside the interval.
 """
 
 from __future__ import annotations

@@ -129,10 +129,9 @@ def simulate_link_rk4(qm: np.ndarray, ts: float, a: float, b: float, c: float = 
     `substeps: 1`, `integrator: mjINT_RK4`): the motor angle linear between samples, the link
     friction taken at each stage from that stage's state, as MuJoCo's soft constraint of time
     constant `timeconst` [s] (0: hard, the Coulomb sign) gives it; phi[k] is the friction / FS
-    as the step's velocity update weights it, (f1 + 2 f2 + 2 f3 + f4) / 6. On MuJoCo's arm6
-    axis1 (ideal sensors, true a, b, c) this matches the logged link where `simulate_link`,
-    which switches the friction inside the step, leaves FV -2.3 % and FS +0.24 % in an
-    output-error fit, and the motor-only K -0.45 % (z -3.8) at the paper's rate.
+    as the step's velocity update weights it, (f1 + 2 f2 + 2 f3 + f4) / 6. This matches
+    MuJoCo's logged link, where `simulate_link`, which switches the friction inside the step,
+    biases the link frictions and the motor-only K.
     Raises ValueError unless a > 0, b, c >= 0."""
     if not (a > 0 and b >= 0 and c >= 0):
         raise ValueError(f"the link needs a > 0, b >= 0, c >= 0 (got {a}, {b}, {c})")

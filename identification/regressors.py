@@ -79,8 +79,8 @@ def _sign(x: np.ndarray, s: FilterSettings, rate: float = 0.0,
     out[~np.isfinite(x)] = np.nan
     if drive is not None and rate > 0 and inside:
         # the stick phases as eq. (22)'s chain sees them: sign(x) takes every reversal as
-        # slip-through, and without feed-forward the motor sticks at most of them (soft,
-        # ideal sensors, the paper's band: Jm -3.33 -> -0.07 %). The view loses two more
+        # slip-through, and without feed-forward the motor sticks at most of them, which
+        # biases Jm. The view loses two more
         # samples than sign(x) at each end: those take the nearest state (a sign there would
         # be a step the decimation spreads over the first rows), so the passes keep their rows
         state = stencil_view(coulomb_integrals(x, s.ts, rate, drive)[1], s.ts, 3)
@@ -148,25 +148,17 @@ def _friction_models(log: Log, friction: tuple[float, float] | Mapping[str, floa
     sample): from rates (FSm / Jm, FS / JL), the reversals placed inside the sample
     interval with the friction's kink; from parameters p, the motor column also gets the held
     torque tau / Jm and its drive between samples, (tau[k] - K defl) / Jm at the interval's
-    start and end with the viscous rate FVm / Jm, for its stick phases (`friction_state`):
-    the closed loop holds the motor at its reversals (stiff_small without feed-forward: a
-    sixth of the time). That state is the noise-free one: its expectation over the log's
-    torque noise (as the once-a-sample plant's below) fixed the friction split without
-    feed-forward (heavy_link and soft, seeds 1-10: FVm +175 / +232 -> -34 / -6 %, FSm -8.8 /
-    -17.8 -> +1.8 / +0.4 %, Jm unchanged within its 2 % spread) but moved heavy_link's Jm
-    with feed-forward by +0.5 % (seeds 1-6, -0.02 -> +0.50 %; not understood, not shipped:
-    branch jit7-b). The link, driven by the spring alone, keeps its reversals
-    slip-through (its stick phases, tried the same way, moved K by +1.3 % on an axis without
-    feed-forward). A log whose metadata says the simulator took one RK4 step a sample
-    (`substeps: 1`, MuJoCo's arm6 and prototype at the paper's rate) cannot switch its
-    friction inside a sample: from rates, the reversals placed linearly between samples;
-    from parameters, the motor's state is MuJoCo's per-stage soft friction of the log's
-    `friction_timeconst_s` over the noise (`jitter.stage_column`; arm6 axis5, 240 s, seeds
-    1-3: FVm +5.6/+5.8/+8.4 -> -0.2/-0.4/+2.7 %, sigma 1.6 %), once the previous pass has a
-    positive K: where the motor sticks that state balances the drive, the logged torque
-    included, and on a log whose motion is the noise's alone (a 1e-6 rad chirp, where the
-    first pass's K is negative) such a column would explain the torque by itself. Zero where
-    a friction or inertia is missing or not positive."""
+    start and end with the viscous rate FVm / Jm, for its stick phases (`friction_state`),
+    since the closed loop holds the motor at its reversals. The link, driven by the spring
+    alone, keeps its reversals slip-through. A log whose metadata says the simulator took
+    one RK4 step a sample (`substeps: 1`) cannot switch its friction inside a sample: from
+    rates, the reversals placed linearly between samples; from parameters, the motor's
+    state is MuJoCo's per-stage soft friction of the log's `friction_timeconst_s` over the
+    noise (`jitter.stage_column`), once the previous pass has a positive K: where the motor
+    sticks that state balances the drive, the logged torque included, and on a log whose
+    motion is the noise's alone (where the first pass's K is negative) such a column would
+    explain the torque by itself. Zero where a friction or inertia is missing or not
+    positive."""
     rates = friction if not isinstance(friction, Mapping) else tuple(
         friction[f] / friction[j] if friction.get(j, 0) > 0 and friction.get(f, 0) > 0
         else 0.0 for f, j in (("FSm", "Jm"), ("FS", "JL")))

@@ -1,5 +1,5 @@
 """Is an identified model believable on the log it came from? Warnings that name the likely
-cause (issue 16: no confident wrong answer). Pure numerics on an Identification, no I/O.
+cause (no confident wrong answer). Pure numerics on an Identification, no I/O.
 
 - **A log that looks mislabelled.** A physical axis has positive inertias and stiffness.
   - Every inertia negative (J, or Jm and JL): the torque column has the wrong sign (the
@@ -15,9 +15,9 @@ cause (issue 16: no confident wrong answer). Pure numerics on an Identification,
 - **The model explains too little of the torque.** A model that describes the axis leaves
   the torque noise seen through the band: a white noise of standard deviation sigma per
   sample (the log's `torque_noise_std`) has RMS sigma sqrt(f_c / (Fs / 2)) below the
-  decimated cutoff f_c (measured on 30 s prototype logs: 0.94 times that floor on a clean
-  log, 1.03-1.09 with gravity or link Coulomb friction hidden, 3.5-11 with backlash,
-  ripple, lag, hardening, offset or asymmetric friction, 30 with q and q_m swapped). A
+  decimated cutoff f_c (a clean log's residual sits near that floor; an unmodelled
+  backlash, ripple, lag, hardening, offset or asymmetric friction puts it several times
+  above, swapped q and q_m far above). A
   residual over NOISE_FACTOR = 3 times the floor holds 9 times the noise power: at least
   89 % of what the model leaves is structure it lacks. A log that states no noise level
   gets the fallback bar: the model explains less than 3/4 of the torque's power (relative

@@ -102,7 +102,7 @@ def test_same_survey_on_two_workers_and_logs_are_simulate_s(surveyed, tmp_path):
     is `simulate --model arm6 --joint J --seed 1`'s."""
     _, _, out = surveyed
     status, text = _run(ARGS + ["--workers", "2", "--out", str(tmp_path / "two")])
-    assert status == 0 and "K, Jm, JL within 0.5 % of the truth (issue 17): 2 of 2 axes" in text
+    assert status == 0 and "K, Jm, JL within 0.5 % of the truth: 2 of 2 axes" in text
     for name in ("survey.csv", "logs/axis1.csv", "logs/axis4.csv"):
         assert (tmp_path / "two" / name).read_bytes() == (out / name).read_bytes(), name
     status, _ = _run(["simulate", "--model", "arm6", "--joint", "axis4", "--duration", "60",

@@ -22,7 +22,7 @@ joint-motor identification only.
 coloured); `sigma_corrected`: the HAC sandwich of `identification.uncertainty.hac_covariance`
 on the linearised problem. Only two-mass identifications of revolute axes are refined; a log
 without q_ref or the controller gains raises LogError. Measured accuracy, uncertainty and
-times: README, "Refinement by closed-loop output error".
+times: docs/validation.md.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""How far the refinement's own sigma can be trusted (issue 17): the output error's Jacobian
+"""How far the refinement's own sigma can be trusted: the output error's Jacobian
 sigma assumes that the replay is the robot. Two checks against the least squares of the same
 log widen or withdraw it, each with a note."""
 
@@ -18,8 +18,7 @@ def widen_on_disagreement(theta: dict[str, float], start: dict[str, float],
     differ by more than 3 of their combined corrected sigma, each estimator sees a model error
     (the nominal axis' friction, the replay's discretisation, the regressor's) that neither
     sigma holds. Such a sigma is widened to include the difference, sqrt(sigma^2 + d^2), and a
-    note says so (arm6 axis3 at the paper rate: Jm refined -0.74 % at -10 white sigma, LS +0.38 %;
-    widened, the truth lies within 1 sigma)."""
+    note says so."""
     sigma, sigma_c, notes = dict(sigma), dict(sigma_c), []
     for n in sigma:
         s_ls = ls_sigma_c.get(n, math.nan)
@@ -44,8 +43,7 @@ def withdraw_when_unmoved(theta: dict[str, float], start: dict[str, float],
     """A refinement that ends within one least-squares corrected sigma of its start on every
     parameter has found nothing the least squares did not: its Jacobian sigma (the output
     error's curvature, which assumes the replay is the robot) is then withdrawn for the least
-    squares' corrected one, and a note says so (arm6 axis2 at the paper rate: the refinement
-    moved Jm by 0.0005 %, and its white sigma put the truth 50 sigma away)."""
+    squares' corrected one, and a note says so."""
     moved = [n for n in sigma if not abs(theta[n] - start[n]) <= ls_sigma_c.get(n, math.nan)]
     if moved:
         return sigma, sigma_c, []

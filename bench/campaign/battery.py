@@ -1,7 +1,7 @@
 """The hidden-effect batteries of `diagnose`: seeded virtual experiments, each hiding effects
 of docs/effects.md (or none). Only the log goes to `diagnose`.
 
-- The battery by visibility (issue 14, item 3; `plan`, `run_spec`, benchmarks/battery.py):
+- The battery by visibility (`plan`, `run_spec`, benchmarks/battery.py):
   every case at the paper's rate, on bench axes and (through a `Runner`) on other
   simulators; each effect's strength is searched so that its in-band visibility
   (bench.campaign.visibility) hits a target drawn uniformly in VISIBILITY_RANGE, whatever
@@ -114,12 +114,12 @@ def confusion(results: list[tuple[str, str]]) -> tuple[list[str], np.ndarray]:
     return labels, M
 
 
-# ---- the battery by visibility (issue 14, item 3) ----
+# ---- the battery by visibility ----
 
 VISIBILITY_RANGE = (0.03, 0.40)   # single-effect targets, drawn uniformly (ratios)
 PAIR_RANGE = (0.10, 0.40)         # each effect's target in a two-effect case
 # link_coulomb is left out: the link's Coulomb friction FS belongs to the nominal model
-# (issue 14, item 1; Table 1 has it), so a log-only diagnosis never names it.
+# (Table 1 has it), so a log-only diagnosis never names it.
 BATTERY_EFFECTS = tuple(e for e in EFFECTS if e != "link_coulomb")
 # Largest strength magnitude of effects bounded by their definition (docs/effects.md 4.2).
 LARGEST = {"asymmetric_friction": 0.95}

@@ -1,6 +1,6 @@
 """What the battery by visibility shows about a detector: the confusion table, the detection
 curve per effect (share named right against in-band visibility) and the visibility above
-which an effect is found 95 % of the time (issue 14, item 3).
+which an effect is found 95 % of the time.
 
 A record is one case as benchmarks/battery.py writes it: a dict with `kind` ("clean",
 "single", "pair"), `effects` (hidden names), `visibilities` (each effect's, ratios), `named`

@@ -36,7 +36,7 @@ def scattered_mjcf(model: str, joint: str | None, factors: dict[str, float]) -> 
     scale with it: a heavier or lighter payload). Returns (xml, joint).
 
     The file's own XML is edited (ElementTree) with the compiled values x factor written at
-    full precision: MjSpec.to_xml rounds every number to 6 digits (K 20341.0458 -> 20341, the
+    full precision: MjSpec.to_xml rounds every number to 6 digits (K 20341.0458 becomes 20341, the
     timestep too). Relative asset folders and includes are made absolute, so the text compiles
     from any folder. Raises ModelStructureError when the file lacks an element it scales."""
     full, axes, path = load_model(model)

@@ -1,5 +1,5 @@
 """`jointbench survey`: the chirp experiment on every axis of a robot in turn, the others
-locked, each identified with the defaults and compared with the model's truth (issue 18).
+locked, each identified with the defaults and compared with the model's truth.
 
 One task per axis (`survey_joint`, a top-level function of plain data: it runs in a worker of
 bench.campaign.executors). An axis is simulated exactly as `jointbench simulate --model M
@@ -29,7 +29,7 @@ from jointbench.identification.parameters import FRICTIONS, STIFFNESS_AND_INERTI
 from jointbench.models import load_model, select_axis
 
 SURVEYED = STIFFNESS_AND_INERTIAS + FRICTIONS   # K, Jm, JL, FVm, FSm, FV, FS: the table's rows
-# Issue 17 (any axis identified at the paper's rate): the joint-motor model's K, Jm and JL within
+# The bar for any axis identified at the paper's rate: the joint-motor model's K, Jm and JL within
 # 0.5 % of the truth; the survey reports, per axis, whether each is inside.
 ACCURACY_BAR_PCT = 0.5
 

@@ -1,5 +1,5 @@
 """In-band visibility of a hidden effect, and the strength that gives a wanted visibility
-(issue 14, item 3: a battery whose strengths are not tuned to the detector).
+(a battery whose strengths are not tuned to the detector).
 
 The visibility of an effect on a case is what it changes in the noise-free command, in the
 band the identification looks at:

@@ -1,7 +1,7 @@
 """The memory a command needs, estimated before it starts, and the limit it must stay under.
 
 Every command holds a handful of arrays per log sample: the simulated signals and the log's
-text (`simulate`: about 360 bytes a sample measured, 2026-12-01), the filtered signals, their
+text (`simulate`: about 360 bytes a sample), the filtered signals, their
 derivatives and the regressor (`identify`: about 480 bytes a sample; `diagnose` without the
 forward view about 180). `BYTES_PER_SAMPLE` rounds the largest up to 1 KiB. A command that
 would need more than the limit is refused with the number (exit status 2) instead of

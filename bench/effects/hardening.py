@@ -31,9 +31,7 @@ def draw(u: Uniform, sign: float, tau_max: float, f1_hz: float, K: float):
     # median deflection is far smaller still (3 urad on the independent soft family): there the
     # spring engages only at the sweep's largest deflections, and a target visibility can
     # ask for a second spring hundreds of times K: a hard stop, one count of the link
-    # encoder worth tens of N m (a prototype case without feedforward, ratio 626 at 4.1 mrad:
-    # 76 N m per count, 12.5 % visibility for a target of 18.3 %, the nominal K 3651 for
-    # 20341, nothing of the spring law named).
+    # encoder worth tens of N m, which no spring law describes.
     return u(1.0, 2.0), {"deflection": u(0.25, 0.5) * 0.1 * tau_max / K}
 
 

@@ -58,7 +58,7 @@ def _num(x: float | None, fmt: str) -> str:
 
 def survey_text(sv: Survey, out: Path | None) -> str:
     """The table (one row per axis and parameter), each axis' filter, first mode and
-    warnings, the accuracy against issue 17's bar, the wall time and the files written."""
+    warnings, the accuracy against the survey's bar, the wall time and the files written."""
     models = sorted({j.model for j in sv.joints if j.status == "ok"})
     lines = [f"survey of {sv.model} ({sv.source.name}): {_axes(len(sv.joints))}, each a "
              f"{sv.duration:g} s chirp at {sv.sample_rate_hz:g} Hz with the others locked, "
@@ -87,7 +87,7 @@ def survey_text(sv: Survey, out: Path | None) -> str:
     ok = [j for j in sv.joints if j.status == "ok"]
     within = sum(j.within_bar() for j in ok)
     worst = sv.worst()
-    lines += ["", f"K, Jm, JL within {ACCURACY_BAR_PCT:g} % of the truth (issue 17): "
+    lines += ["", f"K, Jm, JL within {ACCURACY_BAR_PCT:g} % of the truth: "
                   f"{within} of {_axes(len(sv.joints))}"
               + (f"; largest |error| {worst[1]} {worst[2]:+.3f} % on {worst[0]}" if worst else "")]
     sim = sum(j.sim_s for j in ok if math.isfinite(j.sim_s))
@@ -184,7 +184,7 @@ def table_csv(sv: Survey) -> str:
 
 def plot_survey(sv: Survey):
     """Error in % of the truth per axis and parameter, with +-2 sigma bars (corrected; f1:
-    its own): f1, K, Jm, JL above with issue 17's +-0.5 % band, the frictions below."""
+    its own): f1, K, Jm, JL above with the survey's +-0.5 % band, the frictions below."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -210,7 +210,7 @@ def plot_survey(sv: Survey):
     axes[0].axhspan(-ACCURACY_BAR_PCT, ACCURACY_BAR_PCT, color="tab:green", alpha=0.12,
                     label=f"+-{ACCURACY_BAR_PCT:g} %")
     axes[0].set_title(f"{sv.model}: first mode, stiffness and inertias (green: +-"
-                      f"{ACCURACY_BAR_PCT:g} %, issue 17), bars +-2 sigma")
+                      f"{ACCURACY_BAR_PCT:g} %), bars +-2 sigma")
     axes[1].set_title("frictions (motor FVm, FSm; link FV, FS), bars +-2 sigma")
     axes[1].set_xticks(range(len(ok)), [j.joint for j in ok])
     axes[1].set_xlabel(f"axis ({sv.duration:g} s chirp at {sv.sample_rate_hz:g} Hz, seed "

@@ -1,4 +1,4 @@
-"""Is MuJoCo's Coulomb friction hard enough for the paper's model? (issue 17)
+"""Is MuJoCo's Coulomb friction hard enough for the paper's model?
 
 MuJoCo's `frictionloss` is a soft velocity constraint: below a velocity band it acts as a
 steep viscous ramp, not as FS sign(v). With the reference acceleration a_ref = -b v,
@@ -6,7 +6,7 @@ b = 2 / (dmax timeconst), the friction saturates at FS only for |v| > v_b = FS d
 timeconst / (2 J), J the dof's inertia; timeconst is solreffriction's, raised to two time
 steps unless `<flag refsafe="disable"/>`. MuJoCo's default (0.02 s) gives arm6-like axes
 v_b ~ 0.01 rad/s, inside which a chirp spends a few % of its samples: Jm +6 %, FVm +70 %,
-FS -22 % (issue 17). models/arm6.xml's `solreffriction="0.00025 1"` with refsafe disabled
+FS -22 %. models/arm6.xml's `solreffriction="0.00025 1"` with refsafe disabled
 gives v_b ~ 1e-4 rad/s.
 """
 

@@ -23,6 +23,6 @@ counts = N * CPR / (2 * math.pi)
 table = np.column_stack([12.5 + 1e3 * log.t, np.round(log.q_m * counts), np.rad2deg(log.q),
                          log.tau_m / (N * KT), log.q_ref * counts])
 with open(sys.argv[2], "w") as f:
-    f.write("# drive export, axis 1, 2026-11-30\n")
+    f.write("# drive export, axis 1\n")
     f.write("time_ms,motor_counts,link_deg,current_A,ref_counts\n")
     np.savetxt(f, table, delimiter=",", fmt="%.10g")

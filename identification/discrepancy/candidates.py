@@ -254,9 +254,7 @@ def _coupled(e: Effect, base: tuple[tuple[str, dict], ...]) -> list[int]:
     value carries that value's error: a dead band fitted alone widens to take up a hardening
     beyond it, and a hardening tested on top of that width cannot undo it (a wrist hardening
     beside a backlash, tests/test_diagnose_spring_law.py: what the hardening adds to the
-    backlash has t = 2.1 with the width held, 8.2 with it searched again; on the seed-7
-    development battery's kind of case the answer was "backlash or hardening: this log cannot
-    tell them apart")."""
+    backlash has t = 2.1 with the width held, 8.2 with it searched again)."""
     if not e.search or e.block != 1:
         return []
     return [i for i, (name, _) in enumerate(base)
@@ -266,9 +264,9 @@ def _coupled(e: Effect, base: tuple[tuple[str, dict], ...]) -> list[int]:
 def _refitted(nom: Nominal, ref: Reference, coupled: list[int]) -> Reference:
     """`ref` with the searched values of its causes `coupled` searched again, in turn, on the
     causes alone: what a coupled candidate is credited with is then what it adds, not what
-    refitting the causes beside the ones named after them gives (seed-7 development battery:
-    a backlash named before a spring damping; a hardening on top of both took up the width's
-    error and was named a third cause)."""
+    refitting the causes beside the ones named after them gives (otherwise, with a backlash
+    named before a spring damping, a hardening on top of both takes up the width's error and
+    is named a third cause)."""
     effects = list(ref.base.effects)
     for i in coupled:
         name, fx = effects[i]

@@ -1,4 +1,4 @@
-"""Out-of-sample evidence for an effect (issue 14 item 2): does adding it predict rows the fit
+"""Out-of-sample evidence for an effect: does adding it predict rows the fit
 has not seen better, by more than this log's own spread?
 
 **Folds.** The decimated instants are cut into SEGMENTS = 40 contiguous segments of equal
@@ -23,10 +23,8 @@ square successive difference (von Neumann 1941), sigma^2 = sum (l_{s+1} - l_s)^2
 not by the spread around their mean: an effect acts where the chirp's band makes it visible
 (a lag at the high frequencies, a ripple at low speed, a dead band at small deflection), so
 its mean E[l_s] follows the sweep slowly from segment to segment, and the plain standard
-deviation counted that variation as noise. It capped t near sqrt(S f / (1 - f)) for an effect
-seen in a share f of the segments, whatever its size (seed-7 development battery: a backlash
-that removes 99.3 % of the held-out residual had t = 4.02, a torque lag removing 49 % in ten
-segments by factors 5 to 20, t = 3.1). Successive differences cancel a mean that moves
+deviation would count that variation as noise, capping t near sqrt(S f / (1 - f)) for an
+effect seen in a share f of the segments, whatever its size. Successive differences cancel a mean that moves
 slowly and keep the segment-to-segment noise; on independent l_s their estimate has the
 variance of a chi-square with nu = 2 (S - 1)^2 / (3 S - 4) degrees of freedom (26 for S = 40),
 which the p-value uses. The spread holds the noise, the residual's colour and the effect's own
@@ -38,13 +36,9 @@ only dilute each ratio towards 1. Under the null hypothesis (the effect's column
 reference misses) the extra columns only add estimation variance to the held-out prediction:
 E[l_s] < 0 in every segment.
 
-**A spread within the segments, tried and not kept (issue 14, 2026-12-02).** Successive
-differences also count as noise how an effect's visibility changes between segments. A second
-view from each segment's own spread (jackknife over 4 batches, Satterthwaite's dof, each view at
-half the level) was calibrated (96 clean logs: nothing named) and raised a lag seen in 9 of 40
-segments from t = 5.35 to 12.8, but changed no first-named cause on the seed-7 battery and named
-spurious later causes on 3 logs: once the true cause is named, what its model misses is
-structured, and a within-segment spread calls it significant.
+Successive differences also count as noise how an effect's visibility changes between
+segments; a spread within each segment is not used instead, because once the true cause is
+named, what its model misses is structured, and a within-segment spread calls it significant.
 
 **Materiality.** On a 60 s log a test without margin finds mismatches that are real but
 immaterial: dead bands at the encoder's resolution, MuJoCo's own small damping; they remove
@@ -197,8 +191,7 @@ def segment_log_ratios(e0: np.ndarray, e1: np.ndarray, n_times: int,
     """log(sum e0^2 / sum e1^2) in each segment (where both are positive), over the rows of
     `blocks` (every block for ()). An effect that acts in one equation is measured there:
     the other equation's errors, which it leaves as they were, would add the same amount to
-    both sums and pull every ratio towards 1 (a torque lag removing 79 % of the motor
-    equation's held-out residual removed 43 % of both: t 5.35 on its equation, 3.91 on both)."""
+    both sums and pull every ratio towards 1."""
     sq0, sq1 = ((e ** 2).reshape(-1, n_times) for e in (e0, e1))
     rows = list(blocks) if blocks else slice(None)
     h0, h1 = segment_sums(sq0[rows].sum(axis=0)), segment_sums(sq1[rows].sum(axis=0))

@@ -1,6 +1,6 @@
 """The inverse view's verdict: every effect tested against the nominal model of a log and
 ranked; then, once a cause is named, the others tested again against the nominal extended by
-it (issue 15 item 2), and every one that passes named in turn.
+it, and every one that passes named in turn.
 
 A round tests every remaining effect against its reference (identification.discrepancy.
 heldout: held-out folds, a one-sided segment test at ALPHA / m, m the number of effects left
@@ -135,14 +135,12 @@ def beyond(richer: Candidate, simpler: Candidate) -> float:
 
 
 def _material(richer: Candidate, simpler: Candidate, physical: bool) -> bool:
-    """Parsimony yields to issue 14's rule (the named cause explains the most held-out):
+    """Parsimony yields to the naming rule (the named cause explains the most held-out):
     `richer` explains materially more than `simpler` (it removes more than MATERIAL of what
     `simpler` leaves, the margin of identification.discrepancy.heldout) and its fit on top
     of `simpler` is physical. The segment test of what it adds can then miss it because it
     acts in a few segments (a hardening engaging only at the large deflections near the
-    mode: seed-7 development battery, a hardening of ratio 0.49 at 31 mrad beside an
-    asymmetric friction on the soft family explained 57.9 %, the backlash 35.2 %, what the
-    hardening added to the backlash had t = 0.09 and the backlash was named alone)."""
+    mode)."""
     return physical and beyond(richer, simpler) > MATERIAL
 
 
@@ -154,13 +152,9 @@ def _simplest_first(ranked: list[Candidate], nom: Nominal,
     round's level: the claim is its own part) or materially better (_material); otherwise S
     goes first, and the note says that the log cannot tell them apart. Between an effect and
     the one it reduces to (registry `reduces_to`: an asymmetric friction and an offset), in
-    either order, the choice is two-way (_which).
-    (Seed-7 development battery: a dead band fitted as a hardening whose base stiffness is a
-    thirtieth of its engaged one explained 60.5 % where the backlash explained 58.8 %;
-    Coulomb-dominated asymmetric frictions and offsets explained the same share within 0.5
-    point, either way round: while the motor moves the Coulomb part of an asymmetry is a
-    constant torque, and only its viscous part a FVm |qm'| differs; compared directly, not
-    nested, the share that differs went either way by chance.)"""
+    either order, the choice is two-way (_which): while the motor moves the Coulomb part of
+    an asymmetry is a constant torque, and only its viscous part a FVm |qm'| differs, so
+    compared directly, not nested, the share that differs goes either way by chance."""
     if not ranked or not ranked[0].significant:
         return ranked, ""
     best = ranked[0]
@@ -209,8 +203,7 @@ def _which(nom: Nominal, simpler: Candidate, richer: Candidate,
     both add (`richer` is then tested on top of `simpler` in the next round, at that round's
     level).
 
-    Why DECIDE = 0.05 and not the round's ALPHA / m (the reason written before the
-    batteries' counts were looked at): the round's level guards the family of "is anything
+    Why DECIDE = 0.05 and not the round's ALPHA / m: the round's level guards the family of "is anything
     there" tests, so that a log without an unmodelled effect names one with a chance under
     ALPHA. Once one of the two is significant at that level the guard is spent, and what is
     left is which of two descriptions of one torque the log supports: an offset named for an
@@ -297,11 +290,10 @@ def _pruned(nom: Nominal, causes: tuple[Candidate, ...],
     offset beside an asymmetric friction), fitted on top of all the others, must still
     predict the held-out rows significantly better than they do (the segment test without
     margin, at the level it was named at); if it does not, it is dropped, with its notes, and
-    the others are fitted again in order. (Seed-7 development battery: an asymmetric friction
-    hidden beside a backlash; the first round, which the backlash dominated, named its
-    Coulomb part an offset; its viscous part passed in the third round, on top of the
-    backlash, and the offset then added nothing to it. Every cause so checked, not only
-    these, dropped a true backlash under a spurious third-round hardening.) Likewise an
+    the others are fitted again in order: a first round dominated by another cause can name
+    an asymmetry's Coulomb part an offset before its viscous part passes on top of that
+    cause. Only such reducible causes are checked (checking every cause drops a true
+    backlash under a spurious later hardening). Likewise an
     asymmetric friction named beside the offset it reduces to, in either order, must add
     to all the others, the offset included (an offset of 182 N m beside a backlash, with the
     evidence in the motor equation alone: asymmetric friction first, then backlash, offset

@@ -1,14 +1,12 @@
-"""A second view of `torque_lag` in a band that reaches the excitation's top (issue 14).
+"""A second view of `torque_lag` in a band that reaches the excitation's top.
 
 **Why the lag alone.** A first-order lag T shifts the applied torque's phase by about w T:
 its evidence grows with frequency, by physics. The chooser's band (identification.defaults:
 decimated cutoff about 1.4 f1) keeps only the bottom of a sweep that runs far above the first
-mode, so on a low-f1 axis a lag shows in the few segments of the chirp's top part (seed-2026
-battery #60, soft family f1 = 4 Hz: 0.15 rad at the 5.4 Hz cutoff, 0.8 rad at the sweep's
-30 Hz; fitted at 4.58 ms for 4.39 and explaining 27 % of the held-out residual, with t = 3.07
-against the bar 4.23). The other effects act at low speed, small deflection or at the mode,
-which the chooser's band holds; moving the whole diagnosis to the wide band was a wash
-(README, branch `wide8`).
+mode, so on a low-f1 axis a lag shows in the few segments of the chirp's top part (for a
+5 ms lag on a 4 Hz axis swept to 30 Hz: 0.15 rad at the 5.4 Hz cutoff, 0.8 rad at the
+sweep's top). The other effects act at low speed, small deflection or at the mode, which the
+chooser's band holds, so only the lag gets the second band.
 
 **The band** is identification.band_choice.wide_settings's, as identify's band rule uses it:
 the chooser's Butterworth, the decimation lowered until the decimated cutoff reaches the
@@ -24,10 +22,8 @@ hypothesis: 2 min(p_chooser, p_wide) is a valid p-value for "no lag" whatever th
 dependence, and Holm's step-down over the round's m hypotheses runs on it as on any other,
 so on a log without an unmodelled effect the chance of naming one stays under ALPHA.
 Counting the second test as an (m + 1)-th hypothesis would do as well, but would raise every
-other effect's bar too (t 4.23 -> 4.28 in a first round of 8, and EMPS's offset, named second
-at t = 3.93 against 3.86, would fall under 3.97); split within the lag, only the lag's own
-tests pay for the second look: t > 4.50 in either band in a first round of 8 (4.23 without
-q, 4 effects). The split is
+other effect's bar too; split within the lag, only the lag's own tests pay for the second
+look: t > 4.50 in either band in a first round of 8 (4.23 without q, 4 effects). The split is
 fixed by the log's band alone (the lag is tested in two bands whenever the log has a wide
 band), never by what either test finds, so it holds even where the second view is not run.
 
@@ -44,9 +40,8 @@ discretisation of the lag's columns allows between the bands (`discretisation`):
 own statistics and the bands' numerics, no threshold set on a battery. (Root-sum-square
 ignores that both bands fit the same log, which makes the difference's true spread smaller:
 the agreement it asks is the lenient one; the level above does not rest on it.) The fold
-spreads alone measure noise only, and on a quiet log they are a few tenths of a % of T
-(independent balanced family, a 0.3 ms lag: 0.322 +- 0.0006 ms in the chooser's band, 0.310
-+- 0.0006 in the wide one), while the led columns x + T x' are 3-point differences whose
+spreads alone measure noise only, and on a quiet log they are a few tenths of a % of T,
+while the led columns x + T x' are 3-point differences whose
 gain sin(x)/x, x = w ts, falls with frequency (4 % at 28 Hz at the paper's rate): two bands
 that see the lag at different frequencies may then differ by that share of T.
 

@@ -24,9 +24,8 @@ NOMINAL_RIGID = RIGID[:3]   # J FV FS: the offset is the `offset` effect
 # second difference reads q'' + T^2 / 12 q(4) + ..., an error of 0.4 % of the spring torque at
 # 12 Hz at the paper's rate. A free column q(4) carries it, so that no effect is credited with it:
 # without it a dead band of a few tenths of a mrad "explains" half the residual of an exactly
-# linear axis (tests/indep_sim.py's wrist, frictionless, ideal sensors). (The same column in
-# the motor equation removed the error there too, but it took K 11 % off on a log with a
-# third of its rows clipped out: it is left out.) Numerics, not physics: never reported.
+# linear axis (tests/indep_sim.py's wrist, frictionless, ideal sensors). The motor equation
+# gets no such column: on a log with rows clipped out it trades with K. Numerics, not physics: never reported.
 NUMERICS = ("d4q",)
 
 
@@ -177,10 +176,7 @@ def nominal(log: Log, settings: FilterSettings, link_friction: bool = True) -> N
     if sig.has_link and ref[1] < COLLAPSED * ref[0]:
         # The link equation (homogeneous: 0 = ...) collapsed towards 0 = 0: the spring
         # carries next to none of the motor torque, its residual's spread measures no noise,
-        # and a weight of 1 / (that spread) pins every extended fit to the collapse (arm6
-        # axis4, spring damping 341 N m s/rad, no feedforward: K = 0.17, JL = 0, a spring
-        # torque of 4e-6 of the motor torque, link weight 60 times the motor's; the spring
-        # damping fitted D = 2.4 under those weights, D = 350 for 341 under equal ones).
+        # and a weight of 1 / (that spread) pins every extended fit to the collapse.
         # Both equations are in N m: equal weights.
         w = np.ones(len(y))
         X = solve(Wb, y, w)[0]
@@ -197,14 +193,13 @@ def _with_bias(sig: Signals, W: np.ndarray) -> np.ndarray:
 
     A constant torque on the motor (a current sensor's offset, a constant load: the `offset`
     effect) is no part of the nominal, so it stays out of its design and `offset` is tested
-    against it as any effect is. Left out of the estimate too, it went into the motor rows'
-    residual, and the block weights (1 / that residual's spread) gave the motor equation a
-    thirtieth of its weight: the homogeneous link equation (0 = ...), whose scale only K's
-    motor column sets, then shrank as a whole (bench prototype, no feedforward, offset alone
-    -84.7 N m: K, JL, FV, FS and P all 0.30 times their values, K = 6092 for 2.01e4; with the
-    weights of the clean log but no constant, the part of the offset that sign(qm') and the
-    mean deflection take still moved K by 15 %). With the constant beside them the parameters
-    and weights do not move with an offset at all (tests/test_diagnose_offset_nominal.py)."""
+    against it as any effect is. Left out of the estimate too, it would go into the motor
+    rows' residual, and the block weights (1 / that residual's spread) would give the motor
+    equation a fraction of its weight: the homogeneous link equation (0 = ...), whose scale
+    only K's motor column sets, then shrinks as a whole; even with the right weights, the
+    part of the offset that sign(qm') and the mean deflection take would move K. With the
+    constant beside them the parameters and weights do not move with an offset
+    (tests/test_diagnose_offset_nominal.py)."""
     return np.column_stack([W, stack(sig, np.ones(len(sig.qm)), None)])
 
 
@@ -225,8 +220,8 @@ def transmitted_rms(W: np.ndarray, X: np.ndarray, block: np.ndarray) -> float:
     second spring). The link equation is homogeneous (0 = ...), so its residual means
     something only against a torque of the same model: with a spring damping as large as
     the spring's stiffness times the mode, the damping carries most of that torque, and a
-    residual over the spring part alone read 185 % for a model that removed 88 % of the
-    held-out residual (prototype, D = 2.9e4 N m s/rad)."""
+    residual over the spring part alone would call worse a model that removes most of the
+    held-out residual."""
     motor, link = block == 0, block == 1
     both = np.any(W[motor] != 0, axis=0) & np.any(W[link] != 0, axis=0)
     return float(np.sqrt(np.mean((W[link][:, both] @ X[both]) ** 2)))

@@ -1,4 +1,4 @@
-"""The nominal model extended by several effects at once (issue 15 item 2): the design a
+"""The nominal model extended by several effects at once: the design a
 candidate is tested against once other causes are named, and the design of a model with all
 the named causes.
 
@@ -45,8 +45,8 @@ class Stacked:
 
 # The nominal columns of the last few states (tau, deflection, lead), most recent first, kept
 # on the Nominal (its `memo`): every trial of an effect searched on top of a state rebuilds its
-# design, and the columns a torque lag leads or a dead band rebuilds were decimated again for
-# each (8.6 of 30 s of `diagnose` on a 60 s log with a lag named). Keyed by identity, holding
+# design, and the columns a torque lag leads or a dead band rebuilds would be decimated again
+# for each, a large share of `diagnose`'s time. Keyed by identity, holding
 # the arrays: never a stale hit.
 _KEEP = 8
 

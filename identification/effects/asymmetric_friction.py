@@ -4,11 +4,9 @@
 The inverse view fits the direction-dependent part with its own viscous-to-Coulomb split: the
 extra torque a (theta FV_ref |qm'| + (1 - theta) FS_ref), theta searched in [0, 1]. The
 (1 + a s) law has theta = 1/2 with the true FVm, FSm; but the split of the motor friction
-into FVm and FSm is what a log identifies worst (independent simulator's soft family, clean logs of the seed-7 battery: FVm
-4.0-8.3 for 3.0, FSm 10.4-11.0 for 12, the error coming from the rows of the chirp near and
-above the mode), and the same error in the column's ratio leaves a part of the asymmetry that
-an offset takes up (seed-7 battery #84: with the nominal's ratio, what an offset adds to the
-asymmetry has t = 2.03; with the true ratio, -1.87). Searched, theta reads the split from the
+into FVm and FSm is what a log identifies worst (the error comes from the rows of the chirp
+near and above the mode), and the same error in the column's ratio leaves a part of the
+asymmetry that an offset takes up. Searched, theta reads the split from the
 direction-dependent torque itself. Its Coulomb part is a constant while the motor moves (the
 filtered velocity is never exactly 0), an offset: what the asymmetry adds to an offset is its
 viscous part alone (identification.discrepancy.inverse._which), and an offset adds to it only
@@ -52,8 +50,8 @@ def _magnitudes(rows: Rows) -> tuple[np.ndarray, np.ndarray]:
 def _share(fixed: dict, beside_offset: bool) -> float:
     # Beside an offset the Coulomb part is collinear with it while the motor moves (at
     # theta -> 0 exactly): the split between the two is then arbitrary, and a fit on top of
-    # an offset could hand the asymmetry any Coulomb part (seed-2026 battery #111: a replay
-    # of that fit diverged in 6 ms). There the asymmetry keeps the (1 + a s) law's tie to the
+    # an offset could hand the asymmetry any Coulomb part, and a replay of that fit can
+    # diverge. There the asymmetry keeps the (1 + a s) law's tie to the
     # viscous part, the reference's split, and the offset takes the free constant.
     return 0.5 if beside_offset else fixed.get("viscous_share", 0.5)
 
@@ -92,9 +90,7 @@ def params(values: dict, fixed: dict, rows: Rows) -> dict[str, float]:
 def check(v: dict, rows: Rows) -> str:
     """Each direction's Coulomb friction stays positive, FS (1 +- a_c) >= 0: a Coulomb part of
     the direction-dependent torque larger than the fitted Coulomb friction itself is not an
-    asymmetry of that friction but a constant torque beside it (an offset; seed-2026 battery
-    #111, an offset -2.0 N m beside an asymmetry -0.93 on arm6: fitted alone, coulomb_asymmetry
-    -1.46)."""
+    asymmetry of that friction but a constant torque beside it (an offset)."""
     if OFFSET in v:
         # beside an offset the constant splits between the two at will while the motor moves
         return ""

@@ -17,8 +17,7 @@ def design(rows: Rows, fixed: dict) -> Design:
 def grid(rows: Rows) -> np.ndarray:
     # Geometric grid over the log's own deflection range: the engagement may sit near the
     # encoder scale on a stiff joint, or near the largest deflection (a stiff second spring
-    # engaged by a few peaks: a 97-fold hardening engaged above 0.9 x the 99th percentile
-    # was missed by a grid that stopped there). The top is short of the largest deflection,
+    # engaged by a few peaks, which a grid stopping at a high percentile misses). The top is short of the largest deflection,
     # so that the column is never empty.
     sig = rows.sig
     d = np.abs((sig.qm - sig.q)[sig.sl])

@@ -19,8 +19,7 @@ The user's MJCF (axis convention of models/__init__.py) is the nominal:
    log's reference, gains and encoder resolutions) on the user's model, the corrected and
    the extended one: the torque error before and after, and the same on a `validate` log.
    The replay adds no torque noise: the log's noise realisation is unknown, and another one
-   would add its own closed-loop response (measured on the prototype's true model: 2.13 %
-   torque error with noise, 1.49 % without) to every model alike. What even a perfect model
+   would add its own closed-loop response to every model alike. What even a perfect model
    leaves, the closed-loop response to the log's own noise, is estimated from the log
    (`model_floor`: the replay's noise floor) and each error's excess over it reported.
 """
@@ -51,7 +50,7 @@ from jointbench.identification.log import Log
 from jointbench.identification.parameters import FRICTIONS, STIFFNESS_AND_INERTIAS
 from jointbench.models import find_axes, model_path, select_axis
 
-# The physical parameters of eq. (13) (identification.parameters.TWO_MASS), in the issue's order.
+# The physical parameters of eq. (13) (identification.parameters.TWO_MASS), in the report's order.
 COMPARED = STIFFNESS_AND_INERTIAS + FRICTIONS + GRAVITY
 SIGMAS = 3.0        # |model - data| beyond this many corrected sigmas ...
 FLOOR_PCT = 5.0     # ... and beyond this share of the data's value
@@ -209,8 +208,7 @@ def contradicted(e: ParameterError) -> bool:
     """The log rules the model's value out: |model - data| > SIGMAS sigma (every significant
     parameter, and those under the FLOOR_PCT floor that the log still rules out). The sigma
     holds the log's noise, not the identification's own model error, which shows once the
-    noise is small: arm6 axis5 with a 240 s log, true model: FSm -0.8 % (4.2 sigma) and,
-    through their correlation, FVm +5.6 % (3.1 sigma, named); at 60 s neither counts."""
+    noise is small (a long log of a true model can contradict its frictions)."""
     return abs(e.model - e.data) > SIGMAS * e.sigma
 
 
@@ -225,14 +223,11 @@ def refit(ident: Identification, model: dict[str, float],
     for least squares, C = sigma^2 (W^T W)^-1, exactly the regression with the held columns
     moved to the left-hand side (with the identification's instruments nearly so). Fewer free
     parameters: less of the log's noise, and none of the held ones' own small biases, reaches
-    them through their correlation (arm6 FVm alone with the others at the truth, seeds 1-32:
-    mean -0.2 % and -0.4 %, standard deviation 1.9 % and 3.2 % on axis1 and axis3, against
-    +1.2 % and +3.9 %, 2.9 % and 4.7 % free). The held values must be ones the log does not
+    them through their correlation. The held values must be ones the log does not
     contradict (the caller frees every `contradicted` one): a held value's error reaches the
     free ones through C_fh C_hh^-1. That is also why C is the white one: the corrected
-    (HAC) covariance does as well on average (1.9 %, 3.3 %) but couples the parameters far
-    more (arm6 axis1, K held 4 % off: FVm's error -16 % for the true +20 %, against +28 %
-    with the white C). {} when the identification is not the joint-motor model or nothing
+    (HAC) covariance couples the parameters far more, so a held value's error reaches the
+    free ones more. {} when the identification is not the joint-motor model or nothing
     is free."""
     ls = ident.ls
     names = [n for n in ls.names if n not in ls.unidentifiable]
@@ -251,9 +246,8 @@ def _refitted(errors: dict[str, ParameterError], values: dict[str, float],
               data: dict[str, float]) -> dict[str, ParameterError]:
     """`errors` with each refitted parameter's data value and error replaced. The sigma stays
     the free identification's, and so does the significance it decided: the refit's own
-    conditional sigma claims more than the log knows (arm6 FVm with the others at the truth,
-    32 seeds: conditional sigma about 1.6 % on axis1 and 2.7 % on axis3 against a spread of
-    1.9 % and 3.2 %; the free sigma, 2.2-3.0 % and 3.8-4.7 %, covers it)."""
+    conditional sigma is smaller than the refit's spread, and claims more than the log
+    knows; the free sigma covers that spread."""
     out = dict(errors)
     g = math.hypot(data.get("MX", 0.0), data.get("MY", 0.0))
     for n, v in values.items():

@@ -83,10 +83,7 @@ def plant_substeps(log: Log) -> int:
     `substeps`: its discretisation is its physics (the bench's one RK4 step a sample). Any
     other log (a measured axis, another simulator) comes from a continuous plant: steps no
     longer than the friction constraint's time constant, which a longer step does not resolve
-    (the soft constraint then chatters through the stick phases). Measured on the independent
-    simulator's soft family without feedforward, noise-free (40 s at the paper's rate, seed
-    7): the true axis replays its log at 10.9 % torque error with one step a sample, 0.56 % with 8;
-    the identified nominal at 10.7 % and 7.2 % with 2 steps or more."""
+    (the soft constraint then chatters through the stick phases)."""
     if _mujoco_plant(log):
         steps = log.meta_float(PLANT_STEPS_KEY)
         if steps is not None and steps >= 1:
@@ -221,15 +218,14 @@ def follows(tau: np.ndarray, replayed: np.ndarray) -> bool:
 
 
 def forward_scope(d: Diagnosis) -> ForwardScope:
-    """The segments where the forward view can judge the named causes (issue 14, item 4): all
+    """The segments where the forward view can judge the named causes: all
     of them unless a cause is periodic in the motor angle; then those where both replays keep
     its phase (phase_errors < PHASE_LIMIT), and none when they are fewer than MIN_JUDGED."""
     a, b = d.forward_nominal, d.forward_extended
     if a is not None and b is not None and not follows(d.log.tau_m, a.tau_m):
         # a nominal replay no closer to the logged torque than a zero torque follows nothing
-        # of the experiment: the extended one's error beside it judges nothing either (indep
-        # pendulum, a 2.9 ms lag and a 6.1 N m offset: 99.6 % -> 100 %, "worse", and the
-        # offset the inverse view found, 29.5 % -> 9.07 %, was not named)
+        # of the experiment: the extended one's error beside it judges nothing either, and
+        # would overrule a cause the inverse view found
         return ForwardScope(None, False, (
             f"the forward view cannot judge the named causes on this log: the nominal's replay "
             f"does not follow it (torque error {a.tau_rel_pct:.3g} %, not significantly under "

@@ -1,4 +1,4 @@
-"""Cases for checking `diagnose --model` against ground truth (issue 15's "wrong parameters"):
+"""Cases for checking `diagnose --model` against ground truth ("wrong parameters"):
 a copy of a shipped MJCF with some of K, Jm, JL, FS, FVm off by a known factor, the log of
 the true model, and the score of a diagnosis of that log against the copy.
 

@@ -12,9 +12,8 @@ gain (wrong model / corrected) cannot exceed err_wrong / floor.
    deviation of unit white noise sent through the same filter chain: the noise is assumed
    white and normal at the sample rate, as a current loop's is. The median ignores the rows
    near velocity reversals, where the Coulomb model of eq. (13) is wrong (there the residual
-   is 1.4-1.7 x the noise on the arm6 joints). On the 14 logs of the prototype and the arm6
-   joints (seeds 1, 2, 60 s) it gives 0.96-1.07 x the noise the log declares; the residual's
-   RMS would give 1.01-1.19 x;
+   is 1.4-1.7 x the noise on the arm6 joints). On the prototype and the arm6 joints it gives
+   0.96-1.07 x the noise the log declares; the residual's RMS would give 1.01-1.19 x;
 2. the floor: the corrected model replayed with white torque noise of that level (seeded) and
    without, their torque difference in % RMS of the logged torque, combined over FLOOR_SEEDS.
    On the same logs: 0.975-1.058 x the true model's replay error

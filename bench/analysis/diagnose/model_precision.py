@@ -9,12 +9,10 @@ as T, so the covariance shrinks as 1 / T and
 
     s(T) = s(T0) sqrt(T0 / T)   =>   T >= T0 (z s(T0) / POINTS)^2.
 
-Measured on the default chirp at four times the length (30 -> 120 s prototype, 60 -> 240 s
-arm6 axis3, seed 1): the paper's (white) sigma of every parameter shrinks 1.87-2.14x for the
-2x predicted; the autocorrelation-corrected one, itself estimated from the residual, less
-closely (1.3-3.3x), FVm's 2.04-2.32x (arm6 axis5: 3.90 % at 60 s, 1.82 % at
-240 s). The duration is therefore an estimate, good for FVm, the parameter 60 s logs leave
-coarse. Nothing here is tuned: POINTS is the issue's bar, CONFIDENCE the usual 95 %.
+The paper's (white) sigma follows this law closely; the autocorrelation-corrected one, itself
+estimated from the residual, less closely. The duration is therefore an estimate, good for
+FVm, the parameter 60 s logs leave coarse. Nothing here is tuned: POINTS is the bar asked
+of `diagnose --model`, CONFIDENCE the usual 95 %.
 """
 
 from __future__ import annotations

@@ -102,7 +102,7 @@ def report_markdown(d: Diagnosis, figures: dict[str, str]) -> str:
 
 
 def _causes_lines(d: Diagnosis) -> list[str]:
-    """Every named cause after the first, each with its own gain (issue 15 item 2)."""
+    """Every named cause after the first, each with its own gain."""
     if len(d.causes) < 2:
         return []
     L = ["Named causes, in order (each tested against the nominal extended by the ones "

@@ -91,7 +91,7 @@ def diagnose(log: Log, out_dir: Path | None = None, forward: bool = True,
     judged = _judged(d, forward, say)
     left_out: list[str] = []
     # Several causes whose extended model the forward view rejects: the later ones are left
-    # out in turn, not the whole answer (issue 15 item 2: each named cause keeps its own
+    # out in turn, not the whole answer (each named cause keeps its own
     # gain; a worse replay of the last one says nothing of the ones named before it).
     while _replay_rejects(judged) and len(judged.inverse.causes) > 1:
         left_out.append(f"{judged.inverse.causes[-1].effect} left out: {judged.overruled}")

@@ -62,7 +62,7 @@ class Diagnosis:
 
     @property
     def causes(self) -> tuple[Candidate, ...]:
-        """Every named cause in order (issue 15 item 2), each tested on top of the ones
+        """Every named cause in order, each tested on top of the ones
         before it; () when nothing is named."""
         return () if self.overruled else self.inverse.causes
 

@@ -1,25 +1,22 @@
-"""When `diagnose` must not name its best candidate (issue 16 item 4, issue 14 item 4): the
+"""When `diagnose` must not name its best candidate: the
 answer is then "inconclusive", with the reason.
 
 - **A nominal that cannot be this axis.** Jm, K, JL (or the rigid J) not positive: the fit
   describes no physical axis, so no effect measured against it means anything
   (identification.sanity.mislabel_reason names the likely mislabelling: q and q_m swapped, the
   torque's sign). Positions that look like degrees (identification.log.unit_warnings):
-  every parameter but the Coulomb frictions is then 180 / pi times off. (A check of the nominal's first mode sqrt(K (1/Jm + 1/JL)) / 2 pi against
-  the one measured on the log was tried and left out: with heavy spring damping the
-  measurement finds 23.9 Hz where the axis has 3.75 Hz, and a right nominal was overruled.)
+  every parameter but the Coulomb frictions is then 180 / pi times off. The nominal's first
+  mode sqrt(K (1/Jm + 1/JL)) / 2 pi is not checked against the one measured on the log: with
+  heavy spring damping the measurement can be far off, and a right nominal overruled.
 - **An extended model that is worse.** The named effect must improve the inverse view's
   error of its equation (after < before) and, when the log replays, must not make the
-  forward view's torque error worse: a forward gain under 1 overrules it (issue 14, item 4).
+  forward view's torque error worse: a forward gain under 1 overrules it.
   A replay is not noise-free (the logged torque's noise, which no model predicts; a replay
   that drifts off the logged motion, so that a ripple of a hundredth of a radian meets the
   motor angle out of phase), so the reason says whether the loss is beyond this log's spread
   (the segment test of the inverse view, identification.discrepancy.heldout, on
   log(sum e_ext^2 / sum e_nom^2), at its level ALPHA) or within it: the first says the fit
-  does not describe the experiment, the second that the replay does not confirm it. (Seed-7
-  development battery: an offset and a ripple on a noisy log at 23.5 % -> 23.9 %, within the
-  spread; a ripple of period 0.0105 rad, fitted at 1.86 N m for 2.08, at 36.1 % -> 48.1 % on
-  a replay that ran 0.0024 rad off the logged motor angle, beyond it.) An extended model that
+  does not describe the experiment, the second that the replay does not confirm it. An extended model that
   does not replay while the nominal does is worse too. A cause periodic in the motor angle
   (torque_ripple) is judged only on the segments where both replays keep its phase
   (bench.analysis.diagnose.forward.forward_scope); on fewer than a quarter of them the
@@ -99,7 +96,7 @@ def gain_reason(d: Diagnosis) -> str:
                     f"experiment's segments with t = {t:.3g}, p = {p:.2g} < {ALPHA:g}), "
                     f"{improves}: the fit does not describe the experiment")
         if not eb < ea:
-            # issue 14, item 4: no named effect whose extended model has a gain below 1, even
+            # no named effect whose extended model has a gain below 1, even
             # when the replay's noise could explain the loss: the replay does not confirm it
             return (f"{c.effect}'s extended model does not improve the forward view{where}: "
                     f"torque error {ea:.3g} % -> {eb:.3g} % ({gain}, under 1; "
