@@ -29,6 +29,7 @@ import datetime as _dt
 import json
 import os
 import platform
+import re
 import shlex
 import subprocess
 import sys
@@ -122,7 +123,7 @@ SECTIONS: tuple[Section, ...] = (
     Section("diagnose-speed", (_cmd("{py} {root}/benchmarks/diagnose_speed.py"),), minutes=3),
     Section("accuracy", (_cmd("{jb} simulate --seed 1 --out demo.csv --quiet"),),
             summary=_accuracy_table, minutes=1),
-    Section("arm", (_cmd("{py} -m pytest -q -p no:cacheprovider {root}/tests/test_arm.py", tail=3),),
+    Section("arm", (_cmd("{py} -m pytest -q -p no:cacheprovider {test:test_arm.py}", tail=3),),
             minutes=3, note="the test's bars; the figures are in the record"),
     Section("any-axis", (_cmd("{py} {root}/benchmarks/indep_accuracy.py"),), minutes=10),
     Section("diagnose", (_cmd("{jb} simulate --seed 1 --effect backlash=0.002 --out backlash.csv --quiet"),
@@ -139,8 +140,8 @@ SECTIONS: tuple[Section, ...] = (
                           "/emps_validation_pulses.csv --disturbance-column pulses_N "
                           "--disturbance-gain 35.15065188 --disturbance-at motor --out emps_diag")),
             minutes=1),
-    Section("faults", (_cmd("{py} -m pytest -q -p no:cacheprovider {root}/tests/test_faults_output.py "
-                            "{root}/tests/test_faults_input.py {root}/tests/test_faults_messages.py",
+    Section("faults", (_cmd("{py} -m pytest -q -p no:cacheprovider {test:test_faults_output.py} "
+                            "{test:test_faults_input.py} {test:test_faults_messages.py}",
                             tail=3),), minutes=3, note="the attack classes' tests"),
     Section("campaign", (_cmd("{py} {root}/benchmarks/campaign.py --out campaign_out"),), minutes=25),
     Section("refine", (_cmd("{jb} simulate --duration 60 --seed 1 --out proto.csv --quiet"),
@@ -214,7 +215,16 @@ def stamp(name: str, seconds: float) -> str:
             f"{now}, {machine()}; {seconds:.0f} s wall._")
 
 
+def _test_file(name: str) -> str:
+    """A test file by its basename, wherever tests/ keeps it (basenames are unique there)."""
+    found = sorted((ROOT / "tests").rglob(name))
+    if len(found) != 1:
+        raise RuntimeError(f"tests/**/{name}: {len(found)} files found, 1 expected")
+    return str(found[0])
+
+
 def _expand(text: str, tmp: Path) -> str:
+    text = re.sub(r"\{test:([\w.]+)\}", lambda m: shlex.quote(_test_file(m.group(1))), text)
     return text.format(py=shlex.quote(sys.executable), jb=shlex.quote(_jointbench()),
                        root=shlex.quote(str(ROOT)), tmp=shlex.quote(str(tmp)))
 
@@ -222,8 +232,9 @@ def _expand(text: str, tmp: Path) -> str:
 def _shown(c: Command) -> str:
     if c.shown:
         return c.shown
-    text = c.argv.replace("{py} {root}/", "python ").replace("{py} -m pytest -q -p no:cacheprovider",
-                                                              "pytest -q")
+    text = re.sub(r"\{test:([\w.]+)\}", r"\1", c.argv)
+    text = text.replace("{py} {root}/", "python ")
+    text = text.replace("{py} -m pytest -q -p no:cacheprovider", "pytest -q")
     return text.replace("{jb}", "jointbench").replace("{root}/", "").replace("{py}", "python")
 
 
@@ -238,8 +249,9 @@ def run_section(section: Section) -> str:
         for c in section.commands:
             argv = shlex.split(_expand(c.argv, tmp))
             print(f"[{section.name}] $ {_shown(c)}", file=sys.stderr, flush=True)
-            r = subprocess.run(argv, capture_output=True, text=True, cwd=tmp, env=env)
-            out = (r.stdout + r.stderr).rstrip("\n").replace(str(tmp) + os.sep, "")
+            r = subprocess.run(argv, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                               cwd=tmp, env=env)   # one stream: progress where it happened
+            out = r.stdout.rstrip("\n").replace(str(tmp) + os.sep, "")
             out = out.replace(str(ROOT) + os.sep, "")
             if r.returncode not in c.ok:
                 raise RuntimeError(f"{_shown(c)}: exit {r.returncode}\n{out[-2000:]}")
