@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test bench bench-peers bench-campaign bench-diagnose battery clean
+.PHONY: demo test bench bench-peers bench-campaign bench-diagnose battery validate clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -39,6 +39,11 @@ bench-diagnose: $(STAMP)
 # the detection curve in docs/figures/detection.png.
 battery: $(STAMP)
 	$(BIN)/python benchmarks/battery.py --jobs 2 --out battery_out
+
+# Regenerate docs/validation.md, every section (hours on 2 cores); one section:
+# `.venv/bin/python benchmarks/validate.py --sections speed` (`--list` shows them).
+validate: $(STAMP)
+	$(BIN)/python benchmarks/validate.py $(if $(SECTIONS),--sections $(SECTIONS))
 
 clean:
 	rm -rf $(VENV) demo_out battery_out build *.egg-info
