@@ -27,35 +27,29 @@ from typing import Callable, Sequence
 from jointbench.bench.options import key_numbers
 from jointbench.identification.effects import EFFECTS
 
-# Options and their defaults (docs/effects.md 4.2).
-OPTIONS: dict[str, dict[str, float]] = {"torque_ripple": {"period": 0.0, "phase": 0.0},
-                                        "hardening": {"deflection": 0.003}}
-NONNEGATIVE = ("backlash", "spring_damping", "torque_lag", "hardening", "link_coulomb")
-
 
 @dataclass(frozen=True)
 class Hidden:
-    """One hidden effect: its name (EFFECTS), strength and the options given."""
+    """One hidden effect: its name (a key of TERMS), strength and the options given."""
 
     name: str
     strength: float
     options: dict[str, float] = field(default_factory=dict)
 
     def __post_init__(self):
-        if self.name not in EFFECTS:
+        if self.name not in EFFECTS or self.name not in TERMS:
             raise ValueError(f"unknown effect '{self.name}'")
         if not math.isfinite(self.strength):
             raise ValueError(f"effect '{self.name}': strength must be finite")
-        if self.name in NONNEGATIVE and self.strength < 0:
-            raise ValueError(f"effect '{self.name}': strength must be >= 0")
-        if self.name == "asymmetric_friction" and not -1 < self.strength < 1:
-            raise ValueError("effect 'asymmetric_friction': strength must lie in (-1, 1)")
-        unknown = set(self.options) - set(OPTIONS.get(self.name, {}))
+        why = TERMS[self.name].refuses(self.strength)
+        if why:
+            raise ValueError(f"effect '{self.name}': strength must {why}")
+        unknown = set(self.options) - set(TERMS[self.name].options)
         if unknown:
             raise ValueError(f"effect '{self.name}' has no option {', '.join(sorted(unknown))}")
 
     def option(self, key: str) -> float:
-        return self.options.get(key, OPTIONS[self.name][key])
+        return self.options.get(key, TERMS[self.name].options[key])
 
 
 def parse_hidden(text: str) -> tuple[Hidden, ...]:
@@ -112,37 +106,73 @@ class Plant:
         return bool(self.backlash or self.damping or self.hardening)
 
 
+# (effect, joint stiffness K [N m/rad], gear ratio or None, whether the link has a mass) ->
+# the Plant fields the effect sets
+Fields = Callable[[Hidden, float, "float | None", bool], dict[str, float]]
+
+
+def _any(strength: float) -> str:
+    return ""
+
+
+def _nonnegative(strength: float) -> str:
+    return "" if strength >= 0 else "be >= 0"
+
+
+def _field(name: str) -> Fields:
+    return lambda e, K, gear_ratio, has_mass: {name: e.strength}
+
+
+def _hardening(e: Hidden, K: float, gear_ratio: float | None, has_mass: bool) -> dict:
+    return {"hardening": e.strength * K, "deflection": e.option("deflection")}
+
+
+def _ripple(e: Hidden, K: float, gear_ratio: float | None, has_mass: bool) -> dict:
+    period = e.option("period")
+    if period <= 0:
+        period = 2 * math.pi / (6 * gear_ratio) if gear_ratio else 0.02
+    return {"ripple": e.strength, "ripple_wavenumber": 2 * math.pi / period,
+            "ripple_phase": e.option("phase")}
+
+
+def _gravity(e: Hidden, K: float, gear_ratio: float | None, has_mass: bool) -> dict:
+    if not has_mass:
+        raise ValueError("effect 'gravity' needs a family with a link mass (MX or MY)")
+    return {"center_shift": e.strength}
+
+
+@dataclass(frozen=True)
+class Term:
+    """How this simulator hides one effect: the Plant fields it sets, its options with their
+    defaults and why a strength is refused ("" when allowed), docs/effects.md 4.2."""
+
+    fields: Fields
+    options: dict[str, float] = field(default_factory=dict)
+    refuses: Callable[[float], str] = _any
+
+
+# Every effect of docs/effects.md this simulator hides, by name.
+TERMS: dict[str, Term] = {
+    "gravity": Term(_gravity),
+    "link_coulomb": Term(_field("link_coulomb"), refuses=_nonnegative),
+    "torque_ripple": Term(_ripple, {"period": 0.0, "phase": 0.0}),
+    "backlash": Term(_field("backlash"), refuses=_nonnegative),
+    "spring_damping": Term(_field("damping"), refuses=_nonnegative),
+    "torque_lag": Term(_field("lag"), refuses=_nonnegative),
+    "hardening": Term(_hardening, {"deflection": 0.003}, _nonnegative),
+    "offset": Term(_field("offset")),
+    "asymmetric_friction": Term(_field("asymmetry"),
+                                refuses=lambda a: "" if -1 < a < 1 else "lie in (-1, 1)"),
+}
+
+
 def plant(effects: tuple[Hidden, ...], K: float, gear_ratio: float | None,
           has_mass: bool) -> Plant:
     """The stepper's parameters of `effects` on an axis of stiffness K [N m/rad]; ValueError
     for gravity on an axis without a link mass."""
     p: dict[str, float] = {}
     for e in effects:
-        s = e.strength
-        if e.name == "backlash":
-            p["backlash"] = s
-        elif e.name == "spring_damping":
-            p["damping"] = s
-        elif e.name == "torque_lag":
-            p["lag"] = s
-        elif e.name == "hardening":
-            p["hardening"], p["deflection"] = s * K, e.option("deflection")
-        elif e.name == "link_coulomb":
-            p["link_coulomb"] = s
-        elif e.name == "offset":
-            p["offset"] = s
-        elif e.name == "torque_ripple":
-            period = e.option("period")
-            if period <= 0:
-                period = 2 * math.pi / (6 * gear_ratio) if gear_ratio else 0.02
-            p.update(ripple=s, ripple_wavenumber=2 * math.pi / period,
-                     ripple_phase=e.option("phase"))
-        elif e.name == "asymmetric_friction":
-            p["asymmetry"] = s
-        elif e.name == "gravity":
-            if not has_mass:
-                raise ValueError("effect 'gravity' needs a family with a link mass (MX or MY)")
-            p["center_shift"] = s
+        p.update(TERMS[e.name].fields(e, K, gear_ratio, has_mass))
     return Plant(**p)
 
 

@@ -1,30 +1,81 @@
-"""The two halves of the effect registry (identification.effects, bench.effects) list the
-same names, in docs/effects.md's order, and every entry is complete."""
+"""The effects are found by discovery (jointbench.identification.effects.discover): every name
+has its two modules, its rows in docs/effects.md and its term in the independent simulator,
+and the two halves of the registry list the same names in the one order."""
 
 from __future__ import annotations
+
+import importlib
+import pkgutil
+import re
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+import indep_effects
+import jointbench.bench.effects as bench_effects
+import jointbench.identification.effects as identification_effects
 from jointbench.bench.effects import BENCH_EFFECTS, OPTIONS, HiddenEffect
 from jointbench.bench.sim.axes import RIGID_AXIS_REFUSES
 from jointbench.identification.discrepancy import RIGID_TESTS
 from jointbench.identification.effects import EFFECTS, NONE
 from jointbench.identification.parameters import PARAMETERS
 
-# docs/effects.md, in its order.
-CONTRACT = ("gravity", "link_coulomb", "torque_ripple", "backlash", "spring_damping",
-            "torque_lag", "hardening", "offset", "asymmetric_friction")
+NAMES = tuple(EFFECTS)     # the discovery's names, in its order
+DOCS = Path(__file__).resolve().parent.parent / "docs" / "effects.md"
 
 
-def test_both_halves_list_the_contract_names_in_order():
-    assert tuple(EFFECTS) == CONTRACT
-    assert tuple(BENCH_EFFECTS) == CONTRACT
-    assert tuple(OPTIONS) == CONTRACT
-    assert NONE == "none" and NONE not in EFFECTS
+def _modules_with_effect(package) -> set[str]:
+    return {m.name for m in pkgutil.iter_modules(package.__path__)
+            if hasattr(importlib.import_module(f"{package.__name__}.{m.name}"), "EFFECT")}
 
 
-@pytest.mark.parametrize("name", CONTRACT)
+def _docs_tables() -> list[list[str]]:
+    """The first column of every table of docs/effects.md whose rows name effects."""
+    tables: list[list[str]] = []
+    previous = False
+    for line in DOCS.read_text().splitlines():
+        row = re.match(r"\| `([a-z_0-9]+)` \|", line)
+        if row and not previous:
+            tables.append([])
+        if row:
+            tables[-1].append(row.group(1))
+        previous = bool(row)
+    return tables
+
+
+def test_the_registry_is_the_discovery():
+    assert NAMES and NONE == "none" and NONE not in EFFECTS
+    assert EFFECTS == identification_effects.discover()
+    assert tuple(BENCH_EFFECTS) == NAMES
+    assert tuple(OPTIONS) == NAMES
+    orders = [importlib.import_module(f"jointbench.identification.effects.{n}").ORDER
+              for n in NAMES]
+    assert orders == sorted(orders) and len(set(orders)) == len(orders)
+
+
+def test_every_effect_module_has_its_other_half():
+    assert _modules_with_effect(identification_effects) == set(NAMES)
+    assert _modules_with_effect(bench_effects) == set(NAMES)
+
+
+def test_every_effect_has_its_rows_in_docs_in_the_registry_order():
+    """docs/effects.md's tables of names (4.1 the names, 4.2 hiding them) list every effect,
+    in the discovery's order (4.1 ends with `none`)."""
+    tables = _docs_tables()
+    assert len(tables) >= 2
+    for names in tables:
+        assert tuple(n for n in names if n != NONE) == NAMES
+
+
+def test_every_effect_has_its_independent_simulator_term():
+    assert set(indep_effects.TERMS) == set(NAMES)
+    for name in NAMES:
+        # the same options and defaults as the bench's, written again there
+        assert indep_effects.TERMS[name].options == OPTIONS[name], name
+
+
+@pytest.mark.parametrize("name", NAMES)
 def test_identification_entry_is_complete(name):
     e = EFFECTS[name]
     assert e.name == name
@@ -44,7 +95,7 @@ def test_identification_entry_is_complete(name):
         assert (e.unit, e.unit_prismatic) == (p.unit, p.unit_prismatic)
 
 
-@pytest.mark.parametrize("name", CONTRACT)
+@pytest.mark.parametrize("name", NAMES)
 def test_bench_entry_is_complete(name):
     b = BENCH_EFFECTS[name]
     assert b.name == name

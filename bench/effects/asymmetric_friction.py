@@ -49,4 +49,4 @@ def draw(u: Uniform, sign: float, tau_max: float, f1_hz: float, K: float):
 
 
 EFFECT = BenchEffect("asymmetric_friction", draw, check=check, extend=extend, loop=loop,
-                     numeric=NUMERIC, from_numeric=from_numeric)
+                     numeric=NUMERIC, from_numeric=from_numeric, largest=0.95)

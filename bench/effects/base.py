@@ -46,7 +46,9 @@ class BenchEffect:
     - `numeric`, `from_numeric(values, axis)`: the custom numeric `{axis}_{numeric}` an
       extended MJCF carries it in, read back as a loop term;
     - `draw(uniform, sign, tau_max, f1_hz, K)`: a battery strength and options for an axis
-      with this torque limit, first mode and stiffness.
+      with this torque limit, first mode and stiffness; `largest`: the largest strength
+      magnitude the battery's search for a visibility tries (an effect bounded by its
+      definition stays inside its bounds).
     """
 
     name: str
@@ -59,3 +61,4 @@ class BenchEffect:
     loop: LoopTerm | None = None
     numeric: str = ""
     from_numeric: Callable[[list[float], str], "Term | None"] | None = None
+    largest: float = math.inf

@@ -1,19 +1,29 @@
-"""The bench half of every effect, by name, in docs/effects.md's order (the order of
-jointbench.identification.effects.EFFECTS; tests/test_effect_registry.py checks both)."""
+"""The bench half of every effect, by name, in the order of
+jointbench.identification.effects.EFFECTS: the module `bench/effects/NAME.py` of each effect
+the identification half discovers (tests/test_effect_registry.py checks that no bench module
+is left without one)."""
 
 from __future__ import annotations
 
-from jointbench.bench.effects.asymmetric_friction import EFFECT as ASYMMETRIC_FRICTION
-from jointbench.bench.effects.backlash import EFFECT as BACKLASH
-from jointbench.bench.effects.gravity import EFFECT as GRAVITY
-from jointbench.bench.effects.hardening import EFFECT as HARDENING
-from jointbench.bench.effects.link_coulomb import EFFECT as LINK_COULOMB
-from jointbench.bench.effects.offset import EFFECT as OFFSET
-from jointbench.bench.effects.spring_damping import EFFECT as SPRING_DAMPING
-from jointbench.bench.effects.torque_lag import EFFECT as TORQUE_LAG
-from jointbench.bench.effects.torque_ripple import EFFECT as TORQUE_RIPPLE
-from jointbench.bench.effects.base import BenchEffect
+import importlib
 
-BENCH_EFFECTS: dict[str, BenchEffect] = {e.name: e for e in (
-    GRAVITY, LINK_COULOMB, TORQUE_RIPPLE, BACKLASH, SPRING_DAMPING, TORQUE_LAG, HARDENING,
-    OFFSET, ASYMMETRIC_FRICTION)}
+from jointbench.bench.effects.base import BenchEffect
+from jointbench.identification.effects import EFFECTS
+
+
+def bench_half(name: str) -> BenchEffect:
+    """The `EFFECT` of `bench/effects/{name}.py`; ImportError when the effect has none."""
+    try:
+        module = importlib.import_module(f"{__package__}.{name}")
+    except ModuleNotFoundError as e:
+        if e.name != f"{__package__}.{name}":
+            raise
+        raise ImportError(f"effect '{name}' has no bench half: bench/effects/{name}.py "
+                          "(docs/effects.md)") from None
+    effect = getattr(module, "EFFECT", None)
+    if not isinstance(effect, BenchEffect) or effect.name != name:
+        raise ImportError(f"{module.__file__}: EFFECT must be a BenchEffect named '{name}'")
+    return effect
+
+
+BENCH_EFFECTS: dict[str, BenchEffect] = {name: bench_half(name) for name in EFFECTS}

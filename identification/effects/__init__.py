@@ -1,22 +1,47 @@
-"""The unmodelled effects (docs/effects.md), identification half: one registry.
+"""The unmodelled effects (docs/effects.md), identification half: one registry, by discovery.
 
-`EFFECTS` maps each name, in docs/effects.md order, to its `Effect` (one module per effect): the
-strength parameter's name in `extended_parameters` and its unit, and the extended regression
-`diagnose`'s inverse view tests (identification.discrepancy). The bench half
-(jointbench.bench.effects) hides the same names in a simulation. To add an effect: one module
-here, one in bench/effects, and one entry in each registry.
+Every module of this package that defines `EFFECT` (an `Effect` named as the module) is an
+effect; its module constant `ORDER` places it in `EFFECTS`, the one order of the effects:
+docs/effects.md's tables, the candidates `diagnose` tests and reports, and the battery's
+labels follow it. The bench half (jointbench.bench.effects) finds each effect's MuJoCo half
+by the same name. Adding an effect is its module here, `bench/effects/NAME.py`, its term in
+the independent simulator and its rows in docs/effects.md (tests/test_effect_registry.py
+checks the four).
 """
 
 from __future__ import annotations
 
-from jointbench.identification.effects import (asymmetric_friction, backlash, gravity,
-                                               hardening, link_coulomb, offset, spring_damping,
-                                               torque_lag, torque_ripple)
+import importlib
+import pkgutil
+
 from jointbench.identification.effects.base import Effect, Rows, deadzone, sign0
 
-EFFECTS: dict[str, Effect] = {m.EFFECT.name: m.EFFECT for m in (
-    gravity, link_coulomb, torque_ripple, backlash, spring_damping, torque_lag, hardening,
-    offset, asymmetric_friction)}
+
+def discover() -> dict[str, Effect]:
+    """Every effect module of this package, by name, sorted by its `ORDER`. ImportError for
+    an `EFFECT` named unlike its module, or without an `ORDER` shared with no other."""
+    found: list[tuple[float, str, Effect]] = []
+    for info in pkgutil.iter_modules(__path__):
+        module = importlib.import_module(f"{__name__}.{info.name}")
+        effect = getattr(module, "EFFECT", None)
+        if effect is None:
+            continue
+        if not isinstance(effect, Effect) or effect.name != info.name:
+            raise ImportError(f"{module.__file__}: EFFECT must be an Effect named "
+                              f"'{info.name}'")
+        order = getattr(module, "ORDER", None)
+        if not isinstance(order, (int, float)):
+            raise ImportError(f"{module.__file__}: the effect needs a number ORDER, its "
+                              "place in the list of effects")
+        found.append((order, info.name, effect))
+    orders = [o for o, _, _ in found]
+    twice = sorted({n for o, n, _ in found if orders.count(o) > 1})
+    if twice:
+        raise ImportError(f"effects {', '.join(twice)} share an ORDER")
+    return {name: effect for _, name, effect in sorted(found)}
+
+
+EFFECTS: dict[str, Effect] = discover()
 NONE = "none"
 
-__all__ = ["EFFECTS", "NONE", "Effect", "Rows", "deadzone", "sign0"]
+__all__ = ["EFFECTS", "NONE", "Effect", "Rows", "deadzone", "discover", "sign0"]

@@ -21,6 +21,8 @@ import numpy as np
 from jointbench.identification.effects.base import Design, Effect, Rows, sign0
 from jointbench.identification.effects.offset import COLUMN as OFFSET
 
+ORDER = 90
+
 # The viscous part's share theta of the direction-dependent torque (scaled by the reference's
 # FV_ref, FS_ref): 0 a constant while moving, 1/2 the reference's own split, 1 viscous alone;
 # the viscous-to-Coulomb ratio relative to the reference's, theta / (1 - theta), is 0, 1/8,

@@ -6,6 +6,8 @@ import numpy as np
 
 from jointbench.identification.effects.base import Design, Effect, Rows, deadzone
 
+ORDER = 40
+
 
 def design(rows: Rows, fixed: dict) -> Design:
     sig, b = rows.sig, fixed["backlash_rad"]

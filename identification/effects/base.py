@@ -69,6 +69,10 @@ class Effect:
     # named over that one only when what it adds to it is significant held out
     # (identification.discrepancy.inverse). "" for none.
     reduces_to: str = ""
+    # For a torque periodic in the motor angle, the parameter holding its period [rad]: the
+    # forward view judges it only where a replay keeps its phase
+    # (bench.analysis.diagnose.forward). "" for none.
+    period: str = ""
 
     def unit_for(self, prismatic: bool) -> str:
         return self.unit_prismatic if prismatic else self.unit

@@ -7,6 +7,8 @@ import numpy as np
 
 from jointbench.identification.effects.base import Design, Effect, Rows
 
+ORDER = 10
+
 
 def design(rows: Rows, fixed: dict) -> Design:
     sig = rows.sig

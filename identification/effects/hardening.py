@@ -7,6 +7,8 @@ import numpy as np
 
 from jointbench.identification.effects.base import Design, Effect, Rows, deadzone, hat
 
+ORDER = 70
+
 
 def design(rows: Rows, fixed: dict) -> Design:
     sig = rows.sig

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from jointbench.identification.effects.base import Design, Effect, Rows, column_value, sign0
 
+ORDER = 20
+
 
 def design(rows: Rows, fixed: dict) -> Design:
     return rows.extend(("FS", None, sign0(rows.sig.qd)))

@@ -6,6 +6,8 @@ import numpy as np
 
 from jointbench.identification.effects.base import Design, Effect, Rows, column_value
 
+ORDER = 80
+
 COLUMN = "offset"     # its one column's name in an extended design
 
 

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from jointbench.identification.effects.base import Design, Effect, Rows, column_value
 
+ORDER = 50
+
 
 def design(rows: Rows, fixed: dict) -> Design:
     dd = rows.sig.qmd - rows.sig.qd

@@ -6,6 +6,8 @@ import numpy as np
 
 from jointbench.identification.effects.base import Design, Effect, Rows, searched_value
 
+ORDER = 60
+
 # scipy.signal (lfilter here, the filtering module for zoh_align) is imported by the functions
 # that run only in diagnose: the effect registry is loaded by every virtual experiment, whose
 # start-up should not pay scipy.signal's 0.8 s.

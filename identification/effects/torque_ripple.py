@@ -6,6 +6,8 @@ import numpy as np
 
 from jointbench.identification.effects.base import Design, Effect, Rows
 
+ORDER = 30
+
 
 def design(rows: Rows, fixed: dict) -> Design:
     ph = 2 * np.pi * rows.sig.qm / fixed["ripple_period_rad"]
@@ -31,4 +33,4 @@ EFFECT = Effect(
     "torque_ripple", "ripple_amplitude", "N m", "N",
     "torque ripple periodic in the motor angle (cogging, drive ripple)",
     needs_link=False, rigid_axis=True, block=0, k=3, design=design, params=params,
-    search="ripple_period_rad", grid=grid)
+    search="ripple_period_rad", grid=grid, period="ripple_period_rad")

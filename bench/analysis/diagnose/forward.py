@@ -31,6 +31,7 @@ from jointbench.bench.sim.replay import ReplayError, replay
 from jointbench.identification.discrepancy import SEGMENTS
 from jointbench.identification.discrepancy import nominal as nominal_rows, predict, with_parameters
 from jointbench.identification.discrepancy.heldout import ALPHA, segment_sums, segment_t
+from jointbench.identification.effects import EFFECTS
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.log import Log
 from jointbench.identification.log_schema import PLANT_INTEGRATOR_KEY, PLANT_STEPS_KEY
@@ -168,7 +169,6 @@ def add_forward_view(d: Diagnosis, say: Callable[[str], None],
 # Where the replay is farther off, the forward view cannot tell a right ripple from a wrong one.
 PHASE_LIMIT = math.sqrt(2.0 * math.log(2.0))   # rad
 MIN_JUDGED = SEGMENTS // 4   # segments the forward view must judge (else: it cannot judge)
-PERIODIC = {"torque_ripple": "ripple_period_rad"}   # effect -> its spatial period parameter
 
 
 @dataclasses.dataclass(frozen=True)
@@ -230,8 +230,8 @@ def forward_scope(d: Diagnosis) -> ForwardScope:
             f"the forward view cannot judge the named causes on this log: the nominal's replay "
             f"does not follow it (torque error {a.tau_rel_pct:.3g} %, not significantly under "
             f"a zero torque's 100 %); they are named on the inverse view alone"))
-    periods = [(c.effect, d.extended_parameters.get(PERIODIC[c.effect], 0.0))
-               for c in d.causes if c.effect in PERIODIC]
+    periods = [(c.effect, d.extended_parameters.get(EFFECTS[c.effect].period, 0.0))
+               for c in d.causes if EFFECTS[c.effect].period]
     periods = [(e, p) for e, p in periods if p > 0]
     if a is None or b is None or not periods:
         return ForwardScope(None, True, "")
