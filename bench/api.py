@@ -383,6 +383,9 @@ def diagnose(log: LogLike, forward: bool = True,
     return result if folder is None else result.write(folder, say)
 
 
+_FLOAT_SETTINGS = ("amplitude", "noise", "scatter", "wn", "rate")
+
+
 def campaign(model: str | os.PathLike = "prototype", joint: str | None = None, *,
              runs: int = 50, seed: int = 0, duration: float = 60.0,
              methods: Sequence[str | Callable[[Log], dict] | Method]
@@ -460,7 +463,11 @@ def campaign(model: str | os.PathLike = "prototype", joint: str | None = None, *
     if unknown:
         raise CampaignError(f"campaign: unknown setting(s) {', '.join(unknown)} "
                             f"(known: {', '.join(sorted(allowed))})")
-    base = RunSettings(model=str(model), joint=joint, duration=duration,
+    # floats as floats: the table's spec line (and so its resumption) must not depend on
+    # whether 10 or 10.0 was written
+    settings = {k: float(v) if k in _FLOAT_SETTINGS and v is not None else v
+                for k, v in settings.items()}
+    base = RunSettings(model=str(model), joint=joint, duration=float(duration),
                        id_models=tuple(id_models), **settings)
     name, values = sweep if sweep is not None else (None, ())
     kind = SWEEPABLE.get(name, float) if name is not None else float
