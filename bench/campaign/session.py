@@ -23,7 +23,7 @@ from jointbench.bench.campaign.spec import CampaignSpec
 from jointbench.bench.campaign.summary import summary_paths
 from jointbench.bench.campaign.table import CampaignTable
 from jointbench.bench.output import check_file, write_text
-from jointbench.bench.results import CampaignReport
+from jointbench.bench.results.campaign import CampaignReport
 from jointbench.identification.defaults import PAPER_RATE
 from jointbench.identification.output import finite_json
 
