@@ -10,6 +10,8 @@ comparing.
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import math
 from pathlib import Path
@@ -45,13 +47,17 @@ def _cli(capsys, *argv: str) -> tuple[int, str]:
 
 @pytest.fixture(scope="module")
 def logs(tmp_path_factory) -> tuple[str, str]:
-    """Two 20 s prototype logs (seeds 1 and 2), written by `jointbench simulate`."""
+    """Two 20 s prototype logs (seeds 1 and 2), written by `jointbench simulate --json`,
+    whose answers validate against the simulate schema."""
     folder = tmp_path_factory.mktemp("logs")
     paths = []
     for seed in (1, 2):
         path = str(folder / f"p{seed}.csv")
-        assert main(["simulate", "--duration", "20", "--seed", str(seed), "--quiet",
-                     "--out", path]) == 0
+        printed = io.StringIO()
+        with contextlib.redirect_stdout(printed):
+            assert main(["simulate", "--duration", "20", "--seed", str(seed), "--quiet",
+                         "--json", "--out", path]) == 0
+        _valid(json.loads(printed.getvalue()), "simulate")
         paths.append(path)
     return paths[0], paths[1]
 
@@ -183,3 +189,29 @@ def test_import_json_is_the_api_s(logs, tmp_path, capsys):
     assert {**cli, "out": None} == {**api, "out": None}
     _valid(cli, "import")
     _valid(api, "import")
+
+
+def test_survey_json_and_text_are_the_api_s(tmp_path, capsys):
+    """One axis of the arm, 10 s: the same answer but for wall times and the folder."""
+    args = ["survey", "--joints", "axis1", "--duration", "10", "--workers", "1", "--quiet"]
+    status, out = _cli(capsys, *args, "--json", "--out", str(tmp_path / "cli"))
+    assert status == 0
+    cli = json.loads(out)
+    sv = jb.survey("arm6", ["axis1"], duration=10, workers=1, out=tmp_path / "api")
+    api = _roundtrip(sv.to_json())
+    _valid(cli, "survey")
+    _valid(api, "survey")
+
+    def same(doc):
+        doc = {k: v for k, v in doc.items() if k not in ("wall_s", "out", "files")}
+        doc["joints"] = [{k: v for k, v in j.items() if k not in ("sim_s", "identify_s", "log")}
+                         for j in doc["joints"]]
+        return doc
+    assert same(cli) == same(api)
+    assert api["out"] == str(tmp_path / "api") and (tmp_path / "api" / "survey.csv").exists()
+    # the text is the result's table but for the wall-time line and the folder's name
+    status, text = _cli(capsys, *args, "--out", str(tmp_path / "api2"))
+    table = sv.table().replace(str(tmp_path / "api"), str(tmp_path / "api2"))
+    keep = [line for line in table.splitlines() if not line.startswith("wall time")]
+    assert [line for line in text.splitlines() if not line.startswith("wall time")] == keep
+
