@@ -181,6 +181,7 @@ def identify(log: LogLike, model: str = "auto", settings: FilterSettings | None 
     for text in sanity_warnings(result, loaded):   # mislabelled, too short, explains too little
         say(text)
         warnings.append(text)
+    warnings += [w for w in result.warnings if w not in warnings]   # the band's checks
     return Fit(loaded, result, loaded.truth() or None, tuple(flags), tuple(warnings),
                source=source, refined=refined, debiased=debiased, validation=validation,
                forward=forward, validate_source=None if validate is None else (

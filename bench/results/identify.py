@@ -78,7 +78,8 @@ class Fit:
         The estimate flags (identification.checks.estimate_flags).
     warnings : tuple of str
         Warnings on the log and the estimate: units, clipped torque, sanity (a mislabelled
-        or too short log, a model that explains too little).
+        or too short log, a model that explains too little), the band against the first
+        mode; the JSON's `warnings`.
     source : str
         The name of the log in the table's first line (the file name as given).
     refined : RefineResult or None
