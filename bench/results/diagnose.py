@@ -59,8 +59,7 @@ class DiagnosisResult:
     @property
     def named_cause(self) -> str:
         """The effect named as the cause ("none" when the nominal model explains the log)."""
-        d = self.diagnosis
-        return d.named_cause if isinstance(d, Diagnosis) else ", ".join(d.named_causes) or "none"
+        return self.diagnosis.named_cause
 
     @property
     def files(self) -> tuple[str, ...]:
