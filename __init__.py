@@ -11,6 +11,7 @@ stays light:
     import jointbench as jb
     log = jb.simulate("prototype", seed=1)
     fit = jb.identify(log)                 # fit.table(), fit.to_json(), fit.plot()
+    fit.parameters["K"]                    # Estimate(value, sigma, sigma_hac, unit)
     d = jb.diagnose(log); d.write("out/")
 """
 
@@ -18,8 +19,9 @@ from __future__ import annotations
 
 __version__ = "0.2.0"
 
-_API = ("simulate", "identify", "diagnose", "read_log", "write_log", "Log", "Fit",
-        "DiagnosisResult", "campaign", "CampaignReport")
+_API = ("simulate", "identify", "diagnose", "campaign", "survey", "import_log", "read_log",
+        "write_log", "Log", "Fit", "Estimate", "DiagnosisResult", "CampaignReport",
+        "SurveyResult", "ImportReport")
 __all__ = ["__version__", *_API]
 
 

@@ -347,8 +347,25 @@ def read_lines(path: str | os.PathLike, parse: Callable[[Iterator[tuple[int, str
 
 
 def read_log(path: str | os.PathLike, max_bytes: int | None = None) -> Log:
-    """Read a log file, streaming it line by line. Raises LogError (file, line, column, what)
-    on any malformed input, and for files over `max_bytes` (default `max_log_bytes()`)."""
+    """Read a log file (docs/log-format.md), streaming it line by line.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The log file.
+    max_bytes : int, optional
+        The largest file read (default `max_log_bytes()`).
+
+    Returns
+    -------
+    Log
+        The validated log.
+
+    Raises
+    ------
+    LogError
+        Any malformed input (naming the file, line and column), or a file over `max_bytes`.
+    """
     return read_lines(path, _parse_lines, max_bytes)
 
 

@@ -61,13 +61,29 @@ class LogError(ValueError):
 
 @dataclass(frozen=True)
 class Log:
-    """A sampled experiment (docs/log-format.md).
+    """A sampled experiment (docs/log-format.md). Prismatic axes use m and N in place of rad
+    and N m.
 
-    Attributes are arrays of equal length: `t` [s], `q_m` motor position referred to the joint
-    side [rad], `tau_m` motor torque referred to the joint side [N m], optional `q` link
-    position [rad] and `q_ref` the tracked reference [rad]. `extra` holds any other column,
-    `meta` the metadata as written (strings), `meta_lines` the line of each metadata key in
-    the file it was read from (for error messages). Prismatic axes use m and N.
+    Parameters
+    ----------
+    t : ndarray
+        Time [s].
+    q_m : ndarray
+        Motor position referred to the joint side [rad].
+    tau_m : ndarray
+        Motor torque referred to the joint side [N m].
+    q : ndarray, optional
+        Link position [rad].
+    q_ref : ndarray, optional
+        The tracked reference [rad].
+    extra : dict of str to ndarray
+        Any other column, by name.
+    meta : dict of str to str
+        The metadata as written.
+    path : str, optional
+        The file it was read from.
+    meta_lines : dict of str to int
+        The line of each metadata key in that file (for error messages).
     """
 
     t: np.ndarray
@@ -112,33 +128,87 @@ class Log:
 
     @property
     def gravity(self) -> float:
+        """Gravity acceleration [m/s^2] (metadata `gravity`, default 9.81)."""
         value = self.meta_float("gravity")
         return 9.81 if value is None else value
 
     @property
     def prismatic(self) -> bool:
+        """A linear axis (metadata `axis: prismatic`): positions in m, forces in N."""
         return self.meta.get("axis", "").strip().lower().startswith("prismatic")
 
     def meta_float(self, key: str) -> float | None:
-        """Metadata `key` as a float, None when absent; LogError when not a number."""
+        """Metadata `key` as a float.
+
+        Parameters
+        ----------
+        key : str
+            The metadata key.
+
+        Returns
+        -------
+        float or None
+            Its value; None when absent.
+
+        Raises
+        ------
+        LogError
+            The value is not a number (names the file and line).
+        """
         if key not in self.meta:
             return None
         return meta_number(key, self.meta[key], self.path, self.meta_lines.get(key))
 
     def plant_timeconst(self) -> float | None:
-        """The simulated plant's friction time constant [s] (PLANT_TIMECONST_KEY, MuJoCo's
-        solreffriction), None when the log has none or gives MuJoCo's direct form (<= 0);
-        LogError (file, line) when it is not a number."""
+        """The simulated plant's friction time constant (PLANT_TIMECONST_KEY, MuJoCo's
+        solreffriction).
+
+        Returns
+        -------
+        float or None
+            The time constant [s]; None when the log has none or gives MuJoCo's direct form
+            (<= 0).
+
+        Raises
+        ------
+        LogError
+            The value is not a number (names the file and line).
+        """
         value = self.meta_float(PLANT_TIMECONST_KEY)
         return value if value is not None and value > 0 else None
 
     def meta_bool(self, key: str, default: bool) -> bool:
+        """Metadata `key` as a boolean.
+
+        Parameters
+        ----------
+        key : str
+            The metadata key.
+        default : bool
+            The value when the key is absent.
+
+        Returns
+        -------
+        bool
+            true/false (or 1/0, yes/no) as written.
+
+        Raises
+        ------
+        LogError
+            The value is not a boolean (names the file and line).
+        """
         if key not in self.meta:
             return default
         return meta_boolean(key, self.meta[key], self.path, self.meta_lines.get(key))
 
     def truth(self) -> dict[str, float]:
-        """Ground truth carried by a virtual log: metadata keys `truth_<name>` as floats."""
+        """Ground truth carried by a virtual log.
+
+        Returns
+        -------
+        dict of str to float
+            The metadata keys `truth_<name>` as {name: value}; finite numbers only.
+        """
         out = {}
         for key, value in self.meta.items():
             # descriptive truth (an effect name) is not a number; nan or inf is no truth
@@ -147,7 +217,13 @@ class Log:
         return out
 
     def columns(self) -> dict[str, np.ndarray]:
-        """All columns in file order: required, optional present, then extras."""
+        """All columns in file order.
+
+        Returns
+        -------
+        dict of str to ndarray
+            The required columns, the optional ones present, then the extras.
+        """
         cols = {"t": self.t, "q_m": self.q_m}
         if self.q is not None:
             cols["q"] = self.q

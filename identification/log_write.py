@@ -103,5 +103,13 @@ def save_figure_atomic(fig: matplotlib.figure.Figure, path: str | os.PathLike[st
 
 
 def write_log(log: Log, path: str | os.PathLike) -> None:
-    """Write `log` to `path` atomically."""
+    """Write a log as the CSV of docs/log-format.md, atomically.
+
+    Parameters
+    ----------
+    log : Log
+        The log.
+    path : str or PathLike
+        The file (replaced only once complete).
+    """
     atomic_write_text(path, format_log(log))

@@ -34,7 +34,7 @@ SNIPPET = textwrap.dedent("""
     d = d.write("out/")
     jb.write_log(log, "copy.csv")
     again = jb.read_log("copy.csv")
-    print(json.dumps({"K": fit.parameters["K"], "K_truth": log.truth()["K"],
+    print(json.dumps({"K": fit.parameters["K"].value, "K_truth": log.truth()["K"],
                       "json": json.loads(text), "table": table, "axes": len(fig.axes),
                       "named_cause": d.named_cause, "files": list(d.files),
                       "samples": [len(log), len(again)], "version": jb.__version__,

@@ -17,7 +17,9 @@ LAYERS = (("jointbench.identification", "jointbench.models"),
           ("jointbench.bench.effects", "jointbench.bench.options", "jointbench.bench.output"),
           ("jointbench.bench.sim",),
           ("jointbench.bench.analysis", "jointbench.bench.campaign", "jointbench.bench.present",
-           "jointbench.bench.demo", "jointbench.bench.api"),
+           "jointbench.bench.demo", "jointbench.bench.results", "jointbench.bench.api_log",
+           "jointbench.bench.api_identify", "jointbench.bench.api_diagnose",
+           "jointbench.bench.api_campaign", "jointbench.bench.api"),
           ("jointbench.bench.cli",))
 
 

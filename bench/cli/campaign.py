@@ -26,7 +26,7 @@ from jointbench.bench.campaign.settings import SWEEPABLE, CampaignError, RunSett
 from jointbench.bench.cli.common import EXIT_GATES_FAILED, positive
 
 # Imported by the dispatcher before it traps signals (see bench/cli/__init__.py).
-LIBRARY = ("jointbench.bench.campaign.run", "jointbench.bench.campaign.summary",
+LIBRARY = ("jointbench.bench.api", "jointbench.bench.campaign.run", "jointbench.bench.campaign.summary",
            "jointbench.bench.campaign.table", "jointbench.bench.campaign.gates",
            "jointbench.bench.campaign.junit", "jointbench.bench.effects")
 
@@ -111,40 +111,6 @@ def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
     return p
 
 
-def plugins(args: argparse.Namespace, spec):
-    """(spec with the methods, methods, gates) of --method, --require and --junit, all checked
-    before any run. Raises CampaignError (bad input)."""
-    from jointbench.bench.campaign.compare import entries
-    from jointbench.bench.campaign.gates import check_gates, parse_gates
-    from jointbench.bench.campaign.junit import check_junit_path
-    from jointbench.bench.campaign.methods import check_methods, parse_method, with_methods
-
-    methods = check_methods([parse_method(text) for text in args.method or []])
-    spec = with_methods(spec, methods)
-    gates = parse_gates(args.require)
-    check_gates(gates, entries(spec))
-    if args.junit:
-        if not gates:
-            raise CampaignError("--junit needs --require: the report holds the gates")
-        if Path(args.junit).resolve() == Path(args.out).resolve():
-            raise CampaignError(f"--junit {args.junit}: the same file as --out")
-        check_junit_path(Path(args.junit))
-    return spec, methods, gates
-
-
-def check_gates_after(args: argparse.Namespace, gates, summary: dict, wall_s: float) -> list:
-    """The gates on the campaign's comparison, into summary["gates"] and the JUnit report."""
-    from jointbench.bench.campaign.gates import evaluate
-    from jointbench.bench.campaign.junit import write_junit
-
-    results = evaluate(gates, summary["comparison"])
-    summary["gates"] = [r.as_dict() for r in results]
-    if args.junit:
-        write_junit(Path(args.junit), results, {"table": str(args.out), "runs": str(
-            summary["runs"]), "spec": json.dumps(summary["spec"], sort_keys=True)}, wall_s)
-    return results
-
-
 def spec_arguments(args: argparse.Namespace, parse_effect: Callable[[str], object]) -> dict:
     """The CampaignSpec keyword arguments (base, runs, seed, sweep, values) of the command line.
     `parse_effect` (bench.effects', passed in: it imports MuJoCo) checks --effect. Raises
@@ -175,98 +141,49 @@ def spec_arguments(args: argparse.Namespace, parse_effect: Callable[[str], objec
     return dict(base=base, runs=args.runs, seed=args.seed, sweep=sweep, values=values)
 
 
-def _check_outputs(spec, out: Path, workers: int | None) -> None:
-    """Before any run: the table and its summaries can be written (bench.output: the table
-    is a campaign table or absent, the summaries ours or absent), and the runs fit in memory
-    (bench.cli.resources; one run per local worker)."""
-    import os
+def _progress(args: argparse.Namespace, out: Path):
+    """The campaign's start line and progress bar on stderr (none with --quiet)."""
+    from jointbench.bench.campaign.run import Progress
 
-    from jointbench.bench.campaign.summary import summary_paths
-    from jointbench.bench.cli.resources import check_memory
-    from jointbench.bench.output import check_file
-    from jointbench.identification.defaults import PAPER_RATE
-
-    for path in (out, *summary_paths(out)):
-        check_file(path)
-    longest = max(spec.settings_at(p).duration for p in range(max(1, len(spec.values))))
-    check_memory(longest * PAPER_RATE, f"--duration {longest:g} s",
-                 copies=workers or os.cpu_count() or 1)
-
-
-def _timing_line(result, timing: dict, engine: str) -> str:
-    """One line: runs done, wall time, engine, throughput and per-run costs when measured."""
-    return (f"{result.new} runs in {result.wall_s:.1f} s on {engine}"
-            + (f" ({timing['runs_per_s']:.2f} runs/s; per run: simulation "
-               f"{timing['mean_simulation_s']:.3f} s, identification "
-               f"{1e3 * timing['mean_identification_s']:.1f} ms, all models)"
-               if timing["runs_per_s"] and timing["mean_simulation_s"]
-               and timing["mean_identification_s"] else "")
-            + (f"; {result.resumed} rows resumed from the table" if result.resumed else ""))
+    def start(total: int, done: int, engine: str):
+        if args.quiet:
+            return None
+        print(f"campaign: {total} runs ({done} already in {out}) on {engine}",
+              file=sys.stderr)
+        return Progress(total, done, enabled=sys.stderr.isatty()).update
+    return start
 
 
 def run(args: argparse.Namespace) -> int:
-    """`jointbench campaign`: run (or resume) the campaign, write the table and its summaries,
-    print them. Exit status 3 when an accuracy gate failed, else 1 when no run succeeded."""
-    import numpy as np
-
-    from jointbench.bench.campaign.executors import make_executor
-    from jointbench.bench.campaign.gates import gates_text
-    from jointbench.bench.campaign.run import Progress, run_campaign
-    from jointbench.bench.campaign.spec import CampaignSpec
-    from jointbench.bench.campaign.summary import summary_paths, summary_text
-    from jointbench.bench.campaign.table import CampaignTable
+    """Parse, `jointbench.campaign` (run or resume, the table and its summaries written),
+    print. Exit status 3 when an accuracy gate failed, else 1 when no run succeeded."""
+    from jointbench.bench.api import campaign
+    from jointbench.bench.campaign.summary import summary_paths
     from jointbench.bench.effects import parse_effects
-    from jointbench.bench.output import write_text
-    from jointbench.identification.output import finite_json
 
-    spec, methods, gates = plugins(args, CampaignSpec(**spec_arguments(args, parse_effects)))
-    out = Path(args.out)
-    if out.suffix.lower() == ".xml" or (Path(str(args.model)).exists()
-                                        and out.resolve() == Path(str(args.model)).resolve()):
-        raise CampaignError(f"--out {out}: refusing to overwrite the model file")
-    _check_outputs(spec, out, args.workers)
-    executor = make_executor(args.workers, args.scheduler)
-    try:
-        tab_rows = 0
-        if out.exists():
-            tab = CampaignTable(out, spec)  # validates before any work
-            tab_rows = len(tab.rows)
-            tab.close()
-        bar = Progress(spec.total, tab_rows, enabled=not args.quiet and sys.stderr.isatty())
-        if not args.quiet:
-            print(f"campaign: {spec.total} runs ({tab_rows} already in {out}) on "
-                  f"{executor.description}", file=sys.stderr)
-        result = run_campaign(spec, out, executor, progress=bar.update, methods=methods,
-                              method_timeout=args.method_timeout)
-    finally:
-        executor.close()
-    summary = dict(result.summary)
-    summary["table"] = str(out)
-    summary["timing"] = {
-        "engine": executor.description, "workers": executor.workers,
-        "runs_this_invocation": result.new, "resumed_rows": result.resumed,
-        "wall_s": result.wall_s,
-        "runs_per_s": result.new / result.wall_s if result.wall_s > 0 and result.new else None,
-        "mean_simulation_s": float(np.mean(result.sim_s)) if result.sim_s else None,
-        "mean_identification_s": float(np.mean(result.identify_s)) if result.identify_s else None,
-    }
-    results = check_gates_after(args, gates, summary, result.wall_s) if gates else []
-    text = summary_text(summary, True if gates else None)
-    if results:
-        text += "\n\n" + gates_text(results)
-    json_path, md_path = summary_paths(out)
-    write_text(json_path, json.dumps(finite_json(summary), indent=1, allow_nan=False) + "\n")
-    timing = _timing_line(result, summary["timing"], executor.description)
-    write_text(md_path, f"# Campaign {out.name}\n\n{timing}\n\n```\n{text}\n```\n")
+    spec = spec_arguments(args, parse_effects)
+    base, out = spec["base"], Path(args.out)
+    report = campaign(
+        base.model, base.joint, runs=spec["runs"], seed=spec["seed"], duration=base.duration,
+        methods=args.method or [], method_timeout=args.method_timeout, require=args.require,
+        id_models=base.id_models,
+        sweep=(spec["sweep"], spec["values"]) if spec["sweep"] else None,
+        workers=args.workers, scheduler=args.scheduler, out=out, junit=args.junit,
+        progress=_progress(args, out), amplitude=base.amplitude, noise=base.noise,
+        motor_bits=base.motor_bits, link_bits=base.link_bits, scatter=base.scatter,
+        wn=base.wn, Nd=base.Nd, stencil=base.stencil, effect=base.effect,
+        debias=base.debias, rate=base.rate)
     if args.json:
-        print(json.dumps(finite_json(summary), allow_nan=False))
+        print(json.dumps(report.to_json(), allow_nan=False))
     else:
+        json_path, md_path = summary_paths(out)
         print(f"table: {out}; summary: {json_path}, {md_path}")
-        print(timing)
-        print(text)
-    failed = [r for r in results if not r.passed]
+        print(report.timing_line())
+        print(report.table())
+    failed = report.failed_gates
     if failed:
-        print(f"jointbench campaign: {len(failed)} of {len(results)} accuracy gates failed: "
-              + "; ".join(f"{r.name} ({r.message})" for r in failed), file=sys.stderr)
+        print(f"jointbench campaign: {len(failed)} of {len(report.gates)} accuracy gates "
+              "failed: " + "; ".join(f"{r.name} ({r.message})" for r in failed),
+              file=sys.stderr)
         return EXIT_GATES_FAILED
-    return 0 if summary["ok"] > 0 else 1
+    return 0 if report.summary["ok"] > 0 else 1

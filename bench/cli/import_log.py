@@ -8,12 +8,12 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from pathlib import Path
 
-from jointbench.bench.cli.common import UsageError, check_output_file, finite, positive
+from jointbench.bench.cli.common import UsageError, finite, positive
 
 # The library `run` imports, loaded by the dispatcher before it traps the signals.
-LIBRARY = ("jointbench.identification.log_import", "jointbench.identification.log")
+LIBRARY = ("jointbench.bench.api", "jointbench.identification.log_import",
+           "jointbench.identification.log")
 
 # Metadata options: option destination -> metadata key (docs/log-format.md section 1.3).
 META_OPTIONS = {"kp": "kp", "kv": "kv", "ki": "ki", "tau_max": "tau_max",
@@ -84,14 +84,11 @@ def _pairs(text: str | None, flag: str, form: str) -> dict[str, str]:
     return out
 
 
-def spec_from_args(args: argparse.Namespace, header: tuple[str, ...]):
-    """The ImportSpec of the options; the default mapping takes the raw columns that already
-    carry a log column's name."""
-    from jointbench.identification.log_import import LOG_COLUMNS, ImportSpec
-
-    columns = _pairs(args.map, "--map", "COL=RAW (e.g. t=time_ms,q_m=motor_counts)")
-    if not args.map:
-        columns = {c: c for c in LOG_COLUMNS if c in header}
+def options(args: argparse.Namespace) -> dict:
+    """The keyword arguments of `jointbench.import_log` of the options (columns None: the raw
+    columns that already carry a log column's name)."""
+    columns = _pairs(args.map, "--map", "COL=RAW (e.g. t=time_ms,q_m=motor_counts)") \
+        if args.map else None
     units = _pairs(args.units, "--units", "COL=UNIT (e.g. t=ms,q_m=counts,tau_m=A)")
     meta: dict[str, str] = {}
     if args.prismatic:
@@ -101,37 +98,24 @@ def spec_from_args(args: argparse.Namespace, header: tuple[str, ...]):
             meta[key] = str(getattr(args, dest))
     for item in args.meta:
         meta.update(_pairs(item, "--meta", "KEY=VALUE (e.g. torque_noise_std=0.5)"))
-    return ImportSpec(columns=columns, units=units, gear_ratio=args.gear_ratio,
-                      motor_side=tuple(c.strip() for c in args.motor_side.split(",") if c.strip()),
-                      counts_per_turn=args.counts_per_turn,
-                      link_counts_per_turn=args.link_counts_per_turn,
-                      torque_constant=args.torque_constant, rate_hz=args.rate, meta=meta,
-                      gains_side=args.gains_side)
+    return dict(columns=columns, units=units, gear_ratio=args.gear_ratio,
+                motor_side=tuple(c.strip() for c in args.motor_side.split(",") if c.strip()),
+                counts_per_turn=args.counts_per_turn,
+                link_counts_per_turn=args.link_counts_per_turn,
+                torque_constant=args.torque_constant, rate_hz=args.rate, meta=meta,
+                gains_side=args.gains_side, delimiter=args.delimiter)
 
 
 def run(args: argparse.Namespace) -> int:
-    """Read, convert, check, write atomically; print what was done."""
-    from jointbench.identification.log import write_log
-    from jointbench.identification.log_import import convert, read_raw
+    """Parse, `jointbench.import_log` (read, convert, check, write atomically); print what
+    was done."""
+    from jointbench.bench.api import import_log
 
-    src, out = Path(args.file), Path(args.out)
-    if src.exists() and out.exists() and out.resolve() == src.resolve():
-        raise UsageError(f"--out {out}: is the input file; choose another name")
-    check_output_file(out)
-    raw = read_raw(src, args.delimiter)
-    result = convert(raw, spec_from_args(args, raw.header))
-    write_log(result.log, out)
-    for text in result.warnings:
+    report = import_log(args.file, args.out, **options(args))
+    for text in report.warnings:
         print(f"jointbench import: warning: {text}", file=sys.stderr)
-    log = result.log
     if args.json:
-        print(json.dumps({"out": str(out), "samples": len(log), "rate_hz": log.sample_rate_hz,
-                          "duration_s": float(log.t[-1]), "columns": list(log.columns()),
-                          "meta": log.meta, "steps": list(result.steps),
-                          "checks": list(result.checks), "warnings": list(result.warnings)}))
-        return 0
-    print("\n".join(["conversion:", *(f"  {s}" for s in result.steps), "checks:",
-                     *(f"  {c}" for c in result.checks),
-                     f"wrote {out}: {len(log)} samples over {log.t[-1]:.4g} s at "
-                     f"{log.sample_rate_hz:.6g} Hz, columns {', '.join(log.columns())}"]))
+        print(json.dumps(report.to_json()))
+    else:
+        print(report.table())
     return 0

@@ -7,12 +7,11 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from pathlib import Path
 
 from jointbench.bench.cli.common import EXIT_FAILURE, UsageError, positive, seed
 
 # The library `run` imports, loaded by the dispatcher before it traps the signals.
-LIBRARY = ("jointbench.bench.campaign.survey", "jointbench.bench.present.survey")
+LIBRARY = ("jointbench.bench.api", "jointbench.bench.campaign.survey", "jointbench.bench.present.survey")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -51,14 +50,10 @@ def _progress(args: argparse.Namespace):
 
 
 def run(args: argparse.Namespace) -> int:
-    """Survey the axes into --out (checked first, written all or nothing); print the text
-    or the JSON object. Exit 1 when an axis failed (its reason in the table)."""
+    """Parse, `jointbench.survey` into --out (checked first, written all or nothing); print
+    the text or the JSON object. Exit 1 when an axis failed (its reason in the table)."""
+    from jointbench.bench.api import survey
     from jointbench.bench.campaign.spec import MIN_DURATION_S
-    from jointbench.bench.campaign.survey import run_survey, survey_axes
-    from jointbench.bench.cli.resources import check_memory
-    from jointbench.bench.output import OutputFolder
-    from jointbench.bench.present.survey import FILES, survey_json, survey_text, write_survey
-    from jointbench.bench.sim.experiment import SAMPLE_RATE_HZ
 
     if args.duration < MIN_DURATION_S:
         raise UsageError(f"--duration {args.duration:g}: must be at least {MIN_DURATION_S:g} s "
@@ -68,19 +63,12 @@ def run(args: argparse.Namespace) -> int:
     joints = [j.strip() for j in args.joints.split(",")] if args.joints else None
     if joints is not None and not all(joints):
         raise UsageError(f"--joints {args.joints!r}: an empty axis name")
-    _, names = survey_axes(args.model, joints)       # ModelStructureError: exit 2, before work
-    out = Path(args.out)
-    folder = OutputFolder(out, FILES)
-    check_memory(len(names) * args.duration * SAMPLE_RATE_HZ,
-                 f"--duration {args.duration:g} s on {len(names)} axes")
-    sv = run_survey(args.model, joints, duration=args.duration, seed=args.seed,
-                    workers=args.workers, progress=_progress(args))
-    with folder.writing() as path:
-        write_survey(sv, path)
+    sv = survey(args.model, joints, duration=args.duration, seed=args.seed,
+                workers=args.workers, out=args.out, progress=_progress(args))
     if args.json:
-        print(json.dumps(survey_json(sv, out), allow_nan=False))
+        print(json.dumps(sv.to_json(), allow_nan=False))
     else:
-        print(survey_text(sv, out))
+        print(sv.table())
     for j in sv.failed:
         print(f"jointbench survey: error: {j.joint}: {j.reason}", file=sys.stderr)
     return EXIT_FAILURE if sv.failed else 0
