@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Callable, Sequence
 from jointbench.bench.analysis.diagnose import Diagnosis, summary_text
 from jointbench.bench.analysis.diagnose import diagnose as diagnose_log
 from jointbench.bench.analysis.diagnose import write as write_diagnosis
+from jointbench.bench.api_args import check, output_path
 from jointbench.bench.campaign.compare import entries
 from jointbench.bench.campaign.executors import make_executor
 from jointbench.bench.campaign.gates import (GateResult, check_gates, evaluate, gates_text,
@@ -40,7 +41,8 @@ from jointbench.identification.checks import estimate_flags
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.identify import Identification
 from jointbench.identification.identify import identify as identify_log
-from jointbench.identification.log import Log, read_log, unit_warnings, write_log
+from jointbench.bench.output import write_log
+from jointbench.identification.log import Log, read_log, unit_warnings
 from jointbench.identification.output import finite_json
 from jointbench.identification.plots import plot_validation
 
@@ -66,6 +68,7 @@ def simulate(model: str | os.PathLike = "prototype", joint: str | None = None, *
     (docs/effects.md);
     `options` go to `bench.sim.experiment.run_experiment` (amplitude, config, lock, sensors,
     sample_rate_hz, ...). Raises SimulationError, ModelStructureError, ValueError."""
+    check("simulate", locals())
     if isinstance(effect, str):
         effect = parse_effects(effect)   # one or several: "offset=5,backlash=0.002"
     return run_experiment(model, joint, duration=duration, seed=seed, effect=effect,
@@ -111,6 +114,7 @@ class Fit:
     def plot(self, path: str | os.PathLike | None = None) -> matplotlib.figure.Figure:
         """The direct validation (paper's Figure 2): measured and predicted torque; saved
         atomically to `path` when given. pyplot is used: pick the backend first."""
+        output_path("path", path)
         r = self.result
         rows = r.block == 0
         return plot_validation(r.t[rows], r.y[rows], r.y_pred[rows], r.relative_error_pct,
@@ -123,6 +127,7 @@ def identify(log: LogLike, model: str = "auto", settings: FilterSettings | None 
     """Identify the axis parameters of `log` (a Log or a log file) with `model`
     (joint-motor, motor-only, motor-only-printed, rigid or auto; paper eqs. 13, 18-20, 6).
     Raises LogError, NotIdentifiable, InversionError (ValueErrors)."""
+    check("identify", locals())
     log = _as_log(log)
     result = identify_log(log, model, settings, f1_hz=f1_hz)
     flags = estimate_flags(result.physical, result.physical_sigma, log.prismatic)
@@ -165,6 +170,7 @@ def diagnose(log: LogLike, forward: bool = True,
     """Diagnose `log` (a Log or a log file) against its own nominal model: the candidate
     effects, the named causes, the extended model, its gain in the inverse and (with
     `forward`) the closed-loop forward views. Writes nothing (see DiagnosisResult.write)."""
+    check("diagnose", locals())
     return DiagnosisResult(diagnose_log(_as_log(log), forward=forward, progress=progress))
 
 
@@ -222,6 +228,7 @@ def campaign(model: str | os.PathLike = "prototype", joint: str | None = None, *
     temporary file. `workers` local processes (default all cores; 1: this process, needed for
     a callable that is not importable, e.g. a lambda). Raises CampaignError (a ValueError) for
     bad input, before any run."""
+    check("campaign", locals())
     allowed = {f.name for f in dataclasses.fields(RunSettings)} - {"model", "joint", "duration",
                                                                   "id_models"}
     unknown = sorted(set(settings) - allowed)

@@ -30,6 +30,9 @@ import numpy as np
 MODELS_DIR = Path(__file__).resolve().parent
 SHIPPED = {"prototype": "prototype_axis.xml", "prototype_axis": "prototype_axis.xml",
            "arm6": "arm6.xml"}
+# A gear ratio beyond this turns a motor-side encoder step or torque into a value the log
+# format refuses (identification.log_read.MAX_ABS_VALUE is 1e12): a typo, not a gearbox.
+MAX_GEAR_RATIO = 1e6
 
 
 class ModelStructureError(ValueError):
@@ -139,12 +142,61 @@ def find_axes(model: mujoco.MjModel, source: str = "<model>") -> list[Axis]:
                          int(model.jnt_qposadr[jm]), int(model.jnt_dofadr[jl]),
                          int(model.jnt_dofadr[jm])))
     axes += _rigid_axes(model, source, {a.name for a in axes})
+    for axis in axes:
+        check_values(model, axis, source)
     if not axes:
         raise ModelStructureError(
             f"{source}: no flexible axis found, nor a rigid one: expected a fixed tendon 'X_spring' coupling "
             "joints 'X_motor' and 'X', and an actuator 'X_motor' (flexible axis), or an "
             "actuator 'X_motor' driving joint 'X' (rigid axis) (see models/__init__.py)")
     return axes
+
+
+def _bad_value(source: str, element: str, attribute: str, value: float, wanted: str
+               ) -> ModelStructureError:
+    return ModelStructureError(f"{source}: {element} {attribute}=\"{value:g}\": must be {wanted}")
+
+
+def check_values(model: mujoco.MjModel, axis: Axis, source: str = "<model>") -> None:
+    """ModelStructureError, naming the file, the element and the attribute, for a value of
+    `axis` that no physical axis has: a spring stiffness K, a damping, a frictionloss or an
+    armature that is not finite or is negative, a gear ratio that is not finite and positive,
+    an actuator gear other than 1 (tau_m is the torque on the rotor joint, already referred to
+    the joint side: the gear ratio goes into `<numeric name="X_gear_ratio">`)."""
+    joints = {axis.link_joint, axis.motor_joint}
+    for j in sorted(joints):
+        name = f"joint '{_name(model, mujoco.mjtObj.mjOBJ_JOINT, j)}'"
+        dof = int(model.jnt_dofadr[j])
+        for attribute, value in (("damping", model.dof_damping[dof]),
+                                 ("frictionloss", model.dof_frictionloss[dof]),
+                                 ("armature", model.dof_armature[dof]),
+                                 ("stiffness", model.jnt_stiffness[j])):
+            if not (np.isfinite(value) and value >= 0):
+                raise _bad_value(source, name, attribute, float(value),
+                                 "a finite number >= 0")
+    if axis.tendon >= 0:
+        name = f"tendon '{_name(model, mujoco.mjtObj.mjOBJ_TENDON, axis.tendon)}'"
+        for attribute, value in (("stiffness", model.tendon_stiffness[axis.tendon]),
+                                 ("damping", model.tendon_damping[axis.tendon]),
+                                 ("frictionloss", model.tendon_frictionloss[axis.tendon])):
+            value = float(np.ravel(value)[0])
+            if not (np.isfinite(value) and value >= 0):
+                raise _bad_value(source, name, attribute, value, "a finite number >= 0")
+    gear = float(model.actuator_gear[axis.actuator, 0])
+    if gear != 1.0:
+        act = _name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, axis.actuator)
+        raise _bad_value(source, f"actuator '{act}'", "gear", gear,
+                         f"1 (the axis convention: tau_m is the torque on the joint, referred "
+                         f"to the joint side; give the gear ratio as <numeric "
+                         f"name=\"{axis.name}_gear_ratio\">)")
+    nid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_NUMERIC, f"{axis.name}_gear_ratio")
+    if nid >= 0:
+        values = model.numeric_data[model.numeric_adr[nid]:
+                                    model.numeric_adr[nid] + model.numeric_size[nid]]
+        value = float(values[0]) if len(values) else float("nan")
+        if not (np.isfinite(value) and 0 < value <= MAX_GEAR_RATIO):
+            raise _bad_value(source, f"numeric '{axis.name}_gear_ratio'", "data", value,
+                             f"a finite gear ratio in (0, {MAX_GEAR_RATIO:g}]")
 
 
 def select_axis(axes: list[Axis], joint: str | None, source: str = "<model>") -> Axis:
