@@ -11,17 +11,20 @@ Pure numerics: no MuJoCo, no file writing (the command line writes with `write_l
 
 from __future__ import annotations
 
+import array
 import math
 import os
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from jointbench.identification.log_read import (read_lines, sampling_jitter, unit_warnings,
-                                                validate)
-from jointbench.identification.log_schema import (BOOLEAN_META, NUMERIC_META, OPTIONAL_COLUMNS,
-                                                  REQUIRED_COLUMNS, Log, LogError, meta_boolean,
-                                                  meta_number)
+from jointbench.identification.log_read import (MAX_ABS_VALUE, read_lines, sampling_jitter,
+                                                unit_warnings, validate)
+from jointbench.identification.log_schema import (BOOLEAN_META, NONNEGATIVE_META, NUMERIC_META,
+                                                  OPTIONAL_COLUMNS, REQUIRED_COLUMNS, Log,
+                                                  LogError, is_number, meta_boolean,
+                                                  meta_number, shown)
+from jointbench.identification.log_write import check_writable
 
 LOG_COLUMNS = REQUIRED_COLUMNS + OPTIONAL_COLUMNS
 POSITIONS = ("q_m", "q", "q_ref")
@@ -37,6 +40,10 @@ DEFAULT_UNITS = {"t": "s", "q_m": "rad", "q": "rad", "tau_m": "Nm", "q_ref": "ra
 MOTOR_SIDE = ("q_m", "tau_m", "q_ref")  # measured on the motor shaft by default (with N)
 GAIN_POWERS = {"kv": 2, "ki": 2, "tau_max": 1}  # motor-side gain x N^power = joint side
 DELIMITERS = (",", ";", "\t", "|")
+# The fastest rate a drive logs its axis at (current loops run at 10-40 kHz, their logs at
+# most at the loop's rate): above it, the time column's unit is the likely slip (seconds
+# declared as ms gives 1000 times the rate).
+MAX_DRIVE_RATE_HZ = 40e3
 
 
 @dataclass(frozen=True)
@@ -92,13 +99,54 @@ def _split(line: str, delimiter: str) -> list[str]:
     return [cell.strip().strip('"').strip() for cell in line.split(delimiter)]
 
 
-def parse_raw(lines, path: str, delimiter: str | None = None) -> RawTable:
+class TooLarge(LogError):
+    """A raw table with more values than the caller allows (`max_values`): `values` read so
+    far, `rows` of them."""
+
+    def __init__(self, message: str, path: str, line: int, values: int):
+        super().__init__(message, path, line)
+        self.values = values
+
+
+def _header(text: str, delimiter: str, path: str, lineno: int) -> list[str]:
+    """The raw header's names; LogError for an empty or repeated name, or a row of numbers
+    (a file without a header)."""
+    header = _split(text, delimiter)
+    if all(is_number(h) for h in header if h) and any(header):
+        raise LogError(f"the first row must be the header (the raw columns' names), found "
+                       f"numbers: '{shown(text, 80)}'; add a header row naming the columns",
+                       path, lineno)
+    if "" in header:
+        raise LogError("empty column name in the header", path, lineno)
+    dup = sorted({h for h in header if header.count(h) > 1})
+    if dup:
+        raise LogError(f"duplicate column '{shown(dup[0])}' in the header", path, lineno)
+    return header
+
+
+def _bad_cell(cells: list[str], header: list[str], path: str, lineno: int) -> LogError:
+    """The error of the first cell that is not a number as the log reader reads one
+    (log_schema.is_number: ASCII, no digit separator), or not finite."""
+    for name, cell in zip(header, cells):
+        if not is_number(cell):
+            what = "empty cell" if not cell else f"not a number: '{shown(cell)}'"
+            return LogError(what, path, lineno, name)
+        if not math.isfinite(float(cell)):
+            return LogError(f"non-finite value '{shown(cell)}'", path, lineno, name)
+    return LogError("unreadable row", path, lineno)  # pragma: no cover - a cell failed above
+
+
+def parse_raw(lines, path: str, delimiter: str | None = None,
+              max_values: int | None = None) -> RawTable:
     """A raw table from numbered text lines: `#` comment lines and blank lines skipped, the
     first other line the header (delimiter `,`, `;`, tab or `|`, found from it unless given),
-    then one row of numbers per line. Raises LogError naming file, line and column."""
+    then one row of numbers per line, each read as the log reader reads a number
+    (log_schema.is_number: `1_000` and non-ASCII digits are refused). Raises LogError naming
+    file, line and column; TooLarge past `max_values` values (the rows are held as 8-byte
+    floats, so that the memory the table takes is known as it is read)."""
     header: list[str] | None = None
-    rows: list[list[float]] = []
-    where: list[int] = []
+    values = array.array("d")
+    where = array.array("q")
     for lineno, line in lines:
         text = line.strip()
         if not text or text.startswith("#"):
@@ -106,39 +154,38 @@ def parse_raw(lines, path: str, delimiter: str | None = None) -> RawTable:
         if header is None:
             if delimiter is None:
                 delimiter = max(DELIMITERS, key=text.count)
-            header = _split(text, delimiter)
-            if "" in header:
-                raise LogError("empty column name in the header", path, lineno)
-            dup = sorted({h for h in header if header.count(h) > 1})
-            if dup:
-                raise LogError(f"duplicate column '{dup[0]}' in the header", path, lineno)
+            header = _header(text, delimiter, path, lineno)
             continue
         cells = _split(text, delimiter)
         if len(cells) != len(header):
             raise LogError(f"expected {len(header)} cells, found {len(cells)}", path, lineno)
-        row = []
-        for name, cell in zip(header, cells):
-            try:
-                x = float(cell)
-            except ValueError:
-                raise LogError(f"not a number: '{cell[:40]}'", path, lineno, name) from None
-            if not math.isfinite(x):
-                raise LogError(f"non-finite value '{cell}'", path, lineno, name)
-            row.append(x)
-        rows.append(row)
+        if "_" in text or not text.isascii():
+            raise _bad_cell(cells, header, path, lineno)
+        try:
+            row = [float(cell) for cell in cells]
+        except ValueError:
+            raise _bad_cell(cells, header, path, lineno) from None
+        if not all(map(math.isfinite, row)):
+            raise _bad_cell(cells, header, path, lineno)
+        values.extend(row)
         where.append(lineno)
+        if max_values is not None and len(values) > max_values:
+            raise TooLarge(f"more than {max_values} values", path, lineno, len(values))
     if header is None:
         raise LogError("empty file: no header row", path)
-    if not rows:
+    if not where:
         raise LogError("no data rows after the header", path)
-    return RawTable(path, tuple(header), np.array(rows, dtype=float), np.array(where),
+    data = np.frombuffer(values, dtype=float).reshape(len(where), len(header))
+    return RawTable(path, tuple(header), data, np.frombuffer(where, dtype=np.int64),
                     delimiter or ",")
 
 
-def read_raw(path: str | os.PathLike, delimiter: str | None = None) -> RawTable:
+def read_raw(path: str | os.PathLike, delimiter: str | None = None,
+             max_values: int | None = None) -> RawTable:
     """`parse_raw` on a file, streamed with the log reader's checks (size limit, binary
-    content; identification.log_read.read_lines). Raises LogError."""
-    return read_lines(path, lambda lines, name: parse_raw(lines, name, delimiter))
+    content; identification.log_read.read_lines). Raises LogError (TooLarge past
+    `max_values`)."""
+    return read_lines(path, lambda lines, name: parse_raw(lines, name, delimiter, max_values))
 
 
 def _check_spec(raw: RawTable, spec: ImportSpec) -> None:
@@ -285,6 +332,8 @@ def _metadata(spec: ImportSpec, rate_hz: float, path: str, steps: list) -> dict[
                 number *= spec.gear_ratio ** GAIN_POWERS[key]
                 steps.append(f"{key}: motor side {value} x N^{GAIN_POWERS[key]} = {number:.10g}")
             value = f"{number:.10g}"
+        elif key in NONNEGATIVE_META:
+            meta_number(key, value, path, None)
         elif key in BOOLEAN_META:
             value = "true" if meta_boolean(key, value, path, None) else "false"
         meta[key] = value
@@ -313,17 +362,53 @@ def convert(raw: RawTable, spec: ImportSpec) -> ImportResult:
             steps.append(how)
     cols["tau_m"], how = _torque(raw, spec, prismatic)
     steps.append(how)
+    _check_range(raw, spec, cols)
     rate = (len(t) - 1) / float(t[-1] - t[0])  # the mean period: uniform checked above
     meta = _metadata(spec, spec.rate_hz or rate, raw.path, steps)
     log = Log(t=t, q_m=cols["q_m"], tau_m=cols["tau_m"], q=cols.get("q"),
               q_ref=cols.get("q_ref"), meta=meta, path=raw.path)
+    check_writable(log)
     validate(log, row_lines=raw.lines)
     checks.append(f"log checks of docs/log-format.md passed (t increasing and uniform, "
                   f"sample_rate_hz {meta['sample_rate_hz']} agrees with t)")
     checks += _model_checks(log)
     constant = [f"{raw.path}: column '{spec.columns[c]}' ({c}) is constant"
                 for c in ("q_m", "q", "tau_m") if c in spec.columns and np.ptp(cols[c]) == 0]
-    return ImportResult(log, tuple(steps), tuple(checks), tuple(unit_warnings(log) + constant))
+    return ImportResult(log, tuple(steps), tuple(checks),
+                        tuple(unit_warnings(log) + _rate_warnings(raw, spec, log) + constant))
+
+
+def _check_range(raw: RawTable, spec: ImportSpec, cols: dict[str, np.ndarray]) -> None:
+    """LogError, naming the raw column and the factor applied, for a converted value beyond
+    what the log reader accepts (MAX_ABS_VALUE): a gear ratio, a counts per turn or a torque
+    constant that is a typo, or a corrupted cell."""
+    for col, x in cols.items():
+        big = np.flatnonzero(~(np.abs(x) <= MAX_ABS_VALUE))
+        if big.size:
+            k = int(big[0])
+            name = spec.columns[col]
+            raw_value = float(raw.column(name)[k])
+            factor = float(x[k] / raw_value) if raw_value else float("nan")
+            raise LogError(f"{col} = {x[k]:.6g} after conversion (raw {raw_value:.6g} x "
+                           f"{factor:.6g}): over {MAX_ABS_VALUE:g} in magnitude, which the log "
+                           "format refuses as a corrupted cell; check --gear-ratio, --units, "
+                           "--counts-per-turn and --torque-constant", raw.path,
+                           int(raw.lines[k]), name)
+
+
+def _rate_warnings(raw: RawTable, spec: ImportSpec, log: Log) -> list[str]:
+    """A warning when the log's rate is above what a drive logs (MAX_DRIVE_RATE_HZ), naming
+    the time unit that would give a drive's rate."""
+    rate = log.sample_rate_hz
+    if not rate > MAX_DRIVE_RATE_HZ:
+        return []
+    unit = spec.units.get("t", "s")
+    slower = {"us": "ms", "ms": "s"}.get(unit)
+    hint = (f"if the time column '{spec.columns['t']}' is in {slower}, not {unit}, give "
+            f"--units t={slower} (a rate of {rate * TIME_UNITS[unit] / TIME_UNITS[slower]:.6g}"
+            " Hz)") if slower else "check the time column's unit (--units t=...) and --rate"
+    return [f"{raw.path}: sample rate {rate:.6g} Hz, above what a drive logs (at most "
+            f"{MAX_DRIVE_RATE_HZ:g} Hz): the time unit is likely wrong; {hint}"]
 
 
 def _model_checks(log: Log) -> list[str]:

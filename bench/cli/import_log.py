@@ -80,6 +80,9 @@ def _pairs(text: str | None, flag: str, form: str) -> dict[str, str]:
         key, sep, value = item.partition("=")
         if not sep or not key.strip() or not value.strip() or "=" in value:
             raise UsageError(f"{flag}: '{item}' must read {form}")
+        if key.strip() in out:
+            raise UsageError(f"{flag}: '{key.strip()}' is given twice ('{out[key.strip()]}' "
+                             f"and '{value.strip()}'); give each once")
         out[key.strip()] = value.strip()
     return out
 
@@ -100,7 +103,12 @@ def spec_from_args(args: argparse.Namespace, header: tuple[str, ...]):
         if getattr(args, dest) is not None:
             meta[key] = str(getattr(args, dest))
     for item in args.meta:
-        meta.update(_pairs(item, "--meta", "KEY=VALUE (e.g. torque_noise_std=0.5)"))
+        for key, value in _pairs(item, "--meta", "KEY=VALUE (e.g. torque_noise_std=0.5)"
+                                 ).items():
+            if key in meta and meta[key] != value:
+                raise UsageError(f"--meta {key}={value}: '{key}' is already given as "
+                                 f"'{meta[key]}' (by --meta or its own option)")
+            meta[key] = value
     return ImportSpec(columns=columns, units=units, gear_ratio=args.gear_ratio,
                       motor_side=tuple(c.strip() for c in args.motor_side.split(",") if c.strip()),
                       counts_per_turn=args.counts_per_turn,
@@ -112,13 +120,14 @@ def spec_from_args(args: argparse.Namespace, header: tuple[str, ...]):
 def run(args: argparse.Namespace) -> int:
     """Read, convert, check, write atomically; print what was done."""
     from jointbench.identification.log import write_log
-    from jointbench.identification.log_import import convert, read_raw
+    from jointbench.bench.cli.import_memory import read_within_memory
+    from jointbench.identification.log_import import convert
 
     src, out = Path(args.file), Path(args.out)
     if src.exists() and out.exists() and out.resolve() == src.resolve():
         raise UsageError(f"--out {out}: is the input file; choose another name")
     check_output_file(out)
-    raw = read_raw(src, args.delimiter)
+    raw = read_within_memory(src, args.delimiter)
     result = convert(raw, spec_from_args(args, raw.header))
     write_log(result.log, out)
     for text in result.warnings:
