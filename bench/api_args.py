@@ -44,10 +44,15 @@ def number(name: str, value: Any, *, low: float | None = None, low_open: bool = 
     x = float(value)
     if not math.isfinite(x):
         raise ValueError(f"{name}: expected a finite number, got {value!r}")
-    if low is not None and (x <= low if low_open else x < low):
-        raise ValueError(f"{name}: must be {'>' if low_open else '>='} {low:g}, got {value!r}")
-    if high is not None and x > high:
-        raise ValueError(f"{name}: must be at most {high:g}, got {value!r}")
+    below = low is not None and (x <= low if low_open else x < low)
+    if below or (high is not None and x > high):
+        if low is not None and high is not None:
+            span = f"must lie in {'(' if low_open else '['}{low:g}, {high:g}]"
+        elif low is not None:
+            span = f"must be above {low:g}" if low_open else f"must be at least {low:g}"
+        else:
+            span = f"must be at most {high:g}"
+        raise ValueError(f"{name}: {span}, got {value!r}")
     return x
 
 

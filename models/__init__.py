@@ -152,51 +152,55 @@ def find_axes(model: mujoco.MjModel, source: str = "<model>") -> list[Axis]:
     return axes
 
 
-def _bad_value(source: str, element: str, attribute: str, value: float, wanted: str
-               ) -> ModelStructureError:
-    return ModelStructureError(f"{source}: {element} {attribute}=\"{value:g}\": must be {wanted}")
+def _not_physical(source: str, element: str, attribute: str, value: float, wanted: str
+                  ) -> ModelStructureError:
+    return ModelStructureError(f"{source}: {element}: {attribute}=\"{value:g}\" is not "
+                               f"physical; it must be {wanted}")
 
 
 def check_values(model: mujoco.MjModel, axis: Axis, source: str = "<model>") -> None:
     """ModelStructureError, naming the file, the element and the attribute, for a value of
-    `axis` that no physical axis has: a spring stiffness K, a damping, a frictionloss or an
-    armature that is not finite or is negative, a gear ratio that is not finite and positive,
-    an actuator gear other than 1 (tau_m is the torque on the rotor joint, already referred to
-    the joint side: the gear ratio goes into `<numeric name="X_gear_ratio">`)."""
-    joints = {axis.link_joint, axis.motor_joint}
-    for j in sorted(joints):
+    `axis` that no physical axis has (each would give zero gains, the square root of a
+    negative, a division by zero or a dropped row): a spring stiffness K or a rotor armature
+    Jm that is not finite and > 0, a damping, frictionloss, armature or joint stiffness that
+    is not finite and >= 0, an actuator gear other than 1 (tau_m is the torque on the rotor
+    joint, already referred to the joint side: the gear ratio goes into
+    `<numeric name="X_gear_ratio">`), a gear ratio that is not finite and in
+    (0, MAX_GEAR_RATIO]."""
+    def check(element: str, attribute: str, value: float, positive: bool, what: str = ""):
+        if not (np.isfinite(value) and (value > 0 if positive else value >= 0)):
+            raise _not_physical(source, element, attribute, float(value),
+                                ("finite and > 0" if positive else "finite and >= 0") + what)
+
+    for j in sorted({axis.link_joint, axis.motor_joint}):
         name = f"joint '{_name(model, mujoco.mjtObj.mjOBJ_JOINT, j)}'"
         dof = int(model.jnt_dofadr[j])
-        for attribute, value in (("damping", model.dof_damping[dof]),
-                                 ("frictionloss", model.dof_frictionloss[dof]),
-                                 ("armature", model.dof_armature[dof]),
-                                 ("stiffness", model.jnt_stiffness[j])):
-            if not (np.isfinite(value) and value >= 0):
-                raise _bad_value(source, name, attribute, float(value),
-                                 "a finite number >= 0")
-    if axis.tendon >= 0:
+        rotor = j == axis.motor_joint and not axis.rigid
+        check(name, "armature", model.dof_armature[dof], rotor,
+              " (the rotor inertia Jm)" if rotor else "")
+        check(name, "damping", model.dof_damping[dof], False)
+        check(name, "frictionloss", model.dof_frictionloss[dof], False)
+        check(name, "stiffness", model.jnt_stiffness[j], False)
+    if not axis.rigid:
         name = f"tendon '{_name(model, mujoco.mjtObj.mjOBJ_TENDON, axis.tendon)}'"
-        for attribute, value in (("stiffness", model.tendon_stiffness[axis.tendon]),
-                                 ("damping", model.tendon_damping[axis.tendon]),
-                                 ("frictionloss", model.tendon_frictionloss[axis.tendon])):
-            value = float(np.ravel(value)[0])
-            if not (np.isfinite(value) and value >= 0):
-                raise _bad_value(source, name, attribute, value, "a finite number >= 0")
+        check(name, "stiffness", float(np.ravel(model.tendon_stiffness[axis.tendon])[0]), True,
+              " (the joint stiffness K)")
+        check(name, "damping", float(np.ravel(model.tendon_damping[axis.tendon])[0]), False)
+        check(name, "frictionloss", float(model.tendon_frictionloss[axis.tendon]), False)
     gear = float(model.actuator_gear[axis.actuator, 0])
     if gear != 1.0:
         act = _name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, axis.actuator)
-        raise _bad_value(source, f"actuator '{act}'", "gear", gear,
-                         f"1 (the axis convention: tau_m is the torque on the joint, referred "
-                         f"to the joint side; give the gear ratio as <numeric "
-                         f"name=\"{axis.name}_gear_ratio\">)")
+        raise ModelStructureError(
+            f"{source}: actuator '{act}': gear=\"{gear:g}\" is not the axis convention's 1: "
+            f"tau_m is the torque on the joint, already referred to the joint side; give the "
+            f"gear ratio as <numeric name=\"{axis.name}_gear_ratio\" data=\"N\"/>")
     nid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_NUMERIC, f"{axis.name}_gear_ratio")
     if nid >= 0:
-        values = model.numeric_data[model.numeric_adr[nid]:
-                                    model.numeric_adr[nid] + model.numeric_size[nid]]
-        value = float(values[0]) if len(values) else float("nan")
+        adr, size = int(model.numeric_adr[nid]), int(model.numeric_size[nid])
+        value = float(model.numeric_data[adr]) if size else float("nan")
         if not (np.isfinite(value) and 0 < value <= MAX_GEAR_RATIO):
-            raise _bad_value(source, f"numeric '{axis.name}_gear_ratio'", "data", value,
-                             f"a finite gear ratio in (0, {MAX_GEAR_RATIO:g}]")
+            raise _not_physical(source, f"numeric '{axis.name}_gear_ratio'", "data", value,
+                                f"a finite gear ratio in (0, {MAX_GEAR_RATIO:g}]")
 
 
 def select_axis(axes: list[Axis], joint: str | None, source: str = "<model>") -> Axis:

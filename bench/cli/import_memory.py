@@ -79,5 +79,5 @@ def read_within_memory(src: Path, delimiter: str | None):
     try:
         return read_raw(src, delimiter, max_values=budget)
     except TooLarge as err:
-        raise _refusal(src, f"line {err.line}: the input passes {budget:.3g} values, the most "
+        raise _refusal(src, f"line {err.line}: the input passes {budget:,} values, the most "
                        f"that import holds ({BYTES_PER_VALUE} bytes each)", limit) from None
