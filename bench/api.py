@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Callable, Sequence
 from jointbench.bench.analysis.diagnose import Diagnosis, summary_text
 from jointbench.bench.analysis.diagnose import diagnose as diagnose_log
 from jointbench.bench.analysis.diagnose import write as write_diagnosis
-from jointbench.bench.api_args import check, output_path
+from jointbench.bench.api_args import check, output_path, path_like
 from jointbench.bench.campaign.compare import entries
 from jointbench.bench.campaign.executors import make_executor
 from jointbench.bench.campaign.gates import (GateResult, check_gates, evaluate, gates_text,
@@ -161,6 +161,7 @@ class DiagnosisResult:
               progress: Callable[[str], None] | None = None) -> DiagnosisResult:
         """Write figures, report.md, diagnosis.json and the models into folder `out`
         (created); the result with the files written."""
+        path_like("out", out)
         done = write_diagnosis(self.diagnosis, Path(out), progress or (lambda msg: None))
         return dataclasses.replace(self, diagnosis=done)
 

@@ -16,6 +16,7 @@ the same input (bench.cli: exit status 2).
 
 from __future__ import annotations
 
+import inspect
 import math
 import numbers
 import os
@@ -27,6 +28,7 @@ import numpy as np
 from jointbench.identification.log_schema import Log, LogError
 
 SEED_LIMIT = 2**32
+MAX_SUBSTEPS = 1000      # as `simulate --substeps`
 LOG_COLUMNS = ("t", "q_m", "tau_m", "q", "q_ref")
 IDENTIFY_MODELS = ("joint-motor", "motor-only", "motor-only-printed", "rigid", "auto")
 
@@ -56,14 +58,17 @@ def number(name: str, value: Any, *, low: float | None = None, low_open: bool = 
     return x
 
 
-def integer(name: str, value: Any, low: int, high: int | None = None) -> int:
-    """`value` as an int (numpy integers too, not a bool nor a float), in [low, high)."""
+def integer(name: str, value: Any, low: int, high: int | None = None,
+            high_shown: str | None = None) -> int:
+    """`value` as an int (numpy integers too, not a bool nor a float), in [low, high]
+    (`high_shown`: how the message writes the upper bound, e.g. "2**32)" for an open one)."""
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
         raise TypeError(f"{name}: expected an integer, got {_type(value)} {value!r}")
     x = int(value)
-    if x < low or (high is not None and x >= high):
-        span = f"[{low}, {high})" if high is not None else f">= {low}"
-        raise ValueError(f"{name}: must lie in {span}, got {x}")
+    if x < low or (high is not None and x > high):
+        span = f"lie in [{low}, {high_shown or f'{high}]'}" if high is not None else \
+            f"be >= {low}"
+        raise ValueError(f"{name}: must {span}, got {x}")
     return x
 
 
@@ -131,11 +136,10 @@ def output_path(name: str, value: Any) -> None:
 
 def memory(name: str, samples: float) -> None:
     """ValueError naming `name` when `samples` log samples need more than the memory limit
-    (bench.cli.resources: the estimate and the limit of the command line)."""
-    from jointbench.bench.cli.resources import BASE_MB, BYTES_PER_SAMPLE, MEMORY_ENV, \
-        memory_limit_mb
+    (bench.memory: the estimate and the limit of the command line)."""
+    from jointbench.bench.memory import MEMORY_ENV, memory_limit_mb, samples_mb
 
-    need = BASE_MB + samples * BYTES_PER_SAMPLE / 2**20
+    need = samples_mb(samples)
     limit = memory_limit_mb()
     if not need <= limit:
         raise ValueError(f"{name}: {samples:.3g} samples need about {need:,.0f} MB of memory, "
@@ -143,7 +147,8 @@ def memory(name: str, samples: float) -> None:
 
 
 def _simulate(a: dict) -> None:
-    from jointbench.bench.sim.experiment import SAMPLE_RATE_HZ
+    from jointbench.bench.effects import HiddenEffect
+    from jointbench.bench.sim.experiment import SAMPLE_RATE_HZ, run_experiment
     from jointbench.bench.sim.reference import Chirp
     from jointbench.identification.log_read import MAX_RATE_HZ, MIN_RATE_HZ
 
@@ -153,15 +158,32 @@ def _simulate(a: dict) -> None:
                         f"{_type(a['joint'])} {a['joint']!r}")
     taper = Chirp.__dataclass_fields__["taper"].default
     duration = number("duration", a["duration"], low=2 * taper)
-    integer("seed", a["seed"], 0, SEED_LIMIT)
+    integer("seed", a["seed"], 0, SEED_LIMIT - 1, "2**32)")
     options = a.get("options", {})
     rate = options.get("sample_rate_hz", SAMPLE_RATE_HZ)
     rate = number("sample_rate_hz", rate, low=MIN_RATE_HZ, high=MAX_RATE_HZ)
     for key in ("amplitude", "tau_max"):
         if options.get(key) is not None:
             number(key, options[key], low=0.0, low_open=True)
+    known = set(inspect.signature(run_experiment).parameters) - set(a)
+    unknown = sorted(set(options) - known)
+    if unknown:
+        raise TypeError(f"simulate: unknown option(s) {', '.join(unknown)} (known: "
+                        f"{', '.join(sorted(known))})")
+    effect = a["effect"]
+    if effect is not None and not isinstance(effect, (str, HiddenEffect)) and not (
+            isinstance(effect, tuple) and all(isinstance(e, HiddenEffect) for e in effect)):
+        raise TypeError(f"effect: expected a text such as 'backlash=0.002', a HiddenEffect or "
+                        f"a tuple of them, got {_type(effect)} {effect!r}")
+    config = options.get("config")
+    if config is not None:
+        if not isinstance(config, dict):
+            raise TypeError(f"config: expected a dict of axis name -> angle [rad], got "
+                            f"{_type(config)}")
+        for axis, angle in config.items():
+            number(f"config[{axis!r}]", angle)
     if "substeps" in options:
-        integer("substeps", options["substeps"], 1, 1001)
+        integer("substeps", options["substeps"], 1, MAX_SUBSTEPS)
     memory("duration", duration * rate)
 
 
@@ -171,6 +193,11 @@ def _identify(a: dict) -> None:
     if a["model"] not in IDENTIFY_MODELS:
         raise ValueError(f"model: {a['model']!r} is not an identification model "
                          f"({', '.join(IDENTIFY_MODELS)})")
+    from jointbench.identification.filtering import FilterSettings
+
+    if a["settings"] is not None and not isinstance(a["settings"], FilterSettings):
+        raise TypeError(f"settings: expected a FilterSettings or None, got "
+                        f"{_type(a['settings'])}")
     if a.get("f1_hz") is not None:
         number("f1_hz", a["f1_hz"], low=0.0, low_open=True)
 
@@ -186,7 +213,7 @@ def _diagnose(a: dict) -> None:
 def _campaign(a: dict) -> None:
     path_like("model", a["model"])
     integer("runs", a["runs"], 1)
-    integer("seed", a["seed"], 0, SEED_LIMIT)
+    integer("seed", a["seed"], 0, SEED_LIMIT - 1, "2**32)")
     number("duration", a["duration"], low=0.0, low_open=True)
     number("method_timeout", a["method_timeout"], low=0.0, low_open=True,
            high=threading.TIMEOUT_MAX)

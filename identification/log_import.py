@@ -11,20 +11,20 @@ Pure numerics: no MuJoCo, no file writing (the command line writes with `write_l
 
 from __future__ import annotations
 
-import array
 import math
 import os
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from jointbench.identification.log_read import (MAX_ABS_VALUE, read_lines, sampling_jitter,
-                                                unit_warnings, validate)
+from jointbench.identification.log_read import (MAX_ABS_VALUE, MAX_RATE_HZ, MIN_RATE_HZ,
+                                                sampling_jitter, unit_warnings, validate)
 from jointbench.identification.log_schema import (BOOLEAN_META, NONNEGATIVE_META, NUMERIC_META,
                                                   OPTIONAL_COLUMNS, REQUIRED_COLUMNS, Log,
-                                                  LogError, is_number, meta_boolean,
-                                                  meta_number, shown)
+                                                  LogError, meta_boolean, meta_number)
 from jointbench.identification.log_write import check_writable
+# the raw table's reader, re-exported: the command line and the tests import it from here
+from jointbench.identification.raw_table import RawTable, TooLarge, parse_raw, read_raw
 
 LOG_COLUMNS = REQUIRED_COLUMNS + OPTIONAL_COLUMNS
 POSITIONS = ("q_m", "q", "q_ref")
@@ -39,7 +39,11 @@ TORQUE_UNITS = {"Nm": 1.0, "N": 1.0, "A": None, "V": None}
 DEFAULT_UNITS = {"t": "s", "q_m": "rad", "q": "rad", "tau_m": "Nm", "q_ref": "rad"}
 MOTOR_SIDE = ("q_m", "tau_m", "q_ref")  # measured on the motor shaft by default (with N)
 GAIN_POWERS = {"kv": 2, "ki": 2, "tau_max": 1}  # motor-side gain x N^power = joint side
-DELIMITERS = (",", ";", "\t", "|")
+# Metadata an import checks against a drive's range (the reader checks only the sign the
+# analyses need): key -> (lowest, highest). A gain is >= 0 (0: no such term); gravity is an
+# acceleration magnitude, 0 for a horizontal axis, and no robot works under 100 m/s^2.
+META_RANGES = {"kp": (0.0, math.inf), "kv": (0.0, math.inf), "ki": (0.0, math.inf),
+               "gravity": (0.0, 100.0)}
 # The fastest rate a drive logs its axis at (current loops run at 10-40 kHz, their logs at
 # most at the loop's rate): above it, the time column's unit is the likely slip (seconds
 # declared as ms gives 1000 times the rate).
@@ -70,21 +74,6 @@ class ImportSpec:
 
 
 @dataclass(frozen=True)
-class RawTable:
-    """A raw CSV table: `header` names, `data` (rows x columns, float), `lines` the file
-    line of each row, `delimiter` found."""
-
-    path: str
-    header: tuple[str, ...]
-    data: np.ndarray
-    lines: np.ndarray
-    delimiter: str
-
-    def column(self, name: str) -> np.ndarray:
-        return self.data[:, self.header.index(name)]
-
-
-@dataclass(frozen=True)
 class ImportResult:
     """The converted `log`, what was done (`steps`), the checks run and their outcome
     (`checks`), and warnings (not errors)."""
@@ -93,99 +82,6 @@ class ImportResult:
     steps: tuple[str, ...]
     checks: tuple[str, ...]
     warnings: tuple[str, ...]
-
-
-def _split(line: str, delimiter: str) -> list[str]:
-    return [cell.strip().strip('"').strip() for cell in line.split(delimiter)]
-
-
-class TooLarge(LogError):
-    """A raw table with more values than the caller allows (`max_values`): `values` read so
-    far, `rows` of them."""
-
-    def __init__(self, message: str, path: str, line: int, values: int):
-        super().__init__(message, path, line)
-        self.values = values
-
-
-def _header(text: str, delimiter: str, path: str, lineno: int) -> list[str]:
-    """The raw header's names; LogError for an empty or repeated name, or a row of numbers
-    (a file without a header)."""
-    header = _split(text, delimiter)
-    if all(is_number(h) for h in header if h) and any(header):
-        raise LogError(f"the first row must be the header (the raw columns' names), found "
-                       f"numbers: '{shown(text, 80)}'; add a header row naming the columns",
-                       path, lineno)
-    if "" in header:
-        raise LogError("empty column name in the header", path, lineno)
-    dup = sorted({h for h in header if header.count(h) > 1})
-    if dup:
-        raise LogError(f"duplicate column '{shown(dup[0])}' in the header", path, lineno)
-    return header
-
-
-def _bad_cell(cells: list[str], header: list[str], path: str, lineno: int) -> LogError:
-    """The error of the first cell that is not a number as the log reader reads one
-    (log_schema.is_number: ASCII, no digit separator), or not finite."""
-    for name, cell in zip(header, cells):
-        if not is_number(cell):
-            what = "empty cell" if not cell else f"not a number: '{shown(cell)}'"
-            return LogError(what, path, lineno, name)
-        if not math.isfinite(float(cell)):
-            return LogError(f"non-finite value '{shown(cell)}'", path, lineno, name)
-    return LogError("unreadable row", path, lineno)  # pragma: no cover - a cell failed above
-
-
-def parse_raw(lines, path: str, delimiter: str | None = None,
-              max_values: int | None = None) -> RawTable:
-    """A raw table from numbered text lines: `#` comment lines and blank lines skipped, the
-    first other line the header (delimiter `,`, `;`, tab or `|`, found from it unless given),
-    then one row of numbers per line, each read as the log reader reads a number
-    (log_schema.is_number: `1_000` and non-ASCII digits are refused). Raises LogError naming
-    file, line and column; TooLarge past `max_values` values (the rows are held as 8-byte
-    floats, so that the memory the table takes is known as it is read)."""
-    header: list[str] | None = None
-    values = array.array("d")
-    where = array.array("q")
-    for lineno, line in lines:
-        text = line.strip()
-        if not text or text.startswith("#"):
-            continue
-        if header is None:
-            if delimiter is None:
-                delimiter = max(DELIMITERS, key=text.count)
-            header = _header(text, delimiter, path, lineno)
-            continue
-        cells = _split(text, delimiter)
-        if len(cells) != len(header):
-            raise LogError(f"expected {len(header)} cells, found {len(cells)}", path, lineno)
-        if "_" in text or not text.isascii():
-            raise _bad_cell(cells, header, path, lineno)
-        try:
-            row = [float(cell) for cell in cells]
-        except ValueError:
-            raise _bad_cell(cells, header, path, lineno) from None
-        if not all(map(math.isfinite, row)):
-            raise _bad_cell(cells, header, path, lineno)
-        values.extend(row)
-        where.append(lineno)
-        if max_values is not None and len(values) > max_values:
-            raise TooLarge(f"more than {max_values} values", path, lineno, len(values))
-    if header is None:
-        raise LogError("empty file: no header row", path)
-    if not where:
-        raise LogError("no data rows after the header", path)
-    data = np.frombuffer(values, dtype=float).reshape(len(where), len(header))
-    return RawTable(path, tuple(header), data, np.frombuffer(where, dtype=np.int64),
-                    delimiter or ",")
-
-
-def read_raw(path: str | os.PathLike, delimiter: str | None = None,
-             max_values: int | None = None) -> RawTable:
-    """`parse_raw` on a file, streamed with the log reader's checks (size limit, binary
-    content; identification.log_read.read_lines). Raises LogError (TooLarge past
-    `max_values`)."""
-    return read_lines(path, lambda lines, name: parse_raw(lines, name, delimiter, max_values))
 
 
 def _check_spec(raw: RawTable, spec: ImportSpec) -> None:
@@ -219,6 +115,10 @@ def _check_spec(raw: RawTable, spec: ImportSpec) -> None:
                         ("--torque-constant", spec.torque_constant)):
         if value is not None and not (math.isfinite(value) and value > 0):
             raise LogError(f"{name} must be a positive number, got {value}", raw.path)
+    if spec.rate_hz is not None and not MIN_RATE_HZ <= spec.rate_hz <= MAX_RATE_HZ:
+        raise LogError(f"--rate {spec.rate_hz:g}: must lie in [{MIN_RATE_HZ:g}, "
+                       f"{MAX_RATE_HZ:g}] Hz, the rates a log may have (docs/log-format.md)",
+                       raw.path)
 
 
 def _time(raw: RawTable, spec: ImportSpec, steps: list, checks: list) -> np.ndarray:
@@ -331,6 +231,12 @@ def _metadata(spec: ImportSpec, rate_hz: float, path: str, steps: list) -> dict[
                     raise LogError(f"motor-side gains need --gear-ratio ({key})", path)
                 number *= spec.gear_ratio ** GAIN_POWERS[key]
                 steps.append(f"{key}: motor side {value} x N^{GAIN_POWERS[key]} = {number:.10g}")
+            low, high = META_RANGES.get(key, (-math.inf, math.inf))
+            if not low <= number <= high:
+                why = ("gravity is an acceleration's magnitude [m/s^2]" if key == "gravity"
+                       else "a gain is >= 0")
+                raise LogError(f"metadata '{key}' = {number:g} is outside [{low:g}, {high:g}] "
+                               f"({why})", path)
             value = f"{number:.10g}"
         elif key in NONNEGATIVE_META:
             meta_number(key, value, path, None)

@@ -71,6 +71,12 @@ def test_seconds_declared_ms_warns_of_the_unit_slip(raw, tmp_path, capsys):
     ([*MAP, "--gear-ratio", "1e300"], "over 1e+12 in magnitude"),
     ([*MAP, "--joint", "axis1\nsample_rate_hz: 5"], "line break"),
     ([*MAP, "--meta", "note=a\rb"], "line break"),
+    ([*MAP, "--delimiter", ""], "--delimiter ''"),
+    ([*MAP, "--delimiter", "."], "--delimiter '.'"),
+    ([*MAP, "--rate", "1e-300"], "--rate 1e-300: must lie in [10, 1e+06] Hz"),
+    ([*MAP, "--gravity", "1e300"], "'gravity' = 1e+300 is outside [0, 100]"),
+    ([*MAP, "--kv", "-3"], "'kv' = -3 is outside"),
+    ([*MAP, "--meta", "kp=-1"], "'kp' = -1 is outside"),
 ])
 def test_refused_options_name_the_problem(args, message, raw, tmp_path, capsys):
     out = tmp_path / "o.csv"

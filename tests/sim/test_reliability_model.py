@@ -90,6 +90,11 @@ def test_diagnose_refuses_a_slide_model_for_a_revolute_log(tmp_path, log_file, c
     assert "slide.xml" in err and "slide (prismatic)" in err and "revolute" in err
 
 
+def test_diagnose_names_a_folder_given_as_model(tmp_path, log_file, capsys):
+    assert main(["diagnose", str(log_file), "--model", str(tmp_path), "--no-forward"]) == 2
+    assert f"{tmp_path}: is a directory, not an MJCF file" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize("text", ['<mujoco><worldbody><body><joint name="x" type="bogus"/>'
                                   '</body></worldbody></mujoco>', "<mujoco><worldbody>"])
 def test_diagnose_names_the_mjcf_file_mujoco_cannot_read(text, tmp_path, log_file, capsys):

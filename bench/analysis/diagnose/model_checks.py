@@ -29,6 +29,8 @@ def load_spec(source: Path) -> mujoco.MjSpec:
     """The MJCF at `source` as an MjSpec with its asset folders made absolute (so that a copy
     written elsewhere still finds its meshes and textures). ModelStructureError naming the
     file when MuJoCo cannot read it."""
+    if Path(source).is_dir():
+        raise ModelStructureError(f"{source}: is a directory, not an MJCF file")
     try:
         spec = mujoco.MjSpec.from_file(str(source))
     except ValueError as err:
