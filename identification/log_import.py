@@ -97,6 +97,12 @@ def _check_spec(raw: RawTable, spec: ImportSpec) -> None:
         if name not in raw.header:
             raise LogError(f"--map {col}={name}: no column '{name}' (the file has "
                            f"{', '.join(raw.header)})", raw.path, int(raw.lines[0]) - 1)
+    taken: dict[str, str] = {}
+    for col, name in spec.columns.items():
+        if name in taken:
+            raise LogError(f"--map {taken[name]}={name},{col}={name}: one raw column for two "
+                           "log columns (each log column is its own measurement)", raw.path)
+        taken[name] = col
     table = {"t": TIME_UNITS, "tau_m": TORQUE_UNITS}
     for col, unit in spec.units.items():
         known = table.get(col, POSITION_UNITS)

@@ -62,6 +62,7 @@ def test_seconds_declared_ms_warns_of_the_unit_slip(raw, tmp_path, capsys):
 @pytest.mark.parametrize("args, message", [
     (["--map", "t=time,q_m=motor,q_m=link,tau_m=cur"], "'q_m' is given twice"),
     ([*MAP, "--units", "t=s,t=ms"], "'t' is given twice"),
+    (["--map", "t=time,q_m=motor,q=motor,tau_m=cur"], "one raw column for two log columns"),
     ([*MAP, "--meta", "torque_noise_std=0.1", "--meta", "torque_noise_std=0.2"],
      "already given"),
     ([*MAP, "--joint", "axis1", "--meta", "joint=axis2"], "already given"),
