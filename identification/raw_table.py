@@ -58,7 +58,8 @@ def _header(text: str, delimiter: str, path: str, lineno: int) -> list[str]:
                        f"numbers: '{shown(text, 80)}'; add a header row naming the columns",
                        path, lineno)
     if "" in header:
-        raise LogError("empty column name in the header", path, lineno)
+        hint = f" (a {delimiter!r} at the end of the line?)" if header[-1] == "" else ""
+        raise LogError(f"empty column name in the header{hint}", path, lineno)
     dup = sorted({h for h in header if header.count(h) > 1})
     if dup:
         raise LogError(f"duplicate column '{shown(dup[0])}' in the header", path, lineno)

@@ -153,3 +153,29 @@ def test_import_from_a_pipe_stops_at_the_memory_limit(tmp_path):
     assert f"the input passes {budget_values(limit):,} values" in proc.stderr
     assert f"{BYTES_PER_VALUE} bytes each" in proc.stderr
     assert not (tmp_path / "o.csv").exists()
+
+
+@pytest.mark.parametrize("key", ["torque_noise_std", "motor_encoder_resolution_rad",
+                                 "link_encoder_resolution_rad"])
+def test_the_reader_refuses_a_negative_sensor_value(key, tmp_path, capsys):
+    """A negative noise level or encoder step (a replica spread of 0 under --debias) is
+    refused by the reader too, naming the key and its line."""
+    path = tmp_path / "o.csv"
+    assert run(capsys, _raw(tmp_path), "--out", path, *MAP)[0] == 0
+    text = path.read_text().replace("# source:", f"# {key}: -0.5\n# source:", 1)
+    path.write_text(text)
+    line = text.splitlines().index(f"# {key}: -0.5") + 1
+    code, err = run_identify(capsys, path)
+    assert code == 2
+    assert f"o.csv:{line}: metadata '{key}' must be >= 0" in err
+
+
+def _raw(tmp_path: Path) -> Path:
+    path = tmp_path / "raw.csv"
+    path.write_text(raw_text())
+    return path
+
+
+def run_identify(capsys, path: Path) -> tuple[int, str]:
+    code = main(["identify", str(path)])
+    return code, capsys.readouterr().err
