@@ -56,6 +56,9 @@ TWINS = {
         ["must lie in [10, 1e+06]"]),
     "NaN sample": (["identify", "{nan}"], lambda log: jb.identify(_nan(log)),
                    ["q_m", "nan"]),
+    "first mode beyond the Nyquist frequency": (
+        ["identify", "{ok}", "--f1", "1e9"], lambda log: jb.identify(log, f1_hz=1e9),
+        ["f1_hz", "the first mode must lie in [0.1, 175.4) hz"]),
     "two samples": (["identify", "{few}"], lambda log: jb.identify(_few(log)),
                     ["2 samples", "at least 3"]),
 }
@@ -69,7 +72,8 @@ def test_cli_refusal_and_its_api_twin(case, surface, log, tmp_path, capsys, monk
     args, call, words = TWINS[case]
     if surface == "cli":
         files = {"{nan}": _log_file(_nan(log), tmp_path / "nan.csv"),
-                 "{few}": _log_file(_few(log), tmp_path / "few.csv")}
+                 "{few}": _log_file(_few(log), tmp_path / "few.csv"),
+                 "{ok}": _log_file(log, tmp_path / "ok.csv")}
         try:
             code = main([str(files.get(a, a)) for a in args])
         except SystemExit as exit_:        # argparse's refusal of an option's type
