@@ -7,8 +7,7 @@ the same input (bench.cli: exit status 2).
   `sample_rate_hz` within the rates a log may have as `--rate`, `duration` at least the
   chirp's fades as `--duration`, and within the memory limit as `check_memory`);
 - a `Log` given as an object: numpy arrays of real numbers, one length, finite, at least 3
-  samples, its metadata writable (identification.log_write.check_writable) and its sampling
-  what the log reader accepts (identification.log_read.validate);
+  samples, its sampling what the log reader accepts (identification.log_read.validate);
 - output paths: checked by the one output layer (bench.output.check_file) before any work;
 - `id_models`: a sequence of model names (a single string is refused: it would be read as
   letters).
@@ -91,12 +90,11 @@ def path_like(name: str, value: Any) -> None:
 
 def log_object(name: str, log: Any) -> None:
     """A Log whose columns are numpy arrays of real numbers of one length (finite, at least 3
-    samples, metadata on one line each, sampling as the reader accepts), or a file name."""
+    samples, sampling as the reader accepts), or a file name."""
     if not isinstance(log, Log):
         path_like(name, log)
         return
     from jointbench.identification.log_read import validate
-    from jointbench.identification.log_write import check_writable
 
     for col in LOG_COLUMNS + tuple(f"extra['{k}']" for k in log.extra):
         value = getattr(log, col) if col in LOG_COLUMNS else log.extra[col[7:-2]]
@@ -112,12 +110,15 @@ def log_object(name: str, log: Any) -> None:
         if value.ndim != 1 or len(value) != len(log.t):
             raise ValueError(f"{name}.{col}: shape {value.shape}, and {name}.t has "
                              f"{len(log.t)} samples: the columns must be 1-D of one length")
+        bad = np.flatnonzero(~np.isfinite(value))
+        if bad.size:
+            raise ValueError(f"{name}.{col}: {value[bad[0]]} at sample {int(bad[0])}: a log "
+                             "holds finite numbers only")
     if len(log.t) < 3:
         raise ValueError(f"{name}: {len(log.t)} samples, at least 3 are needed")
     if not isinstance(log.meta, dict):
         raise TypeError(f"{name}.meta: expected a dict of str, got {_type(log.meta)}")
     try:
-        check_writable(log)
         validate(log)
     except LogError as err:
         raise ValueError(f"{name}: {err.message}"
