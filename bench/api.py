@@ -26,7 +26,9 @@ from jointbench.bench.effects import HiddenEffect, parse_effects
 from jointbench.bench.results import (CampaignReport, DiagnosisResult, Estimate, Fit,
                                       ImportReport, SurveyResult)
 from jointbench.bench.sim.experiment import run_experiment
-from jointbench.identification.log import Log, read_log, write_log
+from jointbench.bench.api_args import check
+from jointbench.bench.output import write_log
+from jointbench.identification.log import Log, read_log
 
 __all__ = ["Estimate", "Fit", "DiagnosisResult", "CampaignReport", "SurveyResult",
            "ImportReport", "Log", "simulate", "identify", "diagnose", "campaign", "survey",
@@ -74,6 +76,7 @@ def simulate(model: str | os.PathLike = "prototype", joint: str | None = None, *
     >>> import jointbench as jb
     >>> log = jb.simulate("prototype", seed=1, duration=10)   # doctest: +SKIP
     """
+    check("simulate", locals())
     if isinstance(effect, str):
         effect = parse_effects(effect)   # one or several: "offset=5,backlash=0.002"
     return run_experiment(model, joint, duration=duration, seed=seed, effect=effect,
@@ -137,8 +140,8 @@ def import_log(file: str | os.PathLike, out: str | os.PathLike | None = None, *,
     """
     # argument checks: here, before any reading
     from jointbench.bench.output import check_file
-    from jointbench.identification.log_import import (LOG_COLUMNS, ImportSpec, convert,
-                                                      read_raw)
+    from jointbench.bench.cli.import_memory import read_within_memory
+    from jointbench.identification.log_import import LOG_COLUMNS, ImportSpec, convert
 
     src = Path(file)
     target = None if out is None else Path(out)
@@ -146,7 +149,7 @@ def import_log(file: str | os.PathLike, out: str | os.PathLike | None = None, *,
         if src.exists() and target.exists() and target.resolve() == src.resolve():
             raise ValueError(f"--out {target}: is the input file; choose another name")
         check_file(target, "--out")
-    raw = read_raw(src, delimiter)
+    raw = read_within_memory(src, delimiter)
     if columns is None:
         columns = {c: c for c in LOG_COLUMNS if c in raw.header}
     spec = ImportSpec(columns=dict(columns), units=dict(units or {}), gear_ratio=gear_ratio,

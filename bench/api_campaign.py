@@ -9,6 +9,7 @@ import os
 from pathlib import Path
 from typing import Callable, Sequence
 
+from jointbench.bench.api_args import check
 from jointbench.bench.campaign.compare import entries
 from jointbench.bench.campaign.gates import check_gates, parse_gates
 from jointbench.bench.campaign.methods import DEFAULT_TIMEOUT_S, Method, methods_of, with_methods
@@ -93,7 +94,7 @@ def campaign(model: str | os.PathLike = "prototype", joint: str | None = None, *
     >>> c = jb.campaign(runs=4, duration=10, require="K.abs_bias_pct<5")   # doctest: +SKIP
     >>> c.passed                                                          # doctest: +SKIP
     """
-    # argument checks: here, before any run
+    check("campaign", locals())
     allowed = {f.name for f in dataclasses.fields(RunSettings)} - {"model", "joint", "duration",
                                                                   "id_models"}
     unknown = sorted(set(settings) - allowed)

@@ -8,6 +8,7 @@ import os
 from pathlib import Path
 from typing import Callable
 
+from jointbench.bench.api_args import check
 from jointbench.bench.api_log import LogLike, as_log, log_name
 from jointbench.bench.results.diagnose import DiagnosisResult
 from jointbench.identification.log import Log
@@ -75,7 +76,7 @@ def diagnose(log: LogLike, forward: bool = True,
     >>> d = jb.diagnose(jb.simulate(seed=1, effect="backlash=0.002"))   # doctest: +SKIP
     >>> d.named_cause                                                   # doctest: +SKIP
     """
-    # argument checks: here, before any reading
+    check("diagnose", locals())
     from jointbench.identification.log import LogError
     from jointbench.identification.saturation import clipping_warnings
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 from typing import Callable
 
+from jointbench.bench.api_args import check
 from jointbench.bench.api_log import LogLike, as_log, log_name
 from jointbench.bench.results.identify import Fit
 from jointbench.identification.checks import estimate_flags
@@ -128,7 +129,7 @@ def identify(log: LogLike, model: str = "auto", settings: FilterSettings | None 
     >>> fit = jb.identify(jb.simulate(seed=1, duration=20))   # doctest: +SKIP
     >>> fit.parameters["K"].sigma_hac                         # doctest: +SKIP
     """
-    # argument checks: here, before any reading
+    check("identify", locals())
     from jointbench.identification.physical import InversionError
     from jointbench.identification.saturation import clipping_warnings
     from jointbench.identification.sanity import sanity_warnings

@@ -196,12 +196,26 @@ class OutputFolder:
                 raise OutputError(f"{flag} {p}: exists and is not a folder"
                                   + (f" ({kind})" if kind else ""))
             _check_folder(p, flag, str(p))
+            self._check_links()
             manifest = read_manifest(p)
             for name in self._present():
                 check_target(p / name, flag, manifest, name)
         else:
             parent = p.parent if str(p.parent) else Path(".")
             _check_folder(parent, flag, str(p))
+
+    def _check_links(self) -> None:
+        """OutputError when a sub-folder the command writes into (`logs/` of `logs/*`) is a
+        symbolic link or not a folder: files written there would land in another folder,
+        past every check of this one."""
+        for name in self.names:
+            parts = Path(name.removesuffix("/*")).parts
+            for k in range(1, len(parts) if not name.endswith("/*") else len(parts) + 1):
+                sub = self.path.joinpath(*parts[:k])
+                if os.path.islink(sub) or (os.path.lexists(sub) and not sub.is_dir()):
+                    what = "a symbolic link" if os.path.islink(sub) else "not a folder"
+                    raise OutputError(f"{self.flag} {self.path}: {sub} is {what}; refusing to "
+                                      f"write {name} through it")
 
     def _declared(self, name: str) -> bool:
         return any(name == n or (n.endswith("/*") and name.startswith(n[:-1]))
@@ -215,6 +229,7 @@ class OutputFolder:
         """Yields the folder to write into; all or nothing (class docstring)."""
         import shutil
         p = self.path
+        self._check_links()   # again: the folder may have changed during the computation
         created = not p.exists()
         p.mkdir(exist_ok=True)
         backup = Path(tempfile.mkdtemp(prefix=_BACKUP_PREFIX, dir=p))
@@ -263,3 +278,44 @@ def _prune(folder: Path, names: set[str], remove_root: bool) -> None:
             os.rmdir(d)
         except OSError:
             pass  # not empty, or gone
+
+
+def write_log(log, path: str | os.PathLike, flag: str = "path") -> Path:
+    """Write a log as the CSV of docs/log-format.md, under the output rule: the target is
+    checked first (never a file jointbench did not write), the log written atomically and
+    read back by the log reader before it counts as written.
+
+    Parameters
+    ----------
+    log : Log
+        The log.
+    path : str or PathLike
+        The file.
+    flag : str
+        The name of the argument or option in error messages.
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Raises
+    ------
+    OutputError
+        `path` is a file jointbench did not write, or cannot be written (a ValueError).
+    LogError
+        The log would not read back, naming the key, column or sample (a ValueError).
+    TypeError
+        `log` is not a Log or `path` not a file name.
+    """
+    from jointbench.identification.log_schema import Log
+    from jointbench.identification.log_write import write_log as write
+
+    if not isinstance(log, Log):
+        raise TypeError(f"log: expected a jointbench Log, got {type(log).__name__}")
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"{flag}: expected a file name (str or os.PathLike), got "
+                        f"{type(path).__name__}")
+    path = check_file(path, flag)
+    write(log, path)
+    return path

@@ -3,11 +3,14 @@ mode with the chosen differentiator (eq. 29), and does the band hold the mode.""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy.optimize import brentq
 
 from jointbench.identification.design import design_bandpass
 from jointbench.identification.filtering import FilterSettings, stencil_gain
+from jointbench.identification.log import Log, LogError
 
 MIN_CUTOFF_OVER_F1 = 1.3   # decimated cutoff / f1 below which the band does not hold the mode
 NYQUIST_CAP = 0.8          # wn_from_f1 caps the Butterworth at 0.8 of the Nyquist frequency
@@ -48,3 +51,15 @@ def band_warnings(rate_hz: float, s: FilterSettings, f1_hz: float, nd: int) -> l
         out.append(f"the band cannot hold the mode: eq. (28) asks wn = {wn28:.4g} rad/s, over "
                    f"the Nyquist cap {cap:.4g} rad/s at {rate_hz:g} Hz")
     return out
+
+
+def check_f1(log: Log, f1_hz: float) -> None:
+    """LogError (naming --f1 and f1_hz) for a first mode the log cannot hold: under one
+    cycle over the log, or at or over the Nyquist frequency (the band and its decimation are
+    designed from it)."""
+    duration = float(log.t[-1] - log.t[0])
+    lo, hi = 1.0 / duration, 0.5 * log.sample_rate_hz
+    if not (math.isfinite(f1_hz) and lo <= f1_hz < hi):
+        raise LogError(f"f1 = {f1_hz:g} Hz (--f1, f1_hz): the first mode must lie in "
+                       f"[{lo:.3g}, {hi:.4g}) Hz: at least one cycle over the {duration:.3g} s "
+                       "log, below the Nyquist frequency", log.path)

@@ -12,7 +12,7 @@ import numpy as np
 from jointbench.identification import link_fit, regressors
 from jointbench.identification.checks import check_excitation, check_signals
 from jointbench.identification.estimate import LSResult, NotIdentifiable, block_weighted, least_squares
-from jointbench.identification.band_checks import band_warnings
+from jointbench.identification.band_checks import band_warnings, check_f1
 from jointbench.identification.band_choice import MODE_DISAGREEMENT, BandChoice, choose_band
 from jointbench.identification.defaults import choose_filter, is_paper_prototype, stencil_for
 from jointbench.identification.first_mode import (FirstMode, given_first_mode,
@@ -128,6 +128,8 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
     """
     if model not in MODEL_CHOICES:
         raise ValueError(f"unknown model {model!r} (choices: {', '.join(MODEL_CHOICES)})")
+    if f1_hz is not None:
+        check_f1(log, f1_hz)
     warnings: list[str] = []
     notes: list[str] = []
     chooser = settings is None

@@ -17,11 +17,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from jointbench.identification.log_read import (read_lines, sampling_jitter, unit_warnings,
-                                                validate)
-from jointbench.identification.log_schema import (BOOLEAN_META, NUMERIC_META, OPTIONAL_COLUMNS,
-                                                  REQUIRED_COLUMNS, Log, LogError, meta_boolean,
-                                                  meta_number)
+from jointbench.identification.log_read import (MAX_ABS_VALUE, MAX_RATE_HZ, MIN_RATE_HZ,
+                                                sampling_jitter, unit_warnings, validate)
+from jointbench.identification.log_schema import (BOOLEAN_META, NONNEGATIVE_META, NUMERIC_META,
+                                                  OPTIONAL_COLUMNS, REQUIRED_COLUMNS, Log,
+                                                  LogError, meta_boolean, meta_number)
+from jointbench.identification.log_write import check_writable
+# the raw table's reader, re-exported: the command line and the tests import it from here
+from jointbench.identification.raw_table import RawTable, TooLarge, parse_raw, read_raw
 
 LOG_COLUMNS = REQUIRED_COLUMNS + OPTIONAL_COLUMNS
 POSITIONS = ("q_m", "q", "q_ref")
@@ -36,7 +39,15 @@ TORQUE_UNITS = {"Nm": 1.0, "N": 1.0, "A": None, "V": None}
 DEFAULT_UNITS = {"t": "s", "q_m": "rad", "q": "rad", "tau_m": "Nm", "q_ref": "rad"}
 MOTOR_SIDE = ("q_m", "tau_m", "q_ref")  # measured on the motor shaft by default (with N)
 GAIN_POWERS = {"kv": 2, "ki": 2, "tau_max": 1}  # motor-side gain x N^power = joint side
-DELIMITERS = (",", ";", "\t", "|")
+# Metadata an import checks against a drive's range (the reader checks only the sign the
+# analyses need): key -> (lowest, highest). A gain is >= 0 (0: no such term); gravity is an
+# acceleration magnitude, 0 for a horizontal axis, and no robot works under 100 m/s^2.
+META_RANGES = {"kp": (0.0, math.inf), "kv": (0.0, math.inf), "ki": (0.0, math.inf),
+               "gravity": (0.0, 100.0)}
+# The fastest rate a drive logs its axis at (current loops run at 10-40 kHz, their logs at
+# most at the loop's rate): above it, the time column's unit is the likely slip (seconds
+# declared as ms gives 1000 times the rate).
+MAX_DRIVE_RATE_HZ = 40e3
 
 
 @dataclass(frozen=True)
@@ -63,21 +74,6 @@ class ImportSpec:
 
 
 @dataclass(frozen=True)
-class RawTable:
-    """A raw CSV table: `header` names, `data` (rows x columns, float), `lines` the file
-    line of each row, `delimiter` found."""
-
-    path: str
-    header: tuple[str, ...]
-    data: np.ndarray
-    lines: np.ndarray
-    delimiter: str
-
-    def column(self, name: str) -> np.ndarray:
-        return self.data[:, self.header.index(name)]
-
-
-@dataclass(frozen=True)
 class ImportResult:
     """The converted `log`, what was done (`steps`), the checks run and their outcome
     (`checks`), and warnings (not errors)."""
@@ -86,59 +82,6 @@ class ImportResult:
     steps: tuple[str, ...]
     checks: tuple[str, ...]
     warnings: tuple[str, ...]
-
-
-def _split(line: str, delimiter: str) -> list[str]:
-    return [cell.strip().strip('"').strip() for cell in line.split(delimiter)]
-
-
-def parse_raw(lines, path: str, delimiter: str | None = None) -> RawTable:
-    """A raw table from numbered text lines: `#` comment lines and blank lines skipped, the
-    first other line the header (delimiter `,`, `;`, tab or `|`, found from it unless given),
-    then one row of numbers per line. Raises LogError naming file, line and column."""
-    header: list[str] | None = None
-    rows: list[list[float]] = []
-    where: list[int] = []
-    for lineno, line in lines:
-        text = line.strip()
-        if not text or text.startswith("#"):
-            continue
-        if header is None:
-            if delimiter is None:
-                delimiter = max(DELIMITERS, key=text.count)
-            header = _split(text, delimiter)
-            if "" in header:
-                raise LogError("empty column name in the header", path, lineno)
-            dup = sorted({h for h in header if header.count(h) > 1})
-            if dup:
-                raise LogError(f"duplicate column '{dup[0]}' in the header", path, lineno)
-            continue
-        cells = _split(text, delimiter)
-        if len(cells) != len(header):
-            raise LogError(f"expected {len(header)} cells, found {len(cells)}", path, lineno)
-        row = []
-        for name, cell in zip(header, cells):
-            try:
-                x = float(cell)
-            except ValueError:
-                raise LogError(f"not a number: '{cell[:40]}'", path, lineno, name) from None
-            if not math.isfinite(x):
-                raise LogError(f"non-finite value '{cell}'", path, lineno, name)
-            row.append(x)
-        rows.append(row)
-        where.append(lineno)
-    if header is None:
-        raise LogError("empty file: no header row", path)
-    if not rows:
-        raise LogError("no data rows after the header", path)
-    return RawTable(path, tuple(header), np.array(rows, dtype=float), np.array(where),
-                    delimiter or ",")
-
-
-def read_raw(path: str | os.PathLike, delimiter: str | None = None) -> RawTable:
-    """`parse_raw` on a file, streamed with the log reader's checks (size limit, binary
-    content; identification.log_read.read_lines). Raises LogError."""
-    return read_lines(path, lambda lines, name: parse_raw(lines, name, delimiter))
 
 
 def _check_spec(raw: RawTable, spec: ImportSpec) -> None:
@@ -154,6 +97,12 @@ def _check_spec(raw: RawTable, spec: ImportSpec) -> None:
         if name not in raw.header:
             raise LogError(f"--map {col}={name}: no column '{name}' (the file has "
                            f"{', '.join(raw.header)})", raw.path, int(raw.lines[0]) - 1)
+    taken: dict[str, str] = {}
+    for col, name in spec.columns.items():
+        if name in taken:
+            raise LogError(f"--map {taken[name]}={name},{col}={name}: one raw column for two "
+                           "log columns (each log column is its own measurement)", raw.path)
+        taken[name] = col
     table = {"t": TIME_UNITS, "tau_m": TORQUE_UNITS}
     for col, unit in spec.units.items():
         known = table.get(col, POSITION_UNITS)
@@ -172,6 +121,10 @@ def _check_spec(raw: RawTable, spec: ImportSpec) -> None:
                         ("--torque-constant", spec.torque_constant)):
         if value is not None and not (math.isfinite(value) and value > 0):
             raise LogError(f"{name} must be a positive number, got {value}", raw.path)
+    if spec.rate_hz is not None and not MIN_RATE_HZ <= spec.rate_hz <= MAX_RATE_HZ:
+        raise LogError(f"--rate {spec.rate_hz:g}: must lie in [{MIN_RATE_HZ:g}, "
+                       f"{MAX_RATE_HZ:g}] Hz, the rates a log may have (docs/log-format.md)",
+                       raw.path)
 
 
 def _time(raw: RawTable, spec: ImportSpec, steps: list, checks: list) -> np.ndarray:
@@ -284,7 +237,15 @@ def _metadata(spec: ImportSpec, rate_hz: float, path: str, steps: list) -> dict[
                     raise LogError(f"motor-side gains need --gear-ratio ({key})", path)
                 number *= spec.gear_ratio ** GAIN_POWERS[key]
                 steps.append(f"{key}: motor side {value} x N^{GAIN_POWERS[key]} = {number:.10g}")
+            low, high = META_RANGES.get(key, (-math.inf, math.inf))
+            if not low <= number <= high:
+                why = ("gravity is an acceleration's magnitude [m/s^2]" if key == "gravity"
+                       else "a gain is >= 0")
+                raise LogError(f"metadata '{key}' = {number:g} is outside [{low:g}, {high:g}] "
+                               f"({why})", path)
             value = f"{number:.10g}"
+        elif key in NONNEGATIVE_META:
+            meta_number(key, value, path, None)
         elif key in BOOLEAN_META:
             value = "true" if meta_boolean(key, value, path, None) else "false"
         meta[key] = value
@@ -313,17 +274,53 @@ def convert(raw: RawTable, spec: ImportSpec) -> ImportResult:
             steps.append(how)
     cols["tau_m"], how = _torque(raw, spec, prismatic)
     steps.append(how)
+    _check_range(raw, spec, cols)
     rate = (len(t) - 1) / float(t[-1] - t[0])  # the mean period: uniform checked above
     meta = _metadata(spec, spec.rate_hz or rate, raw.path, steps)
     log = Log(t=t, q_m=cols["q_m"], tau_m=cols["tau_m"], q=cols.get("q"),
               q_ref=cols.get("q_ref"), meta=meta, path=raw.path)
+    check_writable(log)
     validate(log, row_lines=raw.lines)
     checks.append(f"log checks of docs/log-format.md passed (t increasing and uniform, "
                   f"sample_rate_hz {meta['sample_rate_hz']} agrees with t)")
     checks += _model_checks(log)
     constant = [f"{raw.path}: column '{spec.columns[c]}' ({c}) is constant"
                 for c in ("q_m", "q", "tau_m") if c in spec.columns and np.ptp(cols[c]) == 0]
-    return ImportResult(log, tuple(steps), tuple(checks), tuple(unit_warnings(log) + constant))
+    return ImportResult(log, tuple(steps), tuple(checks),
+                        tuple(unit_warnings(log) + _rate_warnings(raw, spec, log) + constant))
+
+
+def _check_range(raw: RawTable, spec: ImportSpec, cols: dict[str, np.ndarray]) -> None:
+    """LogError, naming the raw column and the factor applied, for a converted value beyond
+    what the log reader accepts (MAX_ABS_VALUE): a gear ratio, a counts per turn or a torque
+    constant that is a typo, or a corrupted cell."""
+    for col, x in cols.items():
+        big = np.flatnonzero(~(np.abs(x) <= MAX_ABS_VALUE))
+        if big.size:
+            k = int(big[0])
+            name = spec.columns[col]
+            raw_value = float(raw.column(name)[k])
+            factor = float(x[k] / raw_value) if raw_value else float("nan")
+            raise LogError(f"{col} = {x[k]:.6g} after conversion (raw {raw_value:.6g} x "
+                           f"{factor:.6g}): over {MAX_ABS_VALUE:g} in magnitude, which the log "
+                           "format refuses as a corrupted cell; check --gear-ratio, --units, "
+                           "--counts-per-turn and --torque-constant", raw.path,
+                           int(raw.lines[k]), name)
+
+
+def _rate_warnings(raw: RawTable, spec: ImportSpec, log: Log) -> list[str]:
+    """A warning when the log's rate is above what a drive logs (MAX_DRIVE_RATE_HZ), naming
+    the time unit that would give a drive's rate."""
+    rate = log.sample_rate_hz
+    if not rate > MAX_DRIVE_RATE_HZ:
+        return []
+    unit = spec.units.get("t", "s")
+    slower = {"us": "ms", "ms": "s"}.get(unit)
+    hint = (f"if the time column '{spec.columns['t']}' is in {slower}, not {unit}, give "
+            f"--units t={slower} (a rate of {rate * TIME_UNITS[unit] / TIME_UNITS[slower]:.6g}"
+            " Hz)") if slower else "check the time column's unit (--units t=...) and --rate"
+    return [f"{raw.path}: sample rate {rate:.6g} Hz, above what a drive logs (at most "
+            f"{MAX_DRIVE_RATE_HZ:g} Hz): the time unit is likely wrong; {hint}"]
 
 
 def _model_checks(log: Log) -> list[str]:

@@ -21,7 +21,8 @@ from typing import Callable, Iterable, Iterator, TypeVar
 import numpy as np
 
 from jointbench.identification.log_schema import (BOOLEAN_META, FORMAT_KEY, FORMAT_VERSION,
-                                                  NUMERIC_META, OPTIONAL_COLUMNS,
+                                                  NONNEGATIVE_META, NUMERIC_META,
+                                                  OPTIONAL_COLUMNS,
                                                   REQUIRED_COLUMNS, Log, LogError, is_number,
                                                   meta_boolean, meta_number, shown)
 
@@ -66,7 +67,7 @@ def _parse_metadata(lines: list[tuple[int, str]], path) -> tuple[dict[str, str],
                            path, lineno)
         meta[key] = value
         where[key] = lineno
-        if key in NUMERIC_META:
+        if key in NUMERIC_META or key in NONNEGATIVE_META:
             meta_number(key, value, path, lineno)
         elif key in BOOLEAN_META:
             meta_boolean(key, value, path, lineno)

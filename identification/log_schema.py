@@ -28,6 +28,10 @@ NUMERIC_META = {"sample_rate_hz": True, "gravity": False, "kp": False, "kv": Fal
                 "ki": False, "tau_max": True, "gear_ratio": True, PLANT_STEPS_KEY: True,
                 PLANT_TIMECONST_KEY: False}
 BOOLEAN_META = ("velocity_feedforward",)
+# Metadata the replays read as numbers that cannot be negative (Sensors.from_log): a noise
+# level and the encoders' steps (0: an ideal sensor).
+NONNEGATIVE_META = ("torque_noise_std", "motor_encoder_resolution_rad",
+                    "link_encoder_resolution_rad")
 # The unit word a numeric key may carry after its number (docs/log-format.md), spaces, `*`
 # and `.` between unit symbols ignored: SI on the joint side (a prismatic axis: N, m).
 META_UNITS = {"sample_rate_hz": ("Hz",), "gravity": ("m/s^2", "m/s2", "m s^-2", "m/s²"),
@@ -263,6 +267,9 @@ def meta_number(key: str, value: str, path, line: int | None) -> float:
                        line)
     if NUMERIC_META.get(key) and number <= 0:
         raise LogError(f"metadata '{key}' must be positive, got '{shown(value)}'", path, line)
+    if key in NONNEGATIVE_META and number < 0:
+        raise LogError(f"metadata '{key}' must be >= 0 (0: an ideal sensor), got "
+                       f"'{shown(value)}'", path, line)
     return number
 
 

@@ -30,6 +30,9 @@ import numpy as np
 MODELS_DIR = Path(__file__).resolve().parent
 SHIPPED = {"prototype": "prototype_axis.xml", "prototype_axis": "prototype_axis.xml",
            "arm6": "arm6.xml"}
+# A gear ratio beyond this turns a motor-side encoder step or torque into a value the log
+# format refuses (identification.log_read.MAX_ABS_VALUE is 1e12): a typo, not a gearbox.
+MAX_GEAR_RATIO = 1e6
 
 
 class ModelStructureError(ValueError):
@@ -139,12 +142,65 @@ def find_axes(model: mujoco.MjModel, source: str = "<model>") -> list[Axis]:
                          int(model.jnt_qposadr[jm]), int(model.jnt_dofadr[jl]),
                          int(model.jnt_dofadr[jm])))
     axes += _rigid_axes(model, source, {a.name for a in axes})
+    for axis in axes:
+        check_values(model, axis, source)
     if not axes:
         raise ModelStructureError(
             f"{source}: no flexible axis found, nor a rigid one: expected a fixed tendon 'X_spring' coupling "
             "joints 'X_motor' and 'X', and an actuator 'X_motor' (flexible axis), or an "
             "actuator 'X_motor' driving joint 'X' (rigid axis) (see models/__init__.py)")
     return axes
+
+
+def _not_physical(source: str, element: str, attribute: str, value: float, wanted: str
+                  ) -> ModelStructureError:
+    return ModelStructureError(f"{source}: {element}: {attribute}=\"{value:g}\" is not "
+                               f"physical; it must be {wanted}")
+
+
+def check_values(model: mujoco.MjModel, axis: Axis, source: str = "<model>") -> None:
+    """ModelStructureError, naming the file, the element and the attribute, for a value of
+    `axis` that no physical axis has (each would give zero gains, the square root of a
+    negative, a division by zero or a dropped row): a spring stiffness K or a rotor armature
+    Jm that is not finite and > 0, a damping, frictionloss, armature or joint stiffness that
+    is not finite and >= 0, an actuator gear other than 1 (tau_m is the torque on the rotor
+    joint, already referred to the joint side: the gear ratio goes into
+    `<numeric name="X_gear_ratio">`), a gear ratio that is not finite and in
+    (0, MAX_GEAR_RATIO]."""
+    def check(element: str, attribute: str, value: float, positive: bool, what: str = ""):
+        if not (np.isfinite(value) and (value > 0 if positive else value >= 0)):
+            raise _not_physical(source, element, attribute, float(value),
+                                ("finite and > 0" if positive else "finite and >= 0") + what)
+
+    for j in sorted({axis.link_joint, axis.motor_joint}):
+        name = f"joint '{_name(model, mujoco.mjtObj.mjOBJ_JOINT, j)}'"
+        dof = int(model.jnt_dofadr[j])
+        rotor = j == axis.motor_joint and not axis.rigid
+        check(name, "armature", model.dof_armature[dof], rotor,
+              " (the rotor inertia Jm)" if rotor else "")
+        check(name, "damping", model.dof_damping[dof], False)
+        check(name, "frictionloss", model.dof_frictionloss[dof], False)
+        check(name, "stiffness", model.jnt_stiffness[j], False)
+    if not axis.rigid:
+        name = f"tendon '{_name(model, mujoco.mjtObj.mjOBJ_TENDON, axis.tendon)}'"
+        check(name, "stiffness", float(np.ravel(model.tendon_stiffness[axis.tendon])[0]), True,
+              " (the joint stiffness K)")
+        check(name, "damping", float(np.ravel(model.tendon_damping[axis.tendon])[0]), False)
+        check(name, "frictionloss", float(model.tendon_frictionloss[axis.tendon]), False)
+    gear = float(model.actuator_gear[axis.actuator, 0])
+    if gear != 1.0:
+        act = _name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, axis.actuator)
+        raise ModelStructureError(
+            f"{source}: actuator '{act}': gear=\"{gear:g}\" is not the axis convention's 1: "
+            f"tau_m is the torque on the joint, already referred to the joint side; give the "
+            f"gear ratio as <numeric name=\"{axis.name}_gear_ratio\" data=\"N\"/>")
+    nid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_NUMERIC, f"{axis.name}_gear_ratio")
+    if nid >= 0:
+        adr, size = int(model.numeric_adr[nid]), int(model.numeric_size[nid])
+        value = float(model.numeric_data[adr]) if size else float("nan")
+        if not (np.isfinite(value) and 0 < value <= MAX_GEAR_RATIO):
+            raise _not_physical(source, f"numeric '{axis.name}_gear_ratio'", "data", value,
+                                f"a finite gear ratio in (0, {MAX_GEAR_RATIO:g}]")
 
 
 def select_axis(axes: list[Axis], joint: str | None, source: str = "<model>") -> Axis:

@@ -14,12 +14,13 @@ PACKAGES = ("bench", "identification", "models")
 MAX_LINES = 400
 # Layers, lowest first: a module may import its own layer or a lower one.
 LAYERS = (("jointbench.identification", "jointbench.models"),
-          ("jointbench.bench.effects", "jointbench.bench.options", "jointbench.bench.output"),
+          ("jointbench.bench.effects", "jointbench.bench.options", "jointbench.bench.output",
+           "jointbench.bench.memory"),
           ("jointbench.bench.sim",),
           ("jointbench.bench.analysis", "jointbench.bench.campaign", "jointbench.bench.present",
            "jointbench.bench.demo", "jointbench.bench.results", "jointbench.bench.api_log",
            "jointbench.bench.api_identify", "jointbench.bench.api_diagnose",
-           "jointbench.bench.api_campaign", "jointbench.bench.api"),
+           "jointbench.bench.api_campaign", "jointbench.bench.api", "jointbench.bench.api_args"),
           ("jointbench.bench.cli",))
 
 

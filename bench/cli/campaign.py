@@ -127,6 +127,8 @@ def spec_arguments(args: argparse.Namespace, parse_effect: Callable[[str], objec
         raise CampaignError(f"--rate must lie in 10 Hz to 100 kHz, got {args.rate:g}")
     if args.scatter < 0:
         raise CampaignError(f"--scatter must be >= 0, got {args.scatter:g}")
+    if not 0 <= args.seed < 2**32:
+        raise CampaignError(f"--seed must be >= 0 and below 2**32, got {args.seed}")
     if args.effect:
         parse_effect(args.effect)  # ValueError names what is wrong
     base = RunSettings(model=str(args.model), joint=args.joint, duration=args.duration,

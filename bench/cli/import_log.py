@@ -80,6 +80,9 @@ def _pairs(text: str | None, flag: str, form: str) -> dict[str, str]:
         key, sep, value = item.partition("=")
         if not sep or not key.strip() or not value.strip() or "=" in value:
             raise UsageError(f"{flag}: '{item}' must read {form}")
+        if key.strip() in out:
+            raise UsageError(f"{flag}: '{key.strip()}' is given twice ('{out[key.strip()]}' "
+                             f"and '{value.strip()}'); give each once")
         out[key.strip()] = value.strip()
     return out
 
@@ -97,7 +100,12 @@ def options(args: argparse.Namespace) -> dict:
         if getattr(args, dest) is not None:
             meta[key] = str(getattr(args, dest))
     for item in args.meta:
-        meta.update(_pairs(item, "--meta", "KEY=VALUE (e.g. torque_noise_std=0.5)"))
+        for key, value in _pairs(item, "--meta", "KEY=VALUE (e.g. torque_noise_std=0.5)"
+                                 ).items():
+            if key in meta and meta[key] != value:
+                raise UsageError(f"--meta {key}={value}: '{key}' is already given as "
+                                 f"'{meta[key]}' (by --meta or its own option)")
+            meta[key] = value
     return dict(columns=columns, units=units, gear_ratio=args.gear_ratio,
                 motor_side=tuple(c.strip() for c in args.motor_side.split(",") if c.strip()),
                 counts_per_turn=args.counts_per_turn,

@@ -13,33 +13,18 @@ Standard library only.
 
 from __future__ import annotations
 
-import math
-import os
-
 from jointbench.bench.cli.common import UsageError
-
-BYTES_PER_SAMPLE = 1024
-MEMORY_ENV = "JOINTBENCH_MAX_MEMORY_MB"
-BASE_MB = 200.0   # the interpreter, numpy, scipy, MuJoCo and a model (about 130-180 MB measured)
+from jointbench.bench.memory import BASE_MB, BYTES_PER_SAMPLE, MEMORY_ENV
+from jointbench.bench.memory import memory_limit_mb as _limit
 
 
 def memory_limit_mb(environ: dict[str, str] | None = None) -> float:
-    """JOINTBENCH_MAX_MEMORY_MB, else half of the physical memory (4096 MB when unknown).
-    UsageError when the variable is not a positive number."""
-    environ = os.environ if environ is None else environ
-    text = environ.get(MEMORY_ENV, "").strip()
-    if text:
-        try:
-            value = float(text) if "_" not in text else math.nan
-        except ValueError:
-            value = math.nan
-        if not (math.isfinite(value) and value > 0):
-            raise UsageError(f"{MEMORY_ENV}={text!r}: give a positive number of MB")
-        return value
+    """JOINTBENCH_MAX_MEMORY_MB, else half of the physical memory (bench.memory). UsageError
+    when the variable is not a positive number."""
     try:
-        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2 / 2**20
-    except (ValueError, OSError, AttributeError):
-        return 4096.0
+        return _limit(environ)
+    except ValueError as err:
+        raise UsageError(str(err)) from None
 
 
 def check_memory(samples: float, what: str, copies: int = 1) -> float:

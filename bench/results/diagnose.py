@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Callable
 
 from jointbench.bench.analysis.diagnose import Diagnosis, summary_text
 from jointbench.bench.analysis.diagnose import write as write_diagnosis
+from jointbench.bench.api_args import path_like
 from jointbench.identification.output import finite_json
 
 if TYPE_CHECKING:
@@ -123,6 +124,7 @@ class DiagnosisResult:
         DiagnosisResult
             The same result with the files written in `files`.
         """
+        path_like("out", out)
         say = progress or (lambda msg: None)
         if self.against_model:
             from jointbench.bench.analysis.diagnose.model_report import write

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from jointbench.bench.analysis.debias import DebiasResult
+from jointbench.bench.api_args import output_path
 from jointbench.bench.analysis.refine import RefineResult
 from jointbench.bench.present.identify import identify_json, identify_text
 from jointbench.bench.present.validate import forward_text
@@ -169,6 +170,7 @@ class Fit:
         matplotlib.figure.Figure
             The figure (pyplot is used: pick the backend first).
         """
+        output_path("path", path)
         r = self.result
         rows = r.block == 0
         return plot_validation(r.t[rows], r.y[rows], r.y_pred[rows], r.relative_error_pct,

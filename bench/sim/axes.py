@@ -164,36 +164,6 @@ def _static_equilibrium(model: mujoco.MjModel, axis: Axis, qpos: np.ndarray,
     return qpos, tau0
 
 
-def _joint_values(model: mujoco.MjModel, joint: int) -> dict[str, float]:
-    d = int(model.jnt_dofadr[joint])
-    return {"armature": float(model.dof_armature[d]), "damping": float(model.dof_damping[d]),
-            "frictionloss": float(model.dof_frictionloss[d])}
-
-
-def check_physical(model: mujoco.MjModel, axes: list[Axis], source: str) -> None:
-    """ModelStructureError naming the element and attribute of a value no axis can have:
-    a spring stiffness K <= 0, a rotor armature Jm <= 0, a negative damping or friction
-    (each would give zero gains, a square root of a negative or a division by zero)."""
-    def fail(element: str, attribute: str, value: float, want: str) -> None:
-        raise ModelStructureError(f"{source}: {element}: {attribute}=\"{value:g}\" is not "
-                                  f"physical; it must be {want}")
-
-    for a in axes:
-        if not a.rigid:
-            K = float(np.ravel(model.tendon_stiffness[a.tendon])[0])
-            if not K > 0:
-                fail(f"tendon '{a.name}_spring'", "stiffness", K, "> 0 (the joint stiffness K)")
-            if not _joint_values(model, a.motor_joint)["armature"] > 0:
-                fail(f"joint '{a.name}_motor'", "armature",
-                     _joint_values(model, a.motor_joint)["armature"],
-                     "> 0 (the rotor inertia Jm)")
-        for j in {a.link_joint, a.motor_joint}:
-            name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j)
-            for attr, value in _joint_values(model, j).items():
-                if not value >= 0:
-                    fail(f"joint '{name}'", attr, value, ">= 0")
-
-
 def _missing_axis(model: mujoco.MjModel, joint: str, path: Path, names: list[str]) -> str:
     """Why `joint` is not an axis of `model`: the part of the convention it lacks."""
     def has(obj, name: str) -> bool:
@@ -237,7 +207,6 @@ def build_experiment_model(model: str | Path = "prototype", joint: str | None = 
         jname = mujoco.mj_id2name(full, mujoco.mjtObj.mjOBJ_JOINT, j) or ""
         if jname.endswith("_motor") and jname[:-len("_motor")] not in names:
             raise ModelStructureError(_missing_axis(full, jname[:-len("_motor")], path, names))
-    check_physical(full, axes, str(path))
     moving = select_axis(axes, joint, str(path))
     joint = moving.name
     config = dict(config or {})

@@ -35,6 +35,7 @@ from typing import Callable, Sequence
 import mujoco
 import numpy as np
 
+from jointbench.bench.analysis.diagnose.model_checks import compiled, load_spec, log_axis
 from jointbench.bench.analysis.diagnose.model_edit import (EDITABLE, GRAVITY, Corrected,
                                                            corrected_spec, spec_truth)
 from jointbench.bench.analysis.diagnose.model_floor import (excess, replay_floor, replay_model,
@@ -48,7 +49,7 @@ from jointbench.identification.discrepancy.candidates import joint_parameters
 from jointbench.identification.identify import Identification, identify
 from jointbench.identification.log import Log
 from jointbench.identification.parameters import FRICTIONS, STIFFNESS_AND_INERTIAS
-from jointbench.models import find_axes, model_path, select_axis
+from jointbench.models import find_axes, model_path
 
 # The physical parameters of eq. (13) (identification.parameters.TWO_MASS), in the report's order.
 COMPARED = STIFFNESS_AND_INERTIAS + FRICTIONS + GRAVITY
@@ -340,12 +341,11 @@ def diagnose_against_model(log: Log, model: str | Path, joint: str | None = None
     LogError for an unusable log."""
     say = progress or (lambda msg: None)
     source = model_path(model)
-    spec = mujoco.MjSpec.from_file(str(source))
-    axes = find_axes(spec.compile(), str(source))
+    spec = load_spec(source)
+    compiled_model = compiled(spec, source)
+    axes = find_axes(compiled_model, str(source))
     names = [a.name for a in axes]
-    if joint is None and log.meta.get("joint") in names:
-        joint = log.meta["joint"]
-    joint = select_axis(axes, joint, str(source)).name
+    joint, checked = log_axis(log, compiled_model, axes, joint, source)
     config = _config(log, config, names)
     truth = spec_truth(spec, joint, config, str(source))[0]
     say(f"model {source.name}, axis {joint}; identification of {log.path or 'the log'}")
@@ -357,7 +357,7 @@ def diagnose_against_model(log: Log, model: str | Path, joint: str | None = None
     corrections = {n: e.data for n, e in errors.items() if e.significant and n in EDITABLE}
     corrected = corrected_spec(source, joint, config, corrections)
     effects, named, notes, d = _structural(log, errors, truth.FS, say)
-    notes = list(corrected.notes) + notes
+    notes = checked + list(corrected.notes) + notes
     K = spec_truth(corrected.spec, joint, config)[0].K
     with tempfile.TemporaryDirectory() as tmp:   # the replays read files
         folder = Path(tmp)

@@ -20,10 +20,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import mujoco
 import numpy as np
 
+from jointbench.bench.analysis.diagnose.model_checks import load_spec
 from jointbench.bench.sim.axes import full_qpos
 from jointbench.models import Axis, ModelStructureError, find_axes
 from jointbench.models.truth import AxisTruth, axis_truth
@@ -195,7 +197,7 @@ def corrected_spec(path: str, joint: str, config: dict[str, float],
     """The MJCF at `path` with axis `joint`'s parameters set to `values` (any of EDITABLE;
     others are ignored), read again from the compiled result. ValueError for a value that is
     not physical (K, Jm, JL <= 0, a negative friction)."""
-    spec = mujoco.MjSpec.from_file(str(path))
+    spec = load_spec(Path(path))
     notes: list[str] = []
     for name, v in values.items():
         if name not in EDITABLE:
