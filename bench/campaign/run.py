@@ -19,7 +19,7 @@ import numpy as np
 
 from jointbench.bench.analysis.debias import debias
 from jointbench.bench.campaign.executors import SerialExecutor
-from jointbench.bench.campaign.host import call, close_hosts
+from jointbench.bench.campaign.host import call, check_refs, check_timeout, close_hosts
 from jointbench.bench.campaign.methods import (DEFAULT_TIMEOUT_S, SCORED, BadResult, Method,
                                                blind, check_estimates, method_labels)
 from jointbench.bench.campaign.scatter import scattered_factors, scattered_mjcf
@@ -279,11 +279,14 @@ class CampaignResult:
     # (every run's times: this invocation's and those of resumed rows, from TABLE.times.csv)
 
 
-def _check_methods(spec: CampaignSpec, methods: Sequence[Method], executor) -> None:
-    """The methods are the spec's, and each can reach the executor's workers."""
+def _check_methods(spec: CampaignSpec, methods: Sequence[Method], executor,
+                   timeout_s: float) -> None:
+    """The methods are the spec's, each named one imports in a host process within the
+    deadline (bench.campaign.host.check_refs), and each can reach the executor's workers."""
     labels = [m.label for m in methods]
     if labels != method_labels(spec):
         raise ValueError(f"methods {labels} differ from the spec's {method_labels(spec)}")
+    check_refs([m.ref for m in methods if m.ref is not None], timeout_s)
     if isinstance(executor, SerialExecutor):
         return
     for m in methods:
@@ -304,7 +307,11 @@ def run_campaign(spec: CampaignSpec, table: str | Path, executor,
     return the rows and summary. `methods` (those of
     `spec`, bench.campaign.methods.with_methods) run on every log, each call under a deadline
     of `method_timeout` s."""
-    _check_methods(spec, methods, executor)
+    try:
+        method_timeout = check_timeout(method_timeout)
+    except ValueError as err:
+        raise CampaignError(str(err)) from None
+    _check_methods(spec, methods, executor, method_timeout)
     tab = CampaignTable(Path(table), spec)
     resumed = len(tab.rows)
     pending = [spec.task(i) for i in range(spec.total) if i not in tab.rows]
