@@ -87,7 +87,7 @@ def check_timeout(timeout_s: float, flag: str = "method_timeout") -> float:
     except (TypeError, ValueError):
         raise ValueError(f"{flag}: {timeout_s!r} is not a number of seconds") from None
     if not 0 < x <= MAX_TIMEOUT_S:
-        raise ValueError(f"{flag}: {timeout_s!r} must lie in (0, {MAX_TIMEOUT_S:g}] s")
+        raise ValueError(f"{flag}: {x:g} s is outside (0, {MAX_TIMEOUT_S:g}] s")
     return x
 
 

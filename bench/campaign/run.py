@@ -31,12 +31,13 @@ from jointbench.bench.campaign.table import CampaignTable
 from jointbench.bench.campaign.times import read_times, times_path, write_times
 from jointbench.bench.effects import parse_effects
 from jointbench.bench.sim.axes import build_experiment_model
-from jointbench.bench.sim.experiment import run_experiment
+from jointbench.bench.sim.experiment import DEFAULT_SUBSTEPS, SAMPLE_RATE_HZ, run_experiment
 from jointbench.bench.sim.sensors import Sensors
 from jointbench.identification.defaults import choose_filter
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.first_mode import FirstMode
 from jointbench.identification.identify import identify
+from jointbench.identification.log_write import format_meta_number
 from jointbench.identification.physical import invert_motor_only
 
 
@@ -139,6 +140,64 @@ def _run_method(method: Method, log, timeout_s: float, row: dict[str, str],
         times[label] = answer.wall_s
 
 
+def _run_model(task: RunTask, tmp: str) -> tuple[str, str | None]:
+    """(model reference, joint) the run simulates: the spec's model, or its copy with the
+    run's scattered parameters written into the folder `tmp`."""
+    s = task.settings
+    if s.scatter <= 0:
+        return s.model, s.joint
+    xml, joint = scattered_mjcf(s.model, s.joint, scattered_factors(s.scatter, task.scatter_seed))
+    path = Path(tmp) / "scattered.xml"
+    path.write_text(xml, encoding="utf-8")
+    return str(path), joint
+
+
+def _setting_cells(task: RunTask) -> dict[str, str]:
+    """The cells of a run's row that its settings fix (run_task_with writes them first)."""
+    s = task.settings
+    row = {"run": str(task.index), "repeat": str(task.repeat), "seed": str(task.seed),
+           "model": s.model, "effect": s.effect or ""}
+    for name in SWEEPABLE:
+        row[name] = _fmt(getattr(s, name))
+    return row
+
+
+def expected_cells(task: RunTask) -> dict[str, str]:
+    """The cells a resumed `ok` row of `task` must hold (bench.campaign.table): its settings
+    and the truth of the spec's model (scattered as the run's), as run_task_with writes them
+    from the log's `truth_*` metadata. Builds the model, no simulation."""
+    s = task.settings
+    with tempfile.TemporaryDirectory(prefix="jointbench-truth-") as tmp:
+        model_ref, joint = _run_model(task, tmp)
+        rate = {} if s.rate is None else {"sample_rate_hz": s.rate}
+        exp = build_experiment_model(model_ref, joint, substeps=DEFAULT_SUBSTEPS,
+                                     effect=parse_effects(s.effect) if s.effect else None,
+                                     **{"sample_rate_hz": SAMPLE_RATE_HZ, **rate})
+    truth = exp.truth.as_dict()
+    cells = _setting_cells(task)
+    for p in TRUTH:
+        v = truth.get(p)
+        v = float(format_meta_number(v)) if v is not None else None   # as the log holds it
+        cells[f"truth.{p}"] = _fmt(v) if v is not None and math.isfinite(v) else ""
+    return cells
+
+
+def expected_of(spec: CampaignSpec) -> Callable[[int], dict[str, str]]:
+    """expected_cells by run index; the model is built once per distinct run settings when
+    nothing is scattered."""
+    cache: dict = {}
+
+    def cells(index: int) -> dict[str, str]:
+        task = spec.task(index)
+        if task.settings.scatter > 0:
+            return expected_cells(task)
+        key = task.settings
+        if key not in cache:
+            cache[key] = expected_cells(task)
+        return {**cache[key], **_setting_cells(task)}
+    return cells
+
+
 def run_task(task: RunTask) -> RunOutcome:
     """Simulate and identify one run; never raises: a failure is the row's status and reason."""
     return run_task_with((), DEFAULT_TIMEOUT_S, task)
@@ -148,11 +207,8 @@ def run_task_with(methods: Sequence[Method], timeout_s: float, task: RunTask) ->
     """run_task, then every plug-in method on the run's log (blind: without its truth), each
     under a deadline of `timeout_s`; a method's failure is its own status and reason."""
     s = task.settings
-    row: dict[str, str] = {"run": str(task.index), "repeat": str(task.repeat),
-                           "seed": str(task.seed), "status": "ok", "reason": "",
-                           "model": s.model, "joint": s.joint or "", "effect": s.effect or ""}
-    for name in SWEEPABLE:
-        row[name] = _fmt(getattr(s, name))
+    row: dict[str, str] = {**_setting_cells(task), "status": "ok", "reason": "",
+                           "joint": s.joint or ""}
     reasons: list[str] = []
     sim_s = identify_s = math.nan
     times: dict[str, float] = {}
@@ -160,12 +216,7 @@ def run_task_with(methods: Sequence[Method], timeout_s: float, task: RunTask) ->
         t0 = time.perf_counter()
         effect = parse_effects(s.effect) if s.effect else None
         with tempfile.TemporaryDirectory(prefix="jointbench-run-") as tmp:
-            model_ref, joint = s.model, s.joint
-            if s.scatter > 0:
-                xml, joint = scattered_mjcf(s.model, s.joint,
-                                            scattered_factors(s.scatter, task.scatter_seed))
-                model_ref = str(Path(tmp) / "scattered.xml")
-                Path(model_ref).write_text(xml, encoding="utf-8")
+            model_ref, joint = _run_model(task, tmp)
             rate = {} if s.rate is None else {"sample_rate_hz": s.rate}
             result = run_experiment(model_ref, joint, duration=s.duration, seed=task.seed,
                                     amplitude=s.amplitude, effect=effect,
@@ -312,7 +363,7 @@ def run_campaign(spec: CampaignSpec, table: str | Path, executor,
     except ValueError as err:
         raise CampaignError(str(err)) from None
     _check_methods(spec, methods, executor, method_timeout)
-    tab = CampaignTable(Path(table), spec)
+    tab = CampaignTable(Path(table), spec, expected=expected_of(spec))
     resumed = len(tab.rows)
     pending = [spec.task(i) for i in range(spec.total) if i not in tab.rows]
     sim_s: list[float] = []

@@ -221,7 +221,7 @@ def run(args: argparse.Namespace) -> int:
 
     from jointbench.bench.campaign.executors import make_executor
     from jointbench.bench.campaign.gates import gates_text
-    from jointbench.bench.campaign.run import Progress, run_campaign
+    from jointbench.bench.campaign.run import Progress, expected_of, run_campaign
     from jointbench.bench.campaign.spec import CampaignSpec
     from jointbench.bench.campaign.summary import summary_paths, summary_text
     from jointbench.bench.campaign.table import CampaignTable
@@ -239,7 +239,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         tab_rows = 0
         if out.exists():
-            tab = CampaignTable(out, spec)  # validates before any work
+            tab = CampaignTable(out, spec, expected=expected_of(spec))  # before any work
             tab_rows = len(tab.rows)
             tab.close()
         bar = Progress(spec.total, tab_rows, enabled=not args.quiet and sys.stderr.isatty())

@@ -50,12 +50,37 @@ def _progress(args: argparse.Namespace):
     return say
 
 
+def _check_memory(axes: int, duration: float, rate_hz: float, workers: int | None) -> None:
+    """Before any run: this process holds every axis's log and, with workers (as many as
+    run_survey starts: at most one per axis), each worker also holds one axis's experiment
+    and identification beside its own interpreter (bench.cli.resources' figures per sample
+    and per process). UsageError over the limit, in MB."""
+    import os
+
+    from jointbench.bench.cli.resources import (BASE_MB, BYTES_PER_SAMPLE, MEMORY_ENV,
+                                                check_memory, memory_limit_mb)
+
+    samples = duration * rate_hz
+    what = f"--duration {duration:g} s on {axes} axes"
+    used = max(1, min(workers or os.cpu_count() or 1, axes))
+    if used == 1:
+        check_memory(axes * samples, what)
+        return
+    mb = samples * BYTES_PER_SAMPLE / 2**20            # one axis's samples
+    need = BASE_MB + axes * mb + used * (BASE_MB + mb)
+    limit = memory_limit_mb()
+    if not need <= limit:
+        raise UsageError(f"{what} with {used} workers: about {need:,.0f} MB of memory "
+                         f"({BASE_MB + axes * mb:,.0f} MB here and {BASE_MB + mb:,.0f} MB per "
+                         f"worker), over the {limit:,.0f} MB limit (set {MEMORY_ENV} to raise "
+                         "it, or give fewer --workers)")
+
+
 def run(args: argparse.Namespace) -> int:
     """Survey the axes into --out (checked first, written all or nothing); print the text
     or the JSON object. Exit 1 when an axis failed (its reason in the table)."""
     from jointbench.bench.campaign.spec import MIN_DURATION_S
     from jointbench.bench.campaign.survey import run_survey, survey_axes
-    from jointbench.bench.cli.resources import check_memory
     from jointbench.bench.output import OutputFolder
     from jointbench.bench.present.survey import FILES, survey_json, survey_text, write_survey
     from jointbench.bench.sim.experiment import SAMPLE_RATE_HZ
@@ -71,8 +96,7 @@ def run(args: argparse.Namespace) -> int:
     _, names = survey_axes(args.model, joints)       # ModelStructureError: exit 2, before work
     out = Path(args.out)
     folder = OutputFolder(out, FILES)
-    check_memory(len(names) * args.duration * SAMPLE_RATE_HZ,
-                 f"--duration {args.duration:g} s on {len(names)} axes")
+    _check_memory(len(names), args.duration, SAMPLE_RATE_HZ, args.workers)
     sv = run_survey(args.model, joints, duration=args.duration, seed=args.seed,
                     workers=args.workers, progress=_progress(args))
     with folder.writing() as path:
