@@ -5,6 +5,7 @@ finished row to the table and, when all are in, returns the rows and the Monte C
 
 from __future__ import annotations
 
+import functools
 import math
 import pickle
 import sys
@@ -162,40 +163,38 @@ def _setting_cells(task: RunTask) -> dict[str, str]:
     return row
 
 
-def expected_cells(task: RunTask) -> dict[str, str]:
-    """The cells a resumed `ok` row of `task` must hold (bench.campaign.table): its settings
-    and the truth of the spec's model (scattered as the run's), as run_task_with writes them
-    from the log's `truth_*` metadata. Builds the model, no simulation."""
-    s = task.settings
+@functools.lru_cache(maxsize=1 << 16)
+def _truth_cells(settings: RunSettings, scatter_seed: int) -> tuple[tuple[str, str], ...]:
+    """The truth cells of a run with these settings (and, with scatter, this scatter seed):
+    built once per process and key, as a resume of a table checks every row."""
+    task = RunTask(index=0, repeat=0, seed=0, scatter_seed=scatter_seed, settings=settings)
     with tempfile.TemporaryDirectory(prefix="jointbench-truth-") as tmp:
         model_ref, joint = _run_model(task, tmp)
-        rate = {} if s.rate is None else {"sample_rate_hz": s.rate}
-        exp = build_experiment_model(model_ref, joint, substeps=DEFAULT_SUBSTEPS,
-                                     effect=parse_effects(s.effect) if s.effect else None,
-                                     **{"sample_rate_hz": SAMPLE_RATE_HZ, **rate})
+        rate = {} if settings.rate is None else {"sample_rate_hz": settings.rate}
+        exp = build_experiment_model(
+            model_ref, joint, substeps=DEFAULT_SUBSTEPS,
+            effect=parse_effects(settings.effect) if settings.effect else None,
+            **{"sample_rate_hz": SAMPLE_RATE_HZ, **rate})
     truth = exp.truth.as_dict()
-    cells = _setting_cells(task)
+    cells = []
     for p in TRUTH:
         v = truth.get(p)
         v = float(format_meta_number(v)) if v is not None else None   # as the log holds it
-        cells[f"truth.{p}"] = _fmt(v) if v is not None and math.isfinite(v) else ""
-    return cells
+        cells.append((f"truth.{p}", _fmt(v) if v is not None and math.isfinite(v) else ""))
+    return tuple(cells)
+
+
+def expected_cells(task: RunTask) -> dict[str, str]:
+    """The cells a resumed `ok` row of `task` must hold (bench.campaign.table): its settings
+    and the truth of the spec's model (scattered as the run's), as run_task_with writes them
+    from the log's `truth_*` metadata. Builds the model (about 30 ms), no simulation."""
+    seed = task.scatter_seed if task.settings.scatter > 0 else 0
+    return {**_setting_cells(task), **dict(_truth_cells(task.settings, seed))}
 
 
 def expected_of(spec: CampaignSpec) -> Callable[[int], dict[str, str]]:
-    """expected_cells by run index; the model is built once per distinct run settings when
-    nothing is scattered."""
-    cache: dict = {}
-
-    def cells(index: int) -> dict[str, str]:
-        task = spec.task(index)
-        if task.settings.scatter > 0:
-            return expected_cells(task)
-        key = task.settings
-        if key not in cache:
-            cache[key] = expected_cells(task)
-        return {**cache[key], **_setting_cells(task)}
-    return cells
+    """expected_cells by run index (CampaignTable's `expected`)."""
+    return lambda index: expected_cells(spec.task(index))
 
 
 def run_task(task: RunTask) -> RunOutcome:

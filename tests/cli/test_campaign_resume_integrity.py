@@ -164,3 +164,29 @@ def test_every_written_row_carries_its_digest(reference):
     for row in rows:
         cells = [row[c] for c in header]
         assert row[DIGEST] == row_digest(spec, cells[:-1])
+
+
+def test_scattered_runs_with_an_effect_resume_and_check_their_own_truth(tmp_path, capsys):
+    """Each run's truth is its own scattered model's (with the hidden effect): the rows the
+    campaign wrote pass the check; another run's truth in a row does not."""
+    out = tmp_path / "sc.csv"
+    args = ["campaign", "--runs", "2", "--duration", "5", "--workers", "1", "--quiet",
+            "--id-models", "joint-motor", "--scatter", "0.1", "--effect", "backlash=0.002",
+            "--out", str(out)]
+    assert main(args) == 0
+    capsys.readouterr()
+    assert main(args + ["--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["timing"]["runs_this_invocation"] == 0
+    lines = out.read_text().split("\n")
+    header = next(csv.reader([lines[2]]))
+    first, second = (next(csv.reader([line])) for line in lines[3:5])
+    i = header.index("truth.K")
+    assert first[i] != second[i]                 # two scatter draws
+    first[i] = second[i]                         # run 1's truth in run 0's row
+    buf = io.StringIO()
+    csv.writer(buf, lineterminator="").writerow(first)
+    lines[3] = buf.getvalue()
+    out.write_text("\n".join(lines))
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert f"sc.csv:4: run 0: column 'truth.K': '{second[i]}' is not this campaign's value" in err
