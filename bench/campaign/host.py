@@ -188,7 +188,11 @@ def _serve(conn, watch, limit_mb: float) -> None:
 
 
 class _Lost(Exception):
-    """The host did not answer: it died or missed the deadline (and is closed)."""
+    """The host did not answer: it died, or missed the deadline (`timed_out`); it is closed."""
+
+    def __init__(self, message: str, timed_out: bool = False):
+        super().__init__(message)
+        self.timed_out = timed_out
 
 
 class Host:
@@ -233,7 +237,8 @@ class Host:
                         + ("" if what == "the call" else f" during {what}")) from None
         self.close()
         raise _Lost(f"timeout: no answer within {timeout_s:g} s "
-                    + ("(call stopped)" if what == "the call" else f"during {what} (stopped)"))
+                    + ("(call stopped)" if what == "the call" else f"during {what} (stopped)"),
+                    timed_out=True)
 
     def resolve(self, ref: str, timeout_s: float) -> str | None:
         """None when the host imports `ref`'s module and finds it within `timeout_s`, else
@@ -259,7 +264,7 @@ class Host:
         try:
             doc = self._request(("call", ref, arg), timeout_s, "the call")
         except _Lost as err:
-            return Answer(error=str(err), wall_s=timeout_s if "timeout" in str(err) else math.nan)
+            return Answer(error=str(err), wall_s=timeout_s if err.timed_out else math.nan)
         wall = doc.get("wall_s")
         wall = float(wall) if isinstance(wall, (int, float)) else math.nan
         if doc.get("error") is not None:
@@ -320,8 +325,6 @@ def check_refs(refs: Sequence[str], timeout_s: float) -> None:
             if error is not None:
                 raise CampaignError(error if error.startswith("--method") else
                                     f"--method {ref}: cannot import it: {error}")
-            if not host.alive:
-                host = Host()
     finally:
         host.close()
 
