@@ -107,10 +107,11 @@ FORKS = """
 """
 
 
-def test_a_forked_child_does_not_outlive_the_campaign(tmp_path):
+@pytest.mark.parametrize("workers", ["1", "2"])
+def test_a_forked_child_does_not_outlive_the_campaign(tmp_path, workers):
     _plugin(tmp_path, FORKS)
-    done = _campaign([*TINY, "--workers", "1", "--method", "plug.py:forks", "--out", "c.csv"],
-                     tmp_path)
+    done = _campaign([*TINY, "--workers", workers, "--method", "plug.py:forks", "--out",
+                      "c.csv"], tmp_path)
     assert done.returncode == 0, done.stderr
     assert _rows(tmp_path / "c.csv")[0]["forks.status"] == "ok"
     child = _wait_for(tmp_path / "child.pid", 10)
