@@ -19,7 +19,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from jointbench.bench.analysis.debias import debias
-from jointbench.bench.campaign.executors import SerialExecutor
+from jointbench.bench.campaign.executors import LocalExecutor, SerialExecutor
 from jointbench.bench.campaign.host import call, check_refs, check_timeout, close_hosts
 from jointbench.bench.campaign.methods import (DEFAULT_TIMEOUT_S, SCORED, BadResult, Method,
                                                blind, check_estimates, method_labels)
@@ -348,6 +348,24 @@ def _check_methods(spec: CampaignSpec, methods: Sequence[Method], executor,
                                 "with one worker") from None
 
 
+def _check_memory(spec: CampaignSpec, executor) -> None:
+    """Before any run: one run per local process (this one, or each worker of a local pool)
+    fits in the memory limit (bench.cli.resources: the longest run's samples at its rate, and
+    the interpreter, per process). A Dask cluster's memory is its own. CampaignError in MB."""
+    from jointbench.bench.cli.resources import check_memory
+
+    if not isinstance(executor, (SerialExecutor, LocalExecutor)):
+        return
+    points = [spec.settings_at(p) for p in range(max(1, len(spec.values)))]
+    s = max(points, key=lambda s: s.duration * (s.rate or SAMPLE_RATE_HZ))
+    rate = s.rate or SAMPLE_RATE_HZ
+    try:
+        check_memory(s.duration * rate, f"duration {s.duration:g} s at {rate:g} Hz",
+                     copies=executor.workers)
+    except ValueError as err:
+        raise CampaignError(str(err)) from None
+
+
 def run_campaign(spec: CampaignSpec, table: str | Path, executor,
                  progress: Callable[[bool], None] | None = None,
                  methods: Sequence[Method] = (),
@@ -361,6 +379,7 @@ def run_campaign(spec: CampaignSpec, table: str | Path, executor,
         method_timeout = check_timeout(method_timeout)
     except ValueError as err:
         raise CampaignError(str(err)) from None
+    _check_memory(spec, executor)
     _check_methods(spec, methods, executor, method_timeout)
     tab = CampaignTable(Path(table), spec, expected=expected_of(spec))
     resumed = len(tab.rows)

@@ -357,3 +357,14 @@ def test_campaign_multiplies_its_memory_estimate_by_the_workers(tmp_path):
                      env={"JOINTBENCH_MAX_MEMORY_MB": "500"}, timeout=60)
     assert done.returncode == 2 and "(4 workers), over the 500 MB limit" in done.stderr
     assert not (tmp_path / "c.csv").exists()
+
+
+def test_api_campaign_checks_its_memory_per_worker(tmp_path, monkeypatch):
+    monkeypatch.setenv("JOINTBENCH_MAX_MEMORY_MB", "500")
+    with pytest.raises(CampaignError, match=r"duration 5 s at 350.87 Hz: .* MB of memory "
+                                            r"\(4 workers\), over the 500 MB limit"):
+        jb.campaign(runs=4, duration=5, workers=4, out=tmp_path / "c.csv")
+    with pytest.raises(CampaignError, match=r"duration 100000 s at 100000 Hz: 1e\+10 samples "
+                                            r"need about .* MB of memory, over the 500 MB"):
+        jb.campaign(runs=1, duration=1e5, rate=1e5, workers=1, out=tmp_path / "c.csv")
+    assert not (tmp_path / "c.csv").exists()
