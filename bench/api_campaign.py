@@ -164,7 +164,7 @@ def survey(model: str | os.PathLike = "arm6", joints: Sequence[str] | None = Non
     """
     # argument checks: here, before any run
     from jointbench.bench.campaign.survey import run_survey, survey_axes
-    from jointbench.bench.cli.resources import check_memory
+    from jointbench.bench.cli.resources import check_survey_memory
     from jointbench.bench.output import OutputFolder
     from jointbench.bench.present.survey import FILES, write_survey
     from jointbench.bench.sim.experiment import SAMPLE_RATE_HZ
@@ -172,8 +172,7 @@ def survey(model: str | os.PathLike = "arm6", joints: Sequence[str] | None = Non
     chosen = None if joints is None else list(joints)
     _, names = survey_axes(model, chosen)       # ModelStructureError before any work
     folder = None if out is None else OutputFolder(Path(out), FILES)
-    check_memory(len(names) * duration * SAMPLE_RATE_HZ,
-                 f"--duration {duration:g} s on {len(names)} axes")
+    check_survey_memory(len(names), duration, SAMPLE_RATE_HZ, workers)
     sv = run_survey(model, chosen, duration=duration, seed=seed, workers=workers,
                     progress=progress)
     if folder is not None:

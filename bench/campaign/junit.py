@@ -4,6 +4,9 @@ a <failure> with the measured value for each gate that failed. Written atomicall
 
 from __future__ import annotations
 
+import os
+import stat
+import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -15,20 +18,56 @@ SUITES = "jointbench campaign"   # the root's name: how an existing report is re
 
 
 def check_junit_path(path: Path) -> None:
-    """Before any run: the folder exists, and the file is absent or an earlier report of ours
-    (never overwrite another file). Raises CampaignError."""
+    """Before any run: the folder exists and is writable, and the target is absent or a
+    regular, writable file that is an earlier report of ours (never a FIFO, a device such as
+    /dev/stdout, a link, a read-only file or another program's file). Raises CampaignError."""
     folder = path.parent if str(path.parent) else Path(".")
+    try:
+        info = os.lstat(path)
+    except FileNotFoundError:
+        info = None
+    except OSError as err:
+        raise CampaignError(f"--junit {path}: cannot inspect it: {err.strerror}") from None
     head = ""
-    if path.is_file() and path.stat().st_size > 0:
-        with open(path, "rb") as handle:
-            head = handle.read(4096).decode("utf-8", "replace")
+    if info is not None and stat.S_ISREG(info.st_mode) and info.st_size > 0:
+        try:
+            with open(path, "rb") as handle:
+                head = handle.read(4096).decode("utf-8", "replace")
+        except OSError as err:
+            raise CampaignError(f"--junit {path}: cannot read it: {err.strerror}") from None
+    kind = None if info is None else _kind(info.st_mode)
     problem = (f"folder {folder} does not exist" if not folder.is_dir()
-               else "is a directory" if path.is_dir()
+               else f"is {kind}, not a regular file: refusing to replace it" if kind
+               else "is read-only" if info is not None and (
+                   not info.st_mode & 0o222 or not os.access(path, os.W_OK))
                else "refusing to overwrite a file that is not a jointbench JUnit report; "
                     "remove it or choose another name" if head and f'name="{SUITES}"' not in head
-               else None)
+               else _unwritable(folder))
     if problem:
         raise CampaignError(f"--junit {path}: {problem}")
+
+
+def _unwritable(folder: Path) -> str | None:
+    """Why the report cannot be written into `folder` (it is written atomically: a temporary
+    file there, renamed), found by creating and removing such a file; None when it can."""
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".jointbench-junit-", suffix=".tmp", dir=folder)
+    except OSError as err:
+        return f"folder {folder} is not writable ({err.strerror})"
+    os.close(fd)
+    os.unlink(probe)
+    return None
+
+
+def _kind(mode: int) -> str | None:
+    """What a file that is not a regular one is (None for a regular file)."""
+    for test, name in ((stat.S_ISDIR, "a directory"), (stat.S_ISCHR, "a character device"),
+                       (stat.S_ISBLK, "a block device"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
+                       (stat.S_ISSOCK, "a socket"), (stat.S_ISLNK, "a symbolic link")):
+        if test(mode):
+            return name
+    return None
+
 
 def junit_xml(results: list[GateResult], properties: dict[str, str], wall_s: float) -> str:
     """The report's text: <testsuites><testsuite> with a <testcase> per result."""

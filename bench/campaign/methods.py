@@ -3,13 +3,19 @@
 A method is a callable `f(log: jointbench.Log) -> {name: value}` or `{name: (value, sigma)}`
 with the paper's parameter names (identification.parameters.PARAMETERS). TARGET is
 `package.module:function` (the current folder is importable) or `path/to/file.py:function`.
-The campaign resolves it before any run (a bad one is bad input, exit 2) and, in every process
-that runs experiments, by name again: only the text travels to the workers.
+The campaign imports it before any run, in a host process under the call's deadline (a bad
+one is bad input, exit 2), and, in every process that runs experiments, by name again in
+that process's hosts: only the text travels to the workers, and the campaign process never
+imports a method's module (bench.campaign.host).
 
-Each call sees the run's log *blind*: the `truth_*` metadata removed, as a measured file would
-be. It runs under a deadline (bench.campaign.host); an exception, a timeout or a result that is
-not a dict of finite numbers by known names is that method's failure on that run, with the
-reason in the table, and the campaign goes on.
+Each call sees the run's log *blind* (`blind`): the metadata a measured file would hold (the
+sample rate, the controller's gains and limits, gravity, the joint, its axis type and gear
+ratio, the encoders' resolution, the torque noise, the saturation counts, and the simulated
+plant's time step and friction time constant that the built-in identification reads too),
+and nothing that names the experiment: no `truth_*`, no seed, no source, no chirp, no
+locked configuration, no effect. It runs under a deadline (bench.campaign.host); an
+exception, a timeout or a result that is not a dict of finite numbers by known names is that
+method's failure on that run, with the reason in the table, and the campaign goes on.
 """
 
 from __future__ import annotations
@@ -30,12 +36,21 @@ from typing import Any, Callable, Mapping
 from jointbench.bench.campaign.settings import ID_MODELS, CampaignError
 from jointbench.bench.campaign.spec import PARAMS, CampaignSpec
 from jointbench.identification.log import Log
+from jointbench.identification.log_schema import (BOOLEAN_META, FORMAT_KEY, NUMERIC_META,
+                                                  PLANT_INTEGRATOR_KEY)
 from jointbench.identification.parameters import PARAMETERS
 
 # The names a campaign scores (those with ground truth in a virtual log): table columns
 # `LABEL.NAME` and `LABEL.NAME.sigma` per method. J and offset (the rigid model's) are valid
 # names without a truth: accepted, not scored.
 SCORED = PARAMS["joint-motor"]
+# The metadata a plug-in sees (`blind`): what a drive's log of a measured axis holds, and the
+# simulated plant's keys that the built-in identification reads as well (so that a plug-in
+# wrapping jointbench.identify sees what the built-in sees).
+BLIND_META = frozenset(NUMERIC_META) | frozenset(BOOLEAN_META) | {
+    FORMAT_KEY, PLANT_INTEGRATOR_KEY, "joint", "axis", "motor_encoder_resolution_rad",
+    "link_encoder_resolution_rad", "torque_noise_std", "saturated_samples",
+    "actuator_clamped_samples"}
 DEFAULT_TIMEOUT_S = 60.0
 _LABEL = re.compile(r"[A-Za-z][A-Za-z0-9_-]*\Z")
 RESERVED = set(ID_MODELS) | set(ID_MODELS.values()) | {"truth", "run", "status", "reason"}
@@ -91,20 +106,26 @@ def _import_file(path: Path):
     return module
 
 
+def check_ref(ref: str) -> tuple[str, str]:
+    """(target, attr) of `ref` (`module:attr` or `file.py:attr`), checked without importing
+    anything: the form, and that a FILE.py exists. Raises CampaignError."""
+    target, sep, attr = ref.rpartition(":")
+    if not sep or not target or not attr:
+        raise CampaignError(f"--method {ref}: expected MODULE:FUNCTION or FILE.py:FUNCTION")
+    if target.endswith(".py") and not Path(target).is_file():
+        raise CampaignError(f"--method {ref}: no such file {target}")
+    return target, attr
+
+
 def resolve(ref: str) -> Callable:
     """The callable that `ref` (`module:attr` or `file.py:attr`, attr may be dotted) names.
     Raises CampaignError saying what is missing."""
     if ref in _RESOLVED:
         return _RESOLVED[ref]
-    target, sep, attr = ref.rpartition(":")
-    if not sep or not target or not attr:
-        raise CampaignError(f"--method {ref}: expected MODULE:FUNCTION or FILE.py:FUNCTION")
+    target, attr = check_ref(ref)
     try:
         if target.endswith(".py"):
-            path = Path(target)
-            if not path.is_file():
-                raise CampaignError(f"--method {ref}: no such file {target}")
-            module = _import_file(path.resolve())
+            module = _import_file(Path(target).resolve())
         else:
             if "" not in sys.path and os.getcwd() not in sys.path:
                 sys.path.insert(0, os.getcwd())   # like `python -m`: the current folder
@@ -137,15 +158,16 @@ def check_label(label: str, flag: str = "--method") -> str:
 
 
 def parse_method(text: str) -> Method:
-    """`[LABEL=]TARGET` -> Method, TARGET resolved now. The default label is the function's
-    name. Raises CampaignError."""
+    """`[LABEL=]TARGET` -> Method, TARGET's form checked now (check_ref); its module is
+    imported by the campaign in a host process before any run (host.check_refs), never in
+    this one. The default label is the function's name. Raises CampaignError."""
     text = text.strip()
     label, sep, target = text.partition("=")
     if not sep:
         label, target = "", text
     target = target.strip()
     attr = target.rpartition(":")[2]
-    resolve(target)   # a FILE.py stays as given (the table's spec line): workers share the cwd
+    check_ref(target)   # a FILE.py stays as given (the table's spec line): workers share the cwd
     label = label.strip() or attr.split(".")[-1]
     return Method(check_label(label), target)
 
@@ -279,7 +301,8 @@ def check_estimates(value) -> tuple[dict[str, float], dict[str, float]]:
 
 
 def blind(log: Log) -> Log:
-    """The log as a measured file would be: without the `truth_*` metadata."""
-    meta = {k: v for k, v in log.meta.items() if not k.startswith("truth_")}
+    """The log as a measured file would be: only the BLIND_META keys of its metadata (no
+    truth, no seed or anything else from which the experiment could be simulated again)."""
+    meta = {k: v for k, v in log.meta.items() if k in BLIND_META}
     lines = {k: v for k, v in log.meta_lines.items() if k in meta}
-    return dataclasses.replace(log, meta=meta, meta_lines=lines)
+    return dataclasses.replace(log, meta=meta, meta_lines=lines, path=None)

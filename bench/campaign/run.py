@@ -5,6 +5,7 @@ finished row to the table and, when all are in, returns the rows and the Monte C
 
 from __future__ import annotations
 
+import functools
 import math
 import pickle
 import sys
@@ -18,8 +19,8 @@ from typing import Callable, Sequence
 import numpy as np
 
 from jointbench.bench.analysis.debias import debias
-from jointbench.bench.campaign.executors import SerialExecutor
-from jointbench.bench.campaign.host import call, close_hosts
+from jointbench.bench.campaign.executors import LocalExecutor, SerialExecutor
+from jointbench.bench.campaign.host import call, check_refs, check_timeout, close_hosts
 from jointbench.bench.campaign.methods import (DEFAULT_TIMEOUT_S, SCORED, BadResult, Method,
                                                blind, check_estimates, method_labels)
 from jointbench.bench.campaign.scatter import scattered_factors, scattered_mjcf
@@ -31,12 +32,13 @@ from jointbench.bench.campaign.table import CampaignTable
 from jointbench.bench.campaign.times import read_times, times_path, write_times
 from jointbench.bench.effects import parse_effects
 from jointbench.bench.sim.axes import build_experiment_model
-from jointbench.bench.sim.experiment import run_experiment
+from jointbench.bench.sim.experiment import DEFAULT_SUBSTEPS, SAMPLE_RATE_HZ, run_experiment
 from jointbench.bench.sim.sensors import Sensors
 from jointbench.identification.defaults import choose_filter
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.first_mode import FirstMode
 from jointbench.identification.identify import identify
+from jointbench.identification.log_write import format_meta_number
 from jointbench.identification.physical import invert_motor_only
 
 
@@ -139,6 +141,62 @@ def _run_method(method: Method, log, timeout_s: float, row: dict[str, str],
         times[label] = answer.wall_s
 
 
+def _run_model(task: RunTask, tmp: str) -> tuple[str, str | None]:
+    """(model reference, joint) the run simulates: the spec's model, or its copy with the
+    run's scattered parameters written into the folder `tmp`."""
+    s = task.settings
+    if s.scatter <= 0:
+        return s.model, s.joint
+    xml, joint = scattered_mjcf(s.model, s.joint, scattered_factors(s.scatter, task.scatter_seed))
+    path = Path(tmp) / "scattered.xml"
+    path.write_text(xml, encoding="utf-8")
+    return str(path), joint
+
+
+def _setting_cells(task: RunTask) -> dict[str, str]:
+    """The cells of a run's row that its settings fix (run_task_with writes them first)."""
+    s = task.settings
+    row = {"run": str(task.index), "repeat": str(task.repeat), "seed": str(task.seed),
+           "model": s.model, "effect": s.effect or ""}
+    for name in SWEEPABLE:
+        row[name] = _fmt(getattr(s, name))
+    return row
+
+
+@functools.lru_cache(maxsize=1 << 16)
+def _truth_cells(settings: RunSettings, scatter_seed: int) -> tuple[tuple[str, str], ...]:
+    """The truth cells of a run with these settings (and, with scatter, this scatter seed):
+    built once per process and key, as a resume of a table checks every row."""
+    task = RunTask(index=0, repeat=0, seed=0, scatter_seed=scatter_seed, settings=settings)
+    with tempfile.TemporaryDirectory(prefix="jointbench-truth-") as tmp:
+        model_ref, joint = _run_model(task, tmp)
+        rate = {} if settings.rate is None else {"sample_rate_hz": settings.rate}
+        exp = build_experiment_model(
+            model_ref, joint, substeps=DEFAULT_SUBSTEPS,
+            effect=parse_effects(settings.effect) if settings.effect else None,
+            **{"sample_rate_hz": SAMPLE_RATE_HZ, **rate})
+    truth = exp.truth.as_dict()
+    cells = []
+    for p in TRUTH:
+        v = truth.get(p)
+        v = float(format_meta_number(v)) if v is not None else None   # as the log holds it
+        cells.append((f"truth.{p}", _fmt(v) if v is not None and math.isfinite(v) else ""))
+    return tuple(cells)
+
+
+def expected_cells(task: RunTask) -> dict[str, str]:
+    """The cells a resumed `ok` row of `task` must hold (bench.campaign.table): its settings
+    and the truth of the spec's model (scattered as the run's), as run_task_with writes them
+    from the log's `truth_*` metadata. Builds the model (about 30 ms), no simulation."""
+    seed = task.scatter_seed if task.settings.scatter > 0 else 0
+    return {**_setting_cells(task), **dict(_truth_cells(task.settings, seed))}
+
+
+def expected_of(spec: CampaignSpec) -> Callable[[int], dict[str, str]]:
+    """expected_cells by run index (CampaignTable's `expected`)."""
+    return lambda index: expected_cells(spec.task(index))
+
+
 def run_task(task: RunTask) -> RunOutcome:
     """Simulate and identify one run; never raises: a failure is the row's status and reason."""
     return run_task_with((), DEFAULT_TIMEOUT_S, task)
@@ -148,11 +206,8 @@ def run_task_with(methods: Sequence[Method], timeout_s: float, task: RunTask) ->
     """run_task, then every plug-in method on the run's log (blind: without its truth), each
     under a deadline of `timeout_s`; a method's failure is its own status and reason."""
     s = task.settings
-    row: dict[str, str] = {"run": str(task.index), "repeat": str(task.repeat),
-                           "seed": str(task.seed), "status": "ok", "reason": "",
-                           "model": s.model, "joint": s.joint or "", "effect": s.effect or ""}
-    for name in SWEEPABLE:
-        row[name] = _fmt(getattr(s, name))
+    row: dict[str, str] = {**_setting_cells(task), "status": "ok", "reason": "",
+                           "joint": s.joint or ""}
     reasons: list[str] = []
     sim_s = identify_s = math.nan
     times: dict[str, float] = {}
@@ -160,12 +215,7 @@ def run_task_with(methods: Sequence[Method], timeout_s: float, task: RunTask) ->
         t0 = time.perf_counter()
         effect = parse_effects(s.effect) if s.effect else None
         with tempfile.TemporaryDirectory(prefix="jointbench-run-") as tmp:
-            model_ref, joint = s.model, s.joint
-            if s.scatter > 0:
-                xml, joint = scattered_mjcf(s.model, s.joint,
-                                            scattered_factors(s.scatter, task.scatter_seed))
-                model_ref = str(Path(tmp) / "scattered.xml")
-                Path(model_ref).write_text(xml, encoding="utf-8")
+            model_ref, joint = _run_model(task, tmp)
             rate = {} if s.rate is None else {"sample_rate_hz": s.rate}
             result = run_experiment(model_ref, joint, duration=s.duration, seed=task.seed,
                                     amplitude=s.amplitude, effect=effect,
@@ -279,11 +329,14 @@ class CampaignResult:
     # (every run's times: this invocation's and those of resumed rows, from TABLE.times.csv)
 
 
-def _check_methods(spec: CampaignSpec, methods: Sequence[Method], executor) -> None:
-    """The methods are the spec's, and each can reach the executor's workers."""
+def _check_methods(spec: CampaignSpec, methods: Sequence[Method], executor,
+                   timeout_s: float) -> None:
+    """The methods are the spec's, each named one imports in a host process within the
+    deadline (bench.campaign.host.check_refs), and each can reach the executor's workers."""
     labels = [m.label for m in methods]
     if labels != method_labels(spec):
         raise ValueError(f"methods {labels} differ from the spec's {method_labels(spec)}")
+    check_refs([m.ref for m in methods if m.ref is not None], timeout_s)
     if isinstance(executor, SerialExecutor):
         return
     for m in methods:
@@ -295,6 +348,24 @@ def _check_methods(spec: CampaignSpec, methods: Sequence[Method], executor) -> N
                                 "with one worker") from None
 
 
+def _check_memory(spec: CampaignSpec, executor) -> None:
+    """Before any run: one run per local process (this one, or each worker of a local pool)
+    fits in the memory limit (bench.cli.resources: the longest run's samples at its rate, and
+    the interpreter, per process). A Dask cluster's memory is its own. CampaignError in MB."""
+    from jointbench.bench.cli.resources import check_memory
+
+    if not isinstance(executor, (SerialExecutor, LocalExecutor)):
+        return
+    points = [spec.settings_at(p) for p in range(max(1, len(spec.values)))]
+    s = max(points, key=lambda s: s.duration * (s.rate or SAMPLE_RATE_HZ))
+    rate = s.rate or SAMPLE_RATE_HZ
+    try:
+        check_memory(s.duration * rate, f"duration {s.duration:g} s at {rate:g} Hz",
+                     copies=executor.workers)
+    except ValueError as err:
+        raise CampaignError(str(err)) from None
+
+
 def run_campaign(spec: CampaignSpec, table: str | Path, executor,
                  progress: Callable[[bool], None] | None = None,
                  methods: Sequence[Method] = (),
@@ -304,8 +375,13 @@ def run_campaign(spec: CampaignSpec, table: str | Path, executor,
     return the rows and summary. `methods` (those of
     `spec`, bench.campaign.methods.with_methods) run on every log, each call under a deadline
     of `method_timeout` s."""
-    _check_methods(spec, methods, executor)
-    tab = CampaignTable(Path(table), spec)
+    try:
+        method_timeout = check_timeout(method_timeout)
+    except ValueError as err:
+        raise CampaignError(str(err)) from None
+    _check_memory(spec, executor)
+    _check_methods(spec, methods, executor, method_timeout)
+    tab = CampaignTable(Path(table), spec, expected=expected_of(spec))
     resumed = len(tab.rows)
     pending = [spec.task(i) for i in range(spec.total) if i not in tab.rows]
     sim_s: list[float] = []

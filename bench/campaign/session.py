@@ -17,14 +17,13 @@ from jointbench.bench.campaign.executors import make_executor
 from jointbench.bench.campaign.gates import Gate, evaluate
 from jointbench.bench.campaign.junit import check_junit_path, write_junit
 from jointbench.bench.campaign.methods import DEFAULT_TIMEOUT_S, Method
-from jointbench.bench.campaign.run import run_campaign
+from jointbench.bench.campaign.run import expected_of, run_campaign
 from jointbench.bench.campaign.settings import CampaignError
 from jointbench.bench.campaign.spec import CampaignSpec
 from jointbench.bench.campaign.summary import summary_paths
 from jointbench.bench.campaign.table import CampaignTable
 from jointbench.bench.output import check_file, write_text
 from jointbench.bench.results.campaign import CampaignReport
-from jointbench.identification.defaults import PAPER_RATE
 from jointbench.identification.output import finite_json
 
 # progress(total runs, runs already in the table, engine) -> the per-run callback (ok) or None
@@ -35,10 +34,8 @@ def check_outputs(spec: CampaignSpec, out: Path | None, junit: Path | None,
                   gates: Sequence[Gate], workers: int | None) -> None:
     """Before any run: the JUnit report has gates and its own file, the table is neither the
     model nor an MJCF file, the table and its summaries can be written (bench.output: a
-    campaign table or absent, the summaries ours or absent), and the runs fit in memory
-    (bench.cli.resources; one run per local worker). Raises CampaignError, OutputError."""
-    from jointbench.bench.cli.resources import check_memory
-
+    campaign table or absent, the summaries ours or absent) (the memory each local worker needs is
+    checked by run_campaign, before any run). Raises CampaignError, OutputError."""
     if junit is not None:
         if not gates:
             raise CampaignError("--junit needs --require: the report holds the gates")
@@ -51,9 +48,6 @@ def check_outputs(spec: CampaignSpec, out: Path | None, junit: Path | None,
             raise CampaignError(f"--out {out}: refusing to overwrite the model file")
         for path in (out, *summary_paths(out)):
             check_file(path)
-    longest = max(spec.settings_at(p).duration for p in range(max(1, len(spec.values))))
-    check_memory(longest * PAPER_RATE, f"--duration {longest:g} s",
-                 copies=workers or os.cpu_count() or 1)
 
 
 def _timing(result, executor) -> dict:
@@ -87,7 +81,7 @@ def run_report(spec: CampaignSpec, methods: Sequence[Method], gates: Sequence[Ga
             path = table if table is not None else Path(tmp) / "campaign.csv"
             done = 0
             if path.exists():
-                tab = CampaignTable(path, spec)  # validates before any work
+                tab = CampaignTable(path, spec, expected=expected_of(spec))  # before any work
                 done = len(tab.rows)
                 tab.close()
             update = progress(spec.total, done, executor.description) if progress else None

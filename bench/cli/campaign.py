@@ -53,6 +53,15 @@ def _parse_sweep(text: str) -> tuple[str, tuple[float, ...]]:
     return name, tuple(out)
 
 
+def _method_timeout(value: str) -> float:
+    """Argument type of --method-timeout: a number of seconds in (0, 1e6]."""
+    x = positive(value)
+    if x > 1e6:
+        raise argparse.ArgumentTypeError(f"{value} s is over the longest deadline, 1e6 s "
+                                         "(give a number in (0, 1e6])")
+    return x
+
+
 def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
     p.add_argument("--model", default="prototype",
                    help="prototype, arm6 or an MJCF file following the axis convention")
@@ -98,9 +107,10 @@ def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
                         "current folder is importable) or FILE.py:FUNCTION, a function of a "
                         "jointbench.Log returning {name: value} or {name: (value, sigma)} with "
                         "the paper's names; repeatable")
-    p.add_argument("--method-timeout", type=positive, default=60.0, metavar="S",
-                   help="deadline of one plug-in call in s; past it the call is stopped and "
-                        "fails for that run (default 60)")
+    p.add_argument("--method-timeout", type=_method_timeout, default=60.0, metavar="S",
+                   help="deadline of one plug-in call (and of the import of its module) in "
+                        "s, at most 1e6; past it the call is stopped and fails for that run "
+                        "(default 60)")
     p.add_argument("--require", action="append", metavar="GATES",
                    help="accuracy gates, e.g. \"K.abs_bias_pct<0.5, Jm.coverage_pct>=90, "
                         "failed==0\" or \"mymethod:K.rmse_pct<1\"; exit status 3 when one "

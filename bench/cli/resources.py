@@ -38,3 +38,26 @@ def check_memory(samples: float, what: str, copies: int = 1) -> float:
         raise UsageError(f"{what}: {samples:.3g} samples need about {need:,.0f} MB of memory"
                          f"{per}, over the {limit:,.0f} MB limit (set {MEMORY_ENV} to raise it)")
     return need
+
+
+def check_survey_memory(axes: int, duration: float, rate_hz: float, workers: int | None) -> None:
+    """Before any run: this process holds every axis's log and, with workers (as many as
+    run_survey starts: at most one per axis), each worker also holds one axis's experiment
+    and identification beside its own interpreter (bench.cli.resources' figures per sample
+    and per process). UsageError over the limit, in MB."""
+    import os
+
+    samples = duration * rate_hz
+    what = f"--duration {duration:g} s on {axes} axes"
+    used = max(1, min(workers or os.cpu_count() or 1, axes))
+    if used == 1:
+        check_memory(axes * samples, what)
+        return
+    mb = samples * BYTES_PER_SAMPLE / 2**20            # one axis's samples
+    need = BASE_MB + axes * mb + used * (BASE_MB + mb)
+    limit = memory_limit_mb()
+    if not need <= limit:
+        raise UsageError(f"{what} with {used} workers: about {need:,.0f} MB of memory "
+                         f"({BASE_MB + axes * mb:,.0f} MB here and {BASE_MB + mb:,.0f} MB per "
+                         f"worker), over the {limit:,.0f} MB limit (set {MEMORY_ENV} to raise "
+                         "it, or give fewer --workers)")
