@@ -13,7 +13,8 @@ from pathlib import Path
 from jointbench.bench.cli.common import UsageError, check_output_file, finite, positive
 
 # The library `run` imports, loaded by the dispatcher before it traps the signals.
-LIBRARY = ("jointbench.identification.log_import", "jointbench.identification.log")
+LIBRARY = ("jointbench.identification.log_import", "jointbench.identification.log",
+           "jointbench.identification.bag_import")
 
 # Metadata options: option destination -> metadata key (docs/log-format.md section 1.3).
 META_OPTIONS = {"kp": "kp", "kv": "kv", "ki": "ki", "tau_max": "tau_max",
@@ -24,7 +25,8 @@ META_OPTIONS = {"kp": "kp", "kv": "kv", "ki": "ki", "tau_max": "tau_max",
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """The options of `import`."""
     p.add_argument("file", help="raw CSV file: a header row, then one row of numbers per "
-                                "sample (',' ';' tab or '|'; '#' lines skipped)")
+                                "sample (',' ';' tab or '|'; '#' lines skipped); or a ROS bag "
+                                "(.db3, .mcap, a rosbag2 folder, .bag)")
     p.add_argument("--out", required=True, help="log file to write (never the input)")
     p.add_argument("--map", metavar="COL=RAW,...",
                    help="log column = raw column, e.g. t=time_ms,q_m=motor_counts,"
@@ -71,6 +73,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     meta.add_argument("--meta", action="append", default=[], metavar="KEY=VALUE",
                       help="any other metadata key, e.g. torque_noise_std=0.5 (repeatable)")
     p.add_argument("--json", action="store_true", help="print a JSON summary")
+    from jointbench.bench.cli.import_bag import add_bag_arguments
+    add_bag_arguments(p)
 
 
 def _pairs(text: str | None, flag: str, form: str) -> dict[str, str]:
@@ -114,6 +118,10 @@ def run(args: argparse.Namespace) -> int:
     from jointbench.identification.log import write_log
     from jointbench.identification.log_import import convert, read_raw
 
+    from jointbench.identification.bag_import import is_bag
+    if is_bag(args.file):
+        from jointbench.bench.cli.import_bag import run_bag
+        return run_bag(args, spec_from_args(args, ()))
     src, out = Path(args.file), Path(args.out)
     if src.exists() and out.exists() and out.resolve() == src.resolve():
         raise UsageError(f"--out {out}: is the input file; choose another name")
