@@ -42,10 +42,12 @@ FIELDS = ("position", "velocity", "effort")
 STAMPS = ("header", "receive")
 GRID_LIMIT = 0.5      # every stamp within half a period of its tick: the tick is unambiguous
 GAP_LIMIT = 1.5       # a step between stamps over 1.5 periods: a message is missing
-MOTION_WINDOW_S = 0.25  # survey: motion = rolling sd of q_m over this window
+MOTION_WINDOW_S = 0.25  # survey: motion = rolling sd of q_m's second difference over this
 MOVED_RATIO = 100.0   # moved: peak rolling sd over 100 x its held level (10th percentile)
-ACTIVE_FRACTION = 0.01  # the moving window: rolling sd above 1 % of its peak ...
-PAD_S = 1.0           # ... widened by 1 s each side (the chirp's fade-in starts below it)
+ACTIVE_FRACTION = 1e-3  # the moving window: rolling sd above 0.1 % of its peak (and 3 x
+HELD_MARGIN = 3.0       # the held level) ...
+PAD_S = 0.0           # ... widened by this much each side (none: the second difference
+#                       marks the move's own first and last samples)
 INSTALL_HINT = "reading a bag needs the optional extra: pip install 'jointbench[ros]'"
 
 
@@ -383,12 +385,16 @@ class Motion:
 
 
 def motion(joint: str, q_m: np.ndarray, rate_hz: float) -> Motion:
-    """Whether and when `joint` moved (module docstring): the rolling sd of q_m over
+    """Whether and when `joint` moved (module docstring): the rolling sd of q_m's second
+    difference over
     MOTION_WINDOW_S; moved when its peak exceeds MOVED_RATIO x the larger of its 10th
     percentile and the encoder's step (the smallest nonzero change of q_m); the window the
-    samples above ACTIVE_FRACTION of the peak span, widened by PAD_S each side."""
+    samples above ACTIVE_FRACTION of the peak and HELD_MARGIN x the held level span, widened
+    by PAD_S each side."""
     w = max(3, int(round(MOTION_WINDOW_S * rate_hz)))
-    r = rolling_sd(q_m, w)
+    # the second difference: a chirp's acceleration keeps its size up to its top frequency,
+    # where the position's shrinks as 1 / f^2
+    r = rolling_sd(np.concatenate([[0.0], np.diff(q_m, 2), [0.0]]), w)
     steps = np.abs(np.diff(q_m))
     steps = steps[steps > 0]
     held = max(float(np.percentile(r, 10)), float(steps.min()) if steps.size else 0.0)
@@ -396,7 +402,7 @@ def motion(joint: str, q_m: np.ndarray, rate_hz: float) -> Motion:
     moved = peak > 0 and peak > MOVED_RATIO * held
     if not moved:
         return Motion(joint, False, 0, 0, peak, held)
-    active = np.flatnonzero(r > ACTIVE_FRACTION * peak)
+    active = np.flatnonzero(r > max(ACTIVE_FRACTION * peak, HELD_MARGIN * held))
     pad = int(round(PAD_S * rate_hz))
     return Motion(joint, True, max(int(active[0]) - pad, 0),
                   min(int(active[-1]) + 1 + pad, len(q_m)), peak, held)

@@ -21,7 +21,8 @@ from rosbags.typesys import Stores, get_typestore  # noqa: E402
 from jointbench.bench.campaign.survey import ACCURACY_BAR_PCT  # noqa: E402
 from jointbench.bench.cli import main  # noqa: E402
 from jointbench.bench.sim.experiment import run_experiment  # noqa: E402
-from jointbench.identification.bag_import import fit_grid, motion, rolling_sd  # noqa: E402
+from jointbench.identification.bag_import import (MOTION_WINDOW_S, PAD_S, fit_grid, motion,
+                                                  rolling_sd)  # noqa: E402
 from jointbench.identification.identify import identify  # noqa: E402
 from jointbench.identification.log import read_log, write_log  # noqa: E402
 from jointbench.identification.log_schema import LogError  # noqa: E402
@@ -67,7 +68,7 @@ def _joint_state(store, stamp: int, names, position, effort):
 def write_bag(path: Path, frames: list[dict], stamps: np.ndarray, reference=None,
               storage: str = "mcap") -> Path:
     """A bag of JointState messages on /joint_states, frame k = {name: (position, effort)}
-    stamped stamps[k]; `reference` (name, values) on /reference with the same stamps.
+    stamped stamps[k]; `reference` frames {name: position} on /reference, the same stamps.
     `storage`: mcap or sqlite3 (a ROS 2 folder; the storage file is returned) or ros1."""
     ros1 = storage == "ros1"
     store = _store(ros1)
@@ -83,8 +84,8 @@ def write_bag(path: Path, frames: list[dict], stamps: np.ndarray, reference=None
                                [frame[n][1] for n in names])
             writer.write(conn, int(stamps[k] + delay[k]), ser(msg, typ))
             if ref_conn is not None:
-                ref = _joint_state(store, int(stamps[k]), [reference[0]],
-                                   [reference[1][k]], [])
+                ref = _joint_state(store, int(stamps[k]), list(reference[k]),
+                                   list(reference[k].values()), [])
                 writer.write(ref_conn, int(stamps[k] + delay[k] + 50_000), ser(ref, typ))
 
     if ros1:
@@ -116,6 +117,10 @@ def frames_of(log, joint: str, held: dict[str, float] | None = None) -> list[dic
     return out
 
 
+def ref_frames(q_ref, joint: str = "axis1") -> list[dict]:
+    return [{joint: x} for x in q_ref]
+
+
 def meta_args(log, keys) -> list[str]:
     return [a for k in keys if k in log.meta for a in ("--meta", f"{k}={log.meta[k]}")]
 
@@ -142,7 +147,7 @@ def test_bag_identifies_as_the_csv_log(experiment, storage, tmp_path, capsys):
     the values are the CSV's, the grid's period within 1e-7 of the true one)."""
     native, stamps = experiment
     bag = write_bag(tmp_path / "rec", frames_of(native, "axis1"), stamps,
-                    ("axis1", native.q_ref), storage)
+                    ref_frames(native.q_ref), storage)
     assert bag.suffix == (".mcap" if storage == "mcap" else ".db3")
     assert _import(bag, tmp_path / "log.csv", native) == 0
     text = capsys.readouterr().out
@@ -168,9 +173,9 @@ def test_ros1_bag_and_rosbag2_folder(experiment, tmp_path):
     short = type(native)(t=native.t[:n], q_m=native.q_m[:n], tau_m=native.tau_m[:n],
                          q=native.q[:n], q_ref=native.q_ref[:n], meta=native.meta)
     ros1 = write_bag(tmp_path / "rec.bag", frames_of(short, "axis1"), stamps[:n],
-                     ("axis1", short.q_ref), "ros1")
+                     ref_frames(short.q_ref), "ros1")
     db3 = write_bag(tmp_path / "rec2", frames_of(short, "axis1"), stamps[:n],
-                    ("axis1", short.q_ref), "sqlite3")
+                    ref_frames(short.q_ref), "sqlite3")
     for i, bag in enumerate((ros1, db3.parent)):
         assert _import(bag, tmp_path / f"log{i}.csv", short) == 0
         log = read_log(tmp_path / f"log{i}.csv")
@@ -202,14 +207,14 @@ def test_grid_fit_measures_the_jitter_and_refuses_what_it_cannot_place():
 
 def test_motion_finds_the_window():
     """Held at a constant encoder reading, then a 4 s sine, then held: the window is the
-    sine's, widened by 1 s each side; a joint that only flickers by one count did not move."""
+    sine's, widened by PAD_S each side; a joint that only flickers by one count did not move."""
     rate = 350.87
     t = np.arange(int(20 * rate)) / rate
     q = np.where((t > 6) & (t < 10), 0.3 * np.sin(2 * np.pi * 2 * (t - 6)), 0.0)
     m = motion("a", q, rate)
     assert m.moved
-    assert m.start / rate == pytest.approx(5.0, abs=0.15)
-    assert m.stop / rate == pytest.approx(11.0, abs=0.15)
+    assert m.start / rate == pytest.approx(6.0 - PAD_S, abs=0.15)
+    assert m.stop / rate == pytest.approx(10.0 + PAD_S, abs=0.15)
     flicker = np.where(np.arange(len(t)) % 97 == 0, 1e-4, 0.0)
     assert not motion("b", flicker, rate).moved
     assert rolling_sd(np.ones(10), 3) == pytest.approx(np.zeros(10), abs=1e-12)
@@ -223,46 +228,64 @@ GAP_S = 3.0
 @pytest.fixture(scope="module")
 def survey_bag(tmp_path_factory):
     """arm6's axes 4-6, each moved in turn for 60 s (seed 1, as `survey --seed 1`) while the
-    other two are held at their experiment's angle, 3 s of hold between the moves."""
+    other two are held at their experiment's angle, 3 s of hold between the moves; the
+    controller's references on /reference."""
     folder = tmp_path_factory.mktemp("survey")
     logs = {j: run_experiment("arm6", j, duration=SURVEY_DURATION, seed=1).log for j in SURVEY}
     period = logs[SURVEY[0]].ts
     gap = int(GAP_S / period)
     held = {j: (logs[j].q[0], logs[j].q_m[0], logs[j].tau_m[0]) for j in SURVEY}
+    hold_ref = {j: logs[j].q_ref[0] for j in SURVEY}
     frames: list[dict] = []
+    refs: list[dict] = []
     for j in SURVEY:
         log = logs[j]
         rows = [{**{o: (held[o][0], 0.0) for o in SURVEY},
                  **{f"{o}_motor": (N * held[o][1], 0.0) for o in SURVEY}}] * gap
         frames += rows
+        refs += [dict(hold_ref)] * gap
         for k in range(len(log)):
             f = {o: (held[o][0], 0.0) for o in SURVEY}
             f.update({f"{o}_motor": (N * held[o][1], 0.0) for o in SURVEY})
             f[j] = (log.q[k], 0.0)
             f[f"{j}_motor"] = (N * log.q_m[k], log.tau_m[k] / N)
             frames.append(f)
+            refs.append({**hold_ref, j: log.q_ref[k]})
         held[j] = (log.q[-1], log.q_m[-1], log.tau_m[-1])
+        hold_ref[j] = log.q_ref[-1]
     frames += [frames[-1]] * gap
-    bag = write_bag(folder / "survey", frames, stamps_ns(len(frames), period, seed=5))
-    return bag, logs
+    refs += [dict(hold_ref)] * gap
+    bag = write_bag(folder / "survey", frames, stamps_ns(len(frames), period, seed=5), refs)
+    starts, k = {}, 0
+    for j in SURVEY:   # each experiment's first and last sample time in the bag
+        k += gap
+        starts[j] = (k * period, (k + len(logs[j]) - 1) * period)
+        k += len(logs[j])
+    return bag, logs, starts
 
 
 def test_survey_bag_gives_a_log_per_moved_joint(survey_bag, tmp_path, capsys):
-    """Three logs, each joint's window found from the data (its 60 s move plus about 1 s of
-    hold each side), each identified within the survey's accuracy bar (K, Jm, JL within
+    """Three logs, each joint's window found from the data (its 60 s move, the fade-in's and
+    fade-out's quietest part left out), each identified within the survey's accuracy bar (K, Jm, JL within
     0.5 % of the truth, the bar `survey` holds arm6 to at 60 s)."""
     from jointbench.bench.sim.axes import build_experiment_model
 
-    bag, logs = survey_bag
+    bag, logs, moves = survey_bag
     out = tmp_path / "logs"
+    # the simulator's plant keys, as the CSV logs carry them (the same for the three axes)
+    plant = meta_args(logs[SURVEY[0]], PLANT_KEYS)
+    assert all(meta_args(logs[j], PLANT_KEYS) == plant for j in SURVEY)
     assert main(["import", str(bag), "--out", str(out), "--survey", "--gear-ratio", str(N),
-                 "--json"]) == 0
+                 "--reference-topic", "/reference", *plant, "--json"]) == 0
     answer = json.loads(capsys.readouterr().out)
     assert answer["moved"] == list(SURVEY) and answer["held"] == []
     for j in SURVEY:
         log = read_log(out / f"{j}.csv")
         start, stop = (float(x) for x in log.meta["bag_window_s"].split())
-        assert SURVEY_DURATION < stop - start < SURVEY_DURATION + 3.0
+        first, last = moves[j]   # the window: the move, its quiet ends trimmed, give or
+        edge = MOTION_WINDOW_S / 2 + 0.01   # take half the rolling window
+        assert first - edge <= start <= first + 0.5, (j, start, first)
+        assert last - 0.5 <= stop <= last + edge, (j, stop, last)
         others = dict(p.split("=") for p in log.meta["locked_config"].split())
         assert sorted(others) == sorted(set(SURVEY) - {j})
         truth = build_experiment_model("arm6", j).truth
@@ -284,7 +307,7 @@ def test_bad_bags_exit_2_naming_what_is_missing(experiment, tmp_path, capsys):
     native, stamps = experiment
     n = 500
     frames = frames_of(native, "axis1")[:n]
-    bag = write_bag(tmp_path / "ok", frames, stamps[:n], ("axis1", native.q_ref[:n]))
+    bag = write_bag(tmp_path / "ok", frames, stamps[:n], ref_frames(native.q_ref[:n]))
     work = tmp_path / "work"
     work.mkdir()
     out = str(work / "log.csv")
