@@ -146,8 +146,8 @@ class TimeGrid:
     def describe(self) -> str:
         return (f"uniform grid t0 + k T fitted by least squares to {self.n} stamps: "
                 f"T = {1e3 * self.period:.6g} ms ({self.rate_hz:.7g} Hz), jitter rms "
-                f"{1e6 * self.jitter_rms * self.period:.3g} us ({100 * self.jitter_rms:.3g} % of "
-                f"T), largest {1e6 * self.jitter_max * self.period:.3g} us "
+                f"{1e6 * self.jitter_rms * self.period:.0f} us ({100 * self.jitter_rms:.3g} % of "
+                f"T), largest {1e6 * self.jitter_max * self.period:.0f} us "
                 f"({100 * self.jitter_max:.3g} % of T, at most {100 * GRID_LIMIT:g} %)")
 
 
