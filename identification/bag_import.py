@@ -40,6 +40,7 @@ DEFAULT_TOPIC = "/joint_states"
 MOTOR_SUFFIX = "_motor"
 FIELDS = ("position", "velocity", "effort")
 STAMPS = ("header", "receive")
+BAG_MOTOR_SIDE = ("q_m", "tau_m")   # q and q_ref are the link joint's positions: joint side
 GRID_LIMIT = 0.5      # every stamp within half a period of its tick: the tick is unambiguous
 GAP_LIMIT = 1.5       # a step between stamps over 1.5 periods: a message is missing
 MOTION_WINDOW_S = 0.25  # survey: motion = rolling sd of q_m's second difference over this
@@ -327,8 +328,9 @@ def bag_log(bag: Bag, spec: BagSpec, joint: str, grid: TimeGrid, spec_csv: Impor
             window: tuple[int, int] | None = None, extra_meta: dict[str, str] | None = None
             ) -> ImportResult:
     """The log of axis `joint` (samples `window` = [i0, i1) of the grid, all by default):
-    the columns of `spec` converted as a raw table with `log_import.convert` (gear ratio
-    on q_m and tau_m, metadata of `spec_csv`), with the time method in the metadata."""
+    the columns of `spec` converted as a raw table with `log_import.convert` (the gear ratio
+    on the `spec_csv.motor_side` columns, BAG_MOTOR_SIDE by default; the metadata of
+    `spec_csv`), with the time method in the metadata."""
     sources = spec.sources(joint)
     cols, lo = _columns(bag, sources, grid, spec.topic)
     n = len(cols["q_m"])
@@ -341,7 +343,7 @@ def bag_log(bag: Bag, spec: BagSpec, joint: str, grid: TimeGrid, spec_csv: Impor
     meta.setdefault("joint", joint)
     gear = spec_csv.gear_ratio
     ispec = replace(spec_csv, columns={c: c for c in names}, units={},
-                    motor_side=("q_m", "tau_m") if gear is not None else (), rate_hz=None,
+                    motor_side=spec_csv.motor_side if gear is not None else (), rate_hz=None,
                     meta=meta)
     result = convert(raw, ispec)
     t_first = (grid.t0_ns + (lo + i0) * grid.period * 1e9) * 1e-9

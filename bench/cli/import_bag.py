@@ -84,7 +84,14 @@ def run_bag(args: argparse.Namespace, spec_csv) -> int:
     if args.map or args.units or args.rate or args.delimiter:
         raise UsageError("--map, --units, --rate and --delimiter are for CSV files; a bag "
                          "maps its columns with --topic, --motor-name, --torque-name ...")
+    from dataclasses import replace
+
+    from jointbench.identification.bag_import import BAG_MOTOR_SIDE
+    from jointbench.identification.log_import import MOTOR_SIDE
+
     spec = _spec(args)
+    if spec_csv.motor_side == MOTOR_SIDE:   # --motor-side not given: a bag's own default
+        spec_csv = replace(spec_csv, motor_side=BAG_MOTOR_SIDE)
     src, out = Path(args.file), Path(args.out)
     if args.survey:
         if args.joint is not None:

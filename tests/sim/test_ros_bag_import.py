@@ -65,42 +65,48 @@ def _joint_state(store, stamp: int, names, position, effort):
                                                                                    dtype=float))
 
 
-def write_bag(path: Path, frames: list[dict], stamps: np.ndarray, reference=None,
-              storage: str = "mcap") -> Path:
-    """A bag of JointState messages on /joint_states, frame k = {name: (position, effort)}
-    stamped stamps[k]; `reference` frames {name: position} on /reference, the same stamps.
-    `storage`: mcap or sqlite3 (a ROS 2 folder; the storage file is returned) or ros1."""
+def write_topics(path: Path, topics: dict[str, list[dict]], stamps: np.ndarray,
+                 storage: str = "mcap") -> Path:
+    """A bag of JointState messages: topic -> frames, frame k = {name: (position, effort)}
+    (effort None: an empty effort array) stamped stamps[k], received 0.2-0.6 ms later (each
+    topic 50 us after the previous). `storage`: mcap or sqlite3 (a ROS 2 folder; its storage
+    file is returned) or ros1."""
     ros1 = storage == "ros1"
     store = _store(ros1)
     typ = "sensor_msgs/msg/JointState"
-    rng = np.random.default_rng(7)
-    delay = rng.integers(200_000, 600_000, len(stamps))
+    ser = store.serialize_ros1 if ros1 else store.serialize_cdr
+    delay = np.random.default_rng(7).integers(200_000, 600_000, len(stamps))
 
-    def messages(writer, conn, ref_conn):
-        ser = store.serialize_ros1 if ros1 else store.serialize_cdr
-        for k, frame in enumerate(frames):
-            names = list(frame)
-            msg = _joint_state(store, int(stamps[k]), names, [frame[n][0] for n in names],
-                               [frame[n][1] for n in names])
-            writer.write(conn, int(stamps[k] + delay[k]), ser(msg, typ))
-            if ref_conn is not None:
-                ref = _joint_state(store, int(stamps[k]), list(reference[k]),
-                                   list(reference[k].values()), [])
-                writer.write(ref_conn, int(stamps[k] + delay[k] + 50_000), ser(ref, typ))
+    def messages(writer, conns):
+        for k in range(len(stamps)):
+            for i, (topic, frames) in enumerate(topics.items()):
+                frame = frames[k]
+                names = list(frame)
+                efforts = [frame[n][1] for n in names]
+                msg = _joint_state(store, int(stamps[k]), names, [frame[n][0] for n in names],
+                                   [] if None in efforts else efforts)
+                writer.write(conns[topic], int(stamps[k] + delay[k] + 50_000 * i),
+                             ser(msg, typ))
 
     if ros1:
         with Writer1(path) as writer:
-            conn = writer.add_connection("/joint_states", typ, typestore=store)
-            ref_conn = (writer.add_connection("/reference", typ, typestore=store)
-                        if reference else None)
-            messages(writer, conn, ref_conn)
+            messages(writer, {t: writer.add_connection(t, typ, typestore=store)
+                              for t in topics})
         return path
     plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
     with Writer(path, version=9, storage_plugin=plugin) as writer:
-        conn = writer.add_connection("/joint_states", typ, typestore=store)
-        ref_conn = writer.add_connection("/reference", typ, typestore=store) if reference else None
-        messages(writer, conn, ref_conn)
+        messages(writer, {t: writer.add_connection(t, typ, typestore=store) for t in topics})
     return path / f"{path.name}.{'mcap' if storage == 'mcap' else 'db3'}"
+
+
+def write_bag(path: Path, frames: list[dict], stamps: np.ndarray, reference=None,
+              storage: str = "mcap") -> Path:
+    """`frames` on /joint_states and the `reference` frames {name: position}, if any, on
+    /reference (write_topics)."""
+    topics = {"/joint_states": frames}
+    if reference is not None:
+        topics["/reference"] = [{n: (x, None) for n, x in f.items()} for f in reference]
+    return write_topics(path, topics, stamps, storage)
 
 
 def frames_of(log, joint: str, held: dict[str, float] | None = None) -> list[dict]:
@@ -180,6 +186,29 @@ def test_ros1_bag_and_rosbag2_folder(experiment, tmp_path):
         assert _import(bag, tmp_path / f"log{i}.csv", short) == 0
         log = read_log(tmp_path / f"log{i}.csv")
         assert np.allclose(log.q_m, short.q_m, rtol=1e-12) and len(log) == n
+
+
+def test_motor_and_torque_sensor_on_their_own_topics(experiment, tmp_path):
+    """A series-elastic arm: the link encoder on /joint_states (joint-side), the motor on
+    /motor_states under its own name (motor side), tau_m from a joint torque sensor's
+    effort on /torque_sensor, each topic's messages received at its own time."""
+    native, stamps = experiment
+    n = 3000
+    topics = {"/joint_states": [{"elbow": (native.q[k], None)} for k in range(n)],
+              "/motor_states": [{"elbow_rotor": (N * native.q_m[k], 0.0)} for k in range(n)],
+              "/torque_sensor": [{"elbow_jts": (0.0, native.tau_m[k])}
+                                 for k in range(n)]}
+    bag = write_topics(tmp_path / "sea", topics, stamps[:n])
+    assert main(["import", str(bag), "--out", str(tmp_path / "log.csv"), "--joint", "elbow",
+                 "--motor-topic", "/motor_states", "--motor-name", "elbow_rotor",
+                 "--torque-topic", "/torque_sensor", "--torque-name", "elbow_jts",
+                 "--gear-ratio", str(N), "--motor-side", "q_m"]) == 0
+    log = read_log(tmp_path / "log.csv")
+    # the torque sensor is joint side (--motor-side q_m): tau_m as it is, q_m / N
+    assert np.allclose(log.q_m, native.q_m[:n], rtol=1e-12)
+    assert np.array_equal(log.tau_m, native.tau_m[:n])
+    assert np.array_equal(log.q, native.q[:n]) and log.q_ref is None
+    assert log.meta["bag_topics"] == "/joint_states /motor_states /torque_sensor"
 
 
 def test_grid_fit_measures_the_jitter_and_refuses_what_it_cannot_place():
