@@ -17,8 +17,8 @@ go back, or when a stamp is more than GRID_LIMIT of a period off the grid. The j
 measured (rms and largest |s_k - t0 - k T|) is stated in the log's metadata. The other topics'
 messages are matched to the grid tick nearest their stamp (within GRID_LIMIT of a period).
 
-A survey bag moves each joint in turn while the others are held: `moved_windows` finds
-which joints moved and when, from the rolling standard deviation of their motor position.
+A survey bag moves each joint in turn while the others are held: identification/bag_survey.py
+finds which joints moved and when.
 
 Pure numpy; the bag is read with `rosbags` (the optional extra `jointbench[ros]`), imported
 when a bag is read. No file writing (the command line writes with `write_log`).
@@ -43,12 +43,6 @@ STAMPS = ("header", "receive")
 BAG_MOTOR_SIDE = ("q_m", "tau_m")   # q and q_ref are the link joint's positions: joint side
 GRID_LIMIT = 0.5      # every stamp within half a period of its tick: the tick is unambiguous
 GAP_LIMIT = 1.5       # a step between stamps over 1.5 periods: a message is missing
-MOTION_WINDOW_S = 0.25  # survey: motion = rolling sd of q_m's second difference over this
-MOVED_RATIO = 100.0   # moved: peak rolling sd over 100 x its held level (10th percentile)
-ACTIVE_FRACTION = 1e-3  # the moving window: rolling sd above 0.1 % of its peak (and 3 x
-HELD_MARGIN = 3.0       # the held level) ...
-PAD_S = 0.0           # ... widened by this much each side (none: the second difference
-#                       marks the move's own first and last samples)
 INSTALL_HINT = "reading a bag needs the optional extra: pip install 'jointbench[ros]'"
 
 
@@ -358,95 +352,6 @@ def bag_log(bag: Bag, spec: BagSpec, joint: str, grid: TimeGrid, spec_csv: Impor
              f"t <- {grid.describe()}; samples {lo + i0 + 1} to {lo + i1} of {spec.topic}",
              *[s for s in result.steps[2:] if not s.startswith("t ")]]
     return ImportResult(log, tuple(steps), result.checks, result.warnings)
-
-
-def rolling_sd(x: np.ndarray, w: int) -> np.ndarray:
-    """Standard deviation of x over the centred window of w samples (shorter at the ends)."""
-    n = len(x)
-    x = x - x.mean()
-    c1 = np.concatenate([[0.0], np.cumsum(x)])
-    c2 = np.concatenate([[0.0], np.cumsum(x * x)])
-    i = np.arange(n)
-    lo, hi = np.clip(i - w // 2, 0, n), np.clip(i + w - w // 2, 0, n)
-    m = hi - lo
-    mean = (c1[hi] - c1[lo]) / m
-    return np.sqrt(np.maximum((c2[hi] - c2[lo]) / m - mean ** 2, 0.0))
-
-
-@dataclass(frozen=True)
-class Motion:
-    """A joint's motion in a survey bag: `moved`, its sample window [start, stop) (widened
-    by PAD_S), the peak rolling sd and the held level it is compared with."""
-
-    joint: str
-    moved: bool
-    start: int
-    stop: int
-    peak: float
-    held: float
-
-
-def motion(joint: str, q_m: np.ndarray, rate_hz: float) -> Motion:
-    """Whether and when `joint` moved (module docstring): the rolling sd of q_m's second
-    difference over
-    MOTION_WINDOW_S; moved when its peak exceeds MOVED_RATIO x the larger of its 10th
-    percentile and the encoder's step (the smallest nonzero change of q_m); the window the
-    samples above ACTIVE_FRACTION of the peak and HELD_MARGIN x the held level span, widened
-    by PAD_S each side."""
-    w = max(3, int(round(MOTION_WINDOW_S * rate_hz)))
-    # the second difference: a chirp's acceleration keeps its size up to its top frequency,
-    # where the position's shrinks as 1 / f^2
-    r = rolling_sd(np.concatenate([[0.0], np.diff(q_m, 2), [0.0]]), w)
-    steps = np.abs(np.diff(q_m))
-    steps = steps[steps > 0]
-    held = max(float(np.percentile(r, 10)), float(steps.min()) if steps.size else 0.0)
-    peak = float(r.max())
-    moved = peak > 0 and peak > MOVED_RATIO * held
-    if not moved:
-        return Motion(joint, False, 0, 0, peak, held)
-    active = np.flatnonzero(r > max(ACTIVE_FRACTION * peak, HELD_MARGIN * held))
-    pad = int(round(PAD_S * rate_hz))
-    return Motion(joint, True, max(int(active[0]) - pad, 0),
-                  min(int(active[-1]) + 1 + pad, len(q_m)), peak, held)
-
-
-def survey_joints(names: tuple[str, ...]) -> list[str]:
-    """The axes of a JointState: names X with a name X_motor beside them."""
-    return [n for n in names if n + MOTOR_SUFFIX in names]
-
-
-def moved_windows(bag: Bag, spec: BagSpec, grid: TimeGrid) -> tuple[list[Motion], list[str]]:
-    """Every axis of the main topic with its Motion, and the moved ones' names in time order.
-    LogError when no axis is found, none moved, or two moved at the same time."""
-    data = bag.topic(spec.topic)
-    joints = survey_joints(data.names)
-    if not joints:
-        raise LogError(f"topic {spec.topic}: no axis (a joint NAME with a joint "
-                       f"NAME{MOTOR_SUFFIX}; names: {', '.join(data.names)})", bag.path)
-    motions = [motion(j, data.column(Source(spec.topic, j + MOTOR_SUFFIX, "position"),
-                                     bag.path), grid.rate_hz) for j in joints]
-    moved = sorted((m for m in motions if m.moved), key=lambda m: m.start)
-    if not moved:
-        raise LogError(f"topic {spec.topic}: no joint moved (axes {', '.join(joints)})",
-                       bag.path)
-    for a, b in zip(moved, moved[1:]):
-        if b.start + int(round(PAD_S * grid.rate_hz)) < a.stop - int(round(PAD_S * grid.rate_hz)):
-            raise LogError(f"joints {a.joint} and {b.joint} move at the same time (from "
-                           f"{b.start * grid.period:.3f} s): a survey bag moves one joint at a "
-                           "time", bag.path)
-    return motions, [m.joint for m in moved]
-
-
-def held_config(bag: Bag, spec: BagSpec, motions: list[Motion], m: Motion) -> str:
-    """`locked_config` of the log of `m`: the other axes' median link angle in its window."""
-    data = bag.topic(spec.topic)
-    parts = []
-    for other in motions:
-        if other.joint == m.joint:
-            continue
-        q = data.column(Source(spec.topic, other.joint, "position"), bag.path)
-        parts.append(f"{other.joint}={float(np.median(q[m.start:m.stop])):.6g}")
-    return " ".join(parts)
 
 
 def topics_needed(spec: BagSpec, joint: str | None) -> set[str]:

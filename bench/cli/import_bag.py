@@ -77,8 +77,9 @@ def run_bag(args: argparse.Namespace, spec_csv) -> int:
     """Read the bag, fit the time grid, convert, write (atomically; a survey's folder all or
     nothing); print what was done. `spec_csv`: the ImportSpec of the shared options."""
     from jointbench.bench.output import OutputFolder
-    from jointbench.identification.bag_import import (bag_log, fit_grid, held_config,
-                                                      moved_windows, read_bag, topics_needed)
+    from jointbench.identification.bag_import import (bag_log, fit_grid, read_bag,
+                                                      topics_needed)
+    from jointbench.identification.bag_survey import held_config, moved_windows
     from jointbench.identification.log import write_log
 
     if args.map or args.units or args.rate or args.delimiter:
@@ -96,6 +97,12 @@ def run_bag(args: argparse.Namespace, spec_csv) -> int:
     if args.survey:
         if args.joint is not None:
             raise UsageError("--survey finds the moved joints itself: leave out --joint")
+        named = [f for f, v in (("--link-name", args.link_name), ("--motor-name", args.motor_name),
+                                ("--torque-name", args.torque_name),
+                                ("--reference-name", args.reference_name)) if v]
+        if named:
+            raise UsageError(f"--survey takes each axis' own names (NAME, NAME_motor): leave "
+                             f"out {', '.join(named)}")
         folder = OutputFolder(out, ("*.csv",))
     else:
         if args.joint is None:

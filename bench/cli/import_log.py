@@ -14,7 +14,7 @@ from jointbench.bench.cli.common import UsageError, check_output_file, finite, p
 
 # The library `run` imports, loaded by the dispatcher before it traps the signals.
 LIBRARY = ("jointbench.identification.log_import", "jointbench.identification.log",
-           "jointbench.identification.bag_import")
+           "jointbench.identification.bag_import", "jointbench.identification.bag_survey")
 
 # Metadata options: option destination -> metadata key (docs/log-format.md section 1.3).
 META_OPTIONS = {"kp": "kp", "kv": "kv", "ki": "ki", "tau_max": "tau_max",

@@ -122,3 +122,43 @@ def test_bad_options_exit_2(tmp_path, capsys):
         assert main(["flexify", str(ARM), "--out", str(tmp_path / "o.xml"), *argv]) == 2
         assert text in capsys.readouterr().err
         assert not (tmp_path / "o.xml").exists()
+
+
+def test_one_joint_from_an_identify_answer(tmp_path, capsys):
+    """--joints elbow with an `identify --json` answer: the elbow becomes an axis with its K
+    and Jm; the shoulder, its actuator and its armature stay the user's; an unknown
+    parameter name in the answer is ignored, a missing one takes its stated default."""
+    answer = {"model": "joint-motor", "parameters": {
+        "K": {"value": 5000.0, "sigma": 10.0}, "Jm": {"value": 1.4, "sigma": 0.01},
+        "MX": {"value": 0.1, "sigma": 0.01}}}
+    (tmp_path / "id.json").write_text(json.dumps(answer))
+    out = tmp_path / "one.xml"
+    assert main(["flexify", str(ARM), "--out", str(out), "--from", str(tmp_path / "id.json"),
+                 "--joints", "elbow", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    (elbow,) = doc["joints"]
+    assert elbow["sources"]["K"] == "--from id.json" and elbow["sources"]["FVm"] == "default 0"
+    flex = mujoco.MjModel.from_xml_path(str(out))
+    (axis,) = find_axes(flex, str(out))
+    assert axis.name == "elbow" and flex.tendon_stiffness[axis.tendon] == 5000.0
+    assert flex.actuator("shoulder_drive").gear[0] == 100.0
+    assert flex.dof_armature[flex.joint("shoulder").dofadr[0]] == 2.0
+    assert main(["flexify", str(ARM), "--out", str(tmp_path / "two.xml"), "--from",
+                 str(tmp_path / "id.json")]) == 2
+    assert "an identify answer is one joint's: give --joints JOINT" in capsys.readouterr().err
+
+
+def test_default_k_places_the_first_mode_and_the_users_file_is_kept(tmp_path, capsys):
+    """Without values: Jm is the joint's armature, K puts f1 at 15 Hz; an --out that is the
+    user's own file is refused and left as it was."""
+    out = tmp_path / "d.xml"
+    assert main(["flexify", str(ARM), "--out", str(out), "--json"]) == 0
+    for j in json.loads(capsys.readouterr().out)["joints"]:
+        v = j["values"]
+        assert v["Jm"] == {"shoulder": 2.0, "elbow": 1.2}[j["joint"]]
+        f1 = (v["K"] * (1 / v["Jm"] + 1 / j["JL"])) ** 0.5 / (2 * np.pi)
+        assert f1 == pytest.approx(15.0, rel=1e-12)
+    mine = tmp_path / "mine.xml"
+    mine.write_text("<mujoco/>\n")
+    assert main(["flexify", str(ARM), "--out", str(mine)]) == 2
+    assert "did not write" in capsys.readouterr().err and mine.read_text() == "<mujoco/>\n"

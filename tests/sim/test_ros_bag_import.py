@@ -21,8 +21,9 @@ from rosbags.typesys import Stores, get_typestore  # noqa: E402
 from jointbench.bench.campaign.survey import ACCURACY_BAR_PCT  # noqa: E402
 from jointbench.bench.cli import main  # noqa: E402
 from jointbench.bench.sim.experiment import run_experiment  # noqa: E402
-from jointbench.identification.bag_import import (MOTION_WINDOW_S, PAD_S, fit_grid, motion,
-                                                  rolling_sd)  # noqa: E402
+from jointbench.identification.bag_import import fit_grid  # noqa: E402
+from jointbench.identification.bag_survey import (MOTION_WINDOW_S, motion,  # noqa: E402
+                                                  rolling_sd)
 from jointbench.identification.identify import identify  # noqa: E402
 from jointbench.identification.log import read_log, write_log  # noqa: E402
 from jointbench.identification.log_schema import LogError  # noqa: E402
@@ -236,14 +237,14 @@ def test_grid_fit_measures_the_jitter_and_refuses_what_it_cannot_place():
 
 def test_motion_finds_the_window():
     """Held at a constant encoder reading, then a 4 s sine, then held: the window is the
-    sine's, widened by PAD_S each side; a joint that only flickers by one count did not move."""
+    sine's; a joint that only flickers by one count did not move."""
     rate = 350.87
     t = np.arange(int(20 * rate)) / rate
     q = np.where((t > 6) & (t < 10), 0.3 * np.sin(2 * np.pi * 2 * (t - 6)), 0.0)
     m = motion("a", q, rate)
     assert m.moved
-    assert m.start / rate == pytest.approx(6.0 - PAD_S, abs=0.15)
-    assert m.stop / rate == pytest.approx(10.0 + PAD_S, abs=0.15)
+    assert m.start / rate == pytest.approx(6.0, abs=0.15)
+    assert m.stop / rate == pytest.approx(10.0, abs=0.15)
     flicker = np.where(np.arange(len(t)) % 97 == 0, 1e-4, 0.0)
     assert not motion("b", flicker, rate).moved
     assert rolling_sd(np.ones(10), 3) == pytest.approx(np.zeros(10), abs=1e-12)
@@ -295,8 +296,8 @@ def survey_bag(tmp_path_factory):
 
 def test_survey_bag_gives_a_log_per_moved_joint(survey_bag, tmp_path, capsys):
     """Three logs, each joint's window found from the data (its 60 s move, the fade-in's and
-    fade-out's quietest part left out), each identified within the survey's accuracy bar (K, Jm, JL within
-    0.5 % of the truth, the bar `survey` holds arm6 to at 60 s)."""
+    fade-out's quietest part left out), each identified within the survey's accuracy bar
+    (K, Jm, JL within 0.5 % of the truth, the bar `survey` holds arm6 to at 60 s)."""
     from jointbench.bench.sim.axes import build_experiment_model
 
     bag, logs, moves = survey_bag
@@ -377,6 +378,8 @@ def test_bad_bags_exit_2_naming_what_is_missing(experiment, tmp_path, capsys):
     # no --joint, no --survey; --map on a bag
     assert "--joint NAME" in _bad(work, capsys, base)
     assert "for CSV files" in _bad(work, capsys, base + ["--joint", "axis1", "--map", "t=t"])
+    assert "leave out --motor-name" in _bad(work, capsys, base + ["--survey", "--motor-name",
+                                                                  "m"])
     # a survey bag where nothing moved: the folder is not created
     still = write_bag(tmp_path / "still", [frames[0]] * 300, stamps[:300])
     err = _bad(work, capsys, [str(still), "--out", str(work / "logs"), "--survey"])
