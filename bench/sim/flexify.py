@@ -136,6 +136,10 @@ def flexify(path: str | os.PathLike, given: dict[str, dict[str, float]],
         if name not in all_joints:
             raise ModelStructureError(f"{source}: no joint '{name}' (joints: "
                                       f"{', '.join(all_joints)})")
+    for name in given:
+        if name not in names:
+            raise ModelStructureError(f"{source}: --set gives values for '{name}', which is "
+                                      f"not among the joints to flexify ({', '.join(names)})")
     taken = {_name(model, o, i) for o, n in ((mujoco.mjtObj.mjOBJ_JOINT, model.njnt),
                                              (mujoco.mjtObj.mjOBJ_BODY, model.nbody),
                                              (mujoco.mjtObj.mjOBJ_TENDON, model.ntendon),
@@ -227,7 +231,8 @@ def _edit(spec: mujoco.MjSpec, model: mujoco.MjModel, name: str, j: int,
     hinge.damping[0] = v["FVm"]
     hinge.frictionloss = v["FSm"]
     hinge.stiffness[0] = 0.0
-    hinge.limited = mujoco.mjtLimited.mjLIMITED_FALSE
+    hinge.limited = mujoco.mjtLimited.mjLIMITED_FALSE          # nothing inherited from a
+    hinge.actfrclimited = mujoco.mjtLimited.mjLIMITED_FALSE    # default class limits the rotor
     for jt in (hinge, spec.joint(name)):
         jt.solref_friction = (FRICTION_TC, 1.0)
         jt.solimp_friction[:3] = SOLIMP_FRICTION

@@ -146,6 +146,9 @@ def test_one_joint_from_an_identify_answer(tmp_path, capsys):
     assert main(["flexify", str(ARM), "--out", str(tmp_path / "two.xml"), "--from",
                  str(tmp_path / "id.json")]) == 2
     assert "an identify answer is one joint's: give --joints JOINT" in capsys.readouterr().err
+    assert main(["flexify", str(ARM), "--out", str(tmp_path / "three.xml"), "--joints",
+                 "elbow", "--set", "shoulder.K=1e4"]) == 2
+    assert "not among the joints to flexify (elbow)" in capsys.readouterr().err
 
 
 def test_default_k_places_the_first_mode_and_the_users_file_is_kept(tmp_path, capsys):
