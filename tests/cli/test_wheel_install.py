@@ -6,6 +6,7 @@ the wheel is installed with --no-deps, so jointbench itself comes from the wheel
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 import sys
 import sysconfig
@@ -23,8 +24,12 @@ def _run(args, **kw) -> subprocess.CompletedProcess:
 
 
 def test_wheel_installs_and_runs(tmp_path):
+    # a copy of the sources: setuptools' build/ folder stays out of the checkout
+    src = tmp_path / "src"
+    shutil.copytree(ROOT, src, ignore=shutil.ignore_patterns(
+        ".git", ".venv", "build", "*.egg-info", ".pytest_cache", "__pycache__", "*_out"))
     wheels = tmp_path / "wheels"
-    built = _run([sys.executable, "-m", "pip", "wheel", str(ROOT), "--no-deps",
+    built = _run([sys.executable, "-m", "pip", "wheel", str(src), "--no-deps",
                   "-w", str(wheels), "-q"])
     assert built.returncode == 0, built.stderr
     wheel = next(wheels.glob("jointbench-*.whl"))
