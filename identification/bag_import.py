@@ -27,6 +27,7 @@ when a bag is read. No file writing (the command line writes with `write_log`).
 from __future__ import annotations
 
 import os
+from collections import Counter
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -98,13 +99,14 @@ class BagSpec:
 @dataclass(frozen=True)
 class TopicData:
     """The messages of one topic: stamps [ns], joint names, values[field] (messages x names,
-    NaN where the message's array is empty)."""
+    NaN where the message's array is empty), the messages skipped (`_topic_data`)."""
 
     topic: str
     msgtype: str
     stamps_ns: np.ndarray
     names: tuple[str, ...]
     values: dict[str, np.ndarray]
+    skipped: int = 0   # messages of another publisher (names disjoint from these)
 
     def column(self, source: Source, path: str) -> np.ndarray:
         """The values of `source`; LogError naming the missing name or field."""
@@ -171,23 +173,34 @@ def _stamp_ns(msg, receive_ns: int, stamp: str) -> int:
 
 
 def _topic_data(path: str, topic: str, msgtype: str, messages, stamp: str) -> TopicData:
-    """TopicData of deserialised (receive time, message) pairs."""
-    stamps: list[int] = []
-    names: tuple[str, ...] | None = None
-    rows: dict[str, list[np.ndarray]] = {}
+    """TopicData of deserialised (receive time, message) pairs. The messages carrying the
+    most frequent set of names are kept; those of another publisher on the same topic (names
+    disjoint from them, e.g. a gripper's) are skipped and counted; a message sharing only some
+    of the names is refused."""
+    msgs = []
     for k, (receive_ns, msg) in enumerate(messages, start=1):
         if not hasattr(msg, "name"):
             raise LogError(f"topic {topic}: message type {msgtype} has no joint names "
                            "(field 'name'; expected sensor_msgs/JointState)", path)
-        these = tuple(str(n) for n in msg.name)
-        if names is None:
-            names = these
-            rows = {f: [] for f in FIELDS if hasattr(msg, f)}
-        if set(these) != set(names) or len(these) != len(names):
-            raise LogError(f"topic {topic}: message {k} names {', '.join(these)}, the first "
+        msgs.append((k, receive_ns, msg, tuple(str(n) for n in msg.name)))
+    if not msgs:
+        raise LogError(f"topic {topic}: no message", path)
+    sets = Counter(frozenset(m[3]) for m in msgs)
+    main = max(sets, key=sets.__getitem__)   # the first seen among equally frequent sets
+    names = next(m[3] for m in msgs if frozenset(m[3]) == main)
+    fields = [f for f in FIELDS if hasattr(msgs[0][2], f)]
+    rows: dict[str, list[np.ndarray]] = {f: [] for f in fields}
+    stamps: list[int] = []
+    skipped = 0
+    for k, receive_ns, msg, these in msgs:
+        if frozenset(these) != main or len(these) != len(names):
+            if main.isdisjoint(these):
+                skipped += 1
+                continue
+            raise LogError(f"topic {topic}: message {k} names {', '.join(these)}, the others "
                            f"{', '.join(names)}", path)
         order = [these.index(n) for n in names]
-        for f in rows:
+        for f in fields:
             a = np.asarray(getattr(msg, f), dtype=float)
             if a.size == 0:
                 a = np.full(len(names), np.nan)
@@ -198,10 +211,8 @@ def _topic_data(path: str, topic: str, msgtype: str, messages, stamp: str) -> To
                 a = a[order]
             rows[f].append(a)
         stamps.append(_stamp_ns(msg, receive_ns, stamp))
-    if names is None:
-        raise LogError(f"topic {topic}: no message", path)
     return TopicData(topic, msgtype, np.array(stamps, dtype=np.int64), names,
-                     {f: np.array(v) for f, v in rows.items()})
+                     {f: np.array(v) for f, v in rows.items()}, skipped)
 
 
 def read_bag(path: str | os.PathLike, topics: set[str], stamp: str = "header") -> Bag:
@@ -347,8 +358,11 @@ def bag_log(bag: Bag, spec: BagSpec, joint: str, grid: TimeGrid, spec_csv: Impor
                             f"jitter rms {grid.jitter_rms:.3g} T, max {grid.jitter_max:.3g} T",
                 "bag_t0_s": f"{t_first:.9f}", **(extra_meta or {})}
     log = replace(result.log, meta=log_meta)
+    skipped = [f"{t}: {bag.topics[t].skipped} messages of another publisher skipped (names "
+               "disjoint from these)" for t in sorted({s.topic for s in sources.values()})
+               if bag.topics[t].skipped]
     steps = [f"read {bag.path}: {len(sources)} signals, " +
-             "; ".join(f"{c} <- {s}" for c, s in sources.items()),
+             "; ".join(f"{c} <- {s}" for c, s in sources.items()), *skipped,
              f"t <- {grid.describe()}; samples {lo + i0 + 1} to {lo + i1} of {spec.topic}",
              *[s for s in result.steps[2:] if not s.startswith("t ")]]
     return ImportResult(log, tuple(steps), result.checks, result.warnings)

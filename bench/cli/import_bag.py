@@ -22,7 +22,8 @@ STAMPS = ("header", "receive")
 def add_bag_arguments(p: argparse.ArgumentParser) -> None:
     """The options of `import` for a ROS bag."""
     g = p.add_argument_group("ROS bags (.db3, .mcap, a rosbag2 folder, .bag; needs "
-                             "jointbench[ros]); --joint NAME names the axis")
+                             "jointbench[ros]); --joint NAME names the axis, --motor-side "
+                             "defaults to q_m,tau_m")
     g.add_argument("--topic", default=DEFAULT_TOPIC,
                    help=f"sensor_msgs/JointState topic of q (and of q_m, tau_m unless "
                         f"given) (default {DEFAULT_TOPIC})")

@@ -69,9 +69,10 @@ def _joint_state(store, stamp: int, names, position, effort):
 def write_topics(path: Path, topics: dict[str, list[dict]], stamps: np.ndarray,
                  storage: str = "mcap") -> Path:
     """A bag of JointState messages: topic -> frames, frame k = {name: (position, effort)}
-    (effort None: an empty effort array) stamped stamps[k], received 0.2-0.6 ms later (each
-    topic 50 us after the previous). `storage`: mcap or sqlite3 (a ROS 2 folder; its storage
-    file is returned) or ros1."""
+    (effort None: an empty effort array; a frame None: no message) stamped stamps[k],
+    received 0.2-0.6 ms later (each topic 50 us after the previous). `TOPIC#TAG` is a second
+    publisher on TOPIC. `storage`: mcap or sqlite3 (a ROS 2 folder; its storage file is
+    returned) or ros1."""
     ros1 = storage == "ros1"
     store = _store(ros1)
     typ = "sensor_msgs/msg/JointState"
@@ -82,21 +83,24 @@ def write_topics(path: Path, topics: dict[str, list[dict]], stamps: np.ndarray,
         for k in range(len(stamps)):
             for i, (topic, frames) in enumerate(topics.items()):
                 frame = frames[k]
+                if frame is None:
+                    continue
                 names = list(frame)
                 efforts = [frame[n][1] for n in names]
                 msg = _joint_state(store, int(stamps[k]), names, [frame[n][0] for n in names],
                                    [] if None in efforts else efforts)
-                writer.write(conns[topic], int(stamps[k] + delay[k] + 50_000 * i),
-                             ser(msg, typ))
+                writer.write(conns[topic.split("#")[0]],
+                             int(stamps[k] + delay[k] + 50_000 * i), ser(msg, typ))
 
     if ros1:
         with Writer1(path) as writer:
             messages(writer, {t: writer.add_connection(t, typ, typestore=store)
-                              for t in topics})
+                              for t in {t.split("#")[0] for t in topics}})
         return path
     plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
     with Writer(path, version=9, storage_plugin=plugin) as writer:
-        messages(writer, {t: writer.add_connection(t, typ, typestore=store) for t in topics})
+        messages(writer, {t: writer.add_connection(t, typ, typestore=store)
+                          for t in {t.split("#")[0] for t in topics}})
     return path / f"{path.name}.{'mcap' if storage == 'mcap' else 'db3'}"
 
 
@@ -210,6 +214,22 @@ def test_motor_and_torque_sensor_on_their_own_topics(experiment, tmp_path):
     assert np.array_equal(log.tau_m, native.tau_m[:n])
     assert np.array_equal(log.q, native.q[:n]) and log.q_ref is None
     assert log.meta["bag_topics"] == "/joint_states /motor_states /torque_sensor"
+
+
+def test_a_second_publisher_on_the_topic_is_skipped(experiment, tmp_path, capsys):
+    """/joint_states shared with a gripper's publisher (its own names, a tenth of the rate):
+    its messages are skipped and counted; the arm's are imported as they are."""
+    native, stamps = experiment
+    n = 2000
+    topics = {"/joint_states": frames_of(native, "axis1")[:n],
+              "/joint_states#gripper": [{"finger": (0.01, 0.0)} if k % 10 == 3 else None
+                                        for k in range(n)]}
+    bag = write_topics(tmp_path / "shared", topics, stamps[:n])
+    assert main(["import", str(bag), "--out", str(tmp_path / "log.csv"), "--joint", "axis1",
+                 "--gear-ratio", str(N)]) == 0
+    assert "/joint_states: 200 messages of another publisher skipped" in capsys.readouterr().out
+    log = read_log(tmp_path / "log.csv")
+    assert len(log) == n and np.array_equal(log.q, native.q[:n])
 
 
 def test_grid_fit_measures_the_jitter_and_refuses_what_it_cannot_place():
