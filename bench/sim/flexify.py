@@ -77,9 +77,10 @@ def _actuator_of(model: mujoco.MjModel, joint: int, source: str, jname: str) -> 
     return acts[0]
 
 
-def torque_limit(model: mujoco.MjModel, act: int, source: str, aname: str) -> float | None:
-    """The joint-side torque limit of a rigid arm's actuator (module docstring); None when
-    unlimited. ModelStructureError for a gear of 0."""
+def torque_limit(model: mujoco.MjModel, act: int, source: str, aname: str
+                 ) -> tuple[float, str] | None:
+    """The joint-side torque limit of a rigid arm's actuator (module docstring) and how it was
+    found; None when unlimited. ModelStructureError for a gear of 0."""
     gear = float(model.actuator_gear[act, 0])
     if gear == 0:
         raise ModelStructureError(f"{source}: actuator '{aname}' has gear 0 (it transmits no "
@@ -87,14 +88,15 @@ def torque_limit(model: mujoco.MjModel, act: int, source: str, aname: str) -> fl
     motor = (int(model.actuator_biastype[act]) == int(mujoco.mjtBias.mjBIAS_NONE) and
              int(model.actuator_gaintype[act]) == int(mujoco.mjtGain.mjGAIN_FIXED))
     if motor and model.actuator_ctrllimited[act]:
-        return float(np.max(np.abs(model.actuator_ctrlrange[act])) *
-                     abs(model.actuator_gainprm[act, 0]) * abs(gear))
+        return (float(np.max(np.abs(model.actuator_ctrlrange[act])) *
+                      abs(model.actuator_gainprm[act, 0]) * abs(gear)), "ctrlrange x gear")
     if model.actuator_forcelimited[act]:
-        return float(np.max(np.abs(model.actuator_forcerange[act])) * abs(gear))
+        return (float(np.max(np.abs(model.actuator_forcerange[act])) * abs(gear)),
+                "forcerange x gear")
     return None
 
 
-def _defaults(model: mujoco.MjModel, j: int, gear: float, tau_max: float | None
+def _defaults(model: mujoco.MjModel, j: int, gear: float, limit: tuple[float, str] | None
               ) -> tuple[dict[str, float], dict[str, str], float]:
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
@@ -110,8 +112,8 @@ def _defaults(model: mujoco.MjModel, j: int, gear: float, tau_max: float | None
                "default: JL (no armature on the joint)", "FVm": "default 0", "FSm": "default 0",
                "FV": "the joint's damping", "FS": "the joint's frictionloss",
                "N": "the actuator's gear"}
-    if tau_max is not None:
-        values["tau_max"], sources["tau_max"] = tau_max, "ctrlrange x gear"
+    if limit is not None:
+        values["tau_max"], sources["tau_max"] = limit
     return values, sources, JL
 
 

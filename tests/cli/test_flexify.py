@@ -165,3 +165,18 @@ def test_default_k_places_the_first_mode_and_the_users_file_is_kept(tmp_path, ca
     mine.write_text("<mujoco/>\n")
     assert main(["flexify", str(ARM), "--out", str(mine)]) == 2
     assert "did not write" in capsys.readouterr().err and mine.read_text() == "<mujoco/>\n"
+
+
+def test_a_servo_gives_its_force_range_times_the_gear(tmp_path, capsys):
+    """A position servo (Menagerie's `<position>`/`<general>` with a bias): its ctrlrange is
+    an angle, so the torque limit is its forcerange times the gear."""
+    xml = tmp_path / "servo.xml"
+    xml.write_text(BAD_ACTUATOR.format(
+        joint2='<joint name="j2" axis="0 1 0"/>', gear=50,
+        act2='<position joint="j2" kp="100" gear="20" forcerange="-4 4" ctrlrange="-1 1"/>'))
+    assert main(["flexify", str(xml), "--out", str(tmp_path / "s.xml"), "--json"]) == 0
+    drives = {j["joint"]: j for j in json.loads(capsys.readouterr().out)["joints"]}
+    assert drives["j1"]["values"]["tau_max"] == 50.0      # motor: ctrlrange 1 x gear 50
+    assert drives["j2"]["values"]["tau_max"] == 80.0      # servo: forcerange 4 x gear 20
+    assert drives["j2"]["sources"]["tau_max"] == "forcerange x gear"
+    assert drives["j2"]["values"]["N"] == 20.0
