@@ -13,9 +13,6 @@ from pathlib import Path
 from jointbench.bench.cli.common import UsageError, check_output_file
 
 LIBRARY = ("jointbench.bench.sim.flexify",)
-# identification.parameters' names and bench.sim.flexify.PARAMETERS, here so that parsing
-# imports no numerics
-PARAMETERS = ("K", "Jm", "FVm", "FSm", "FV", "FS", "N", "tau_max")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -35,6 +32,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def parse_set(items: list[str]) -> dict[str, dict[str, float]]:
     """--set JOINT.P=V,... as joint -> parameter -> value; UsageError naming the item."""
+    from jointbench.bench.sim.flexify import PARAMETERS
+
     out: dict[str, dict[str, float]] = {}
     for item in (x for text in items for x in text.split(",") if x.strip()):
         key, sep, value = item.partition("=")

@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 from jointbench.bench.cli.common import UsageError, check_output_file
@@ -74,72 +75,87 @@ def _report(out: Path, result, as_json: bool) -> dict | str:
                       f"{log.sample_rate_hz:.6g} Hz, columns {', '.join(log.columns())}"])
 
 
-def run_bag(args: argparse.Namespace, spec_csv) -> int:
-    """Read the bag, fit the time grid, convert, write (atomically; a survey's folder all or
-    nothing); print what was done. `spec_csv`: the ImportSpec of the shared options."""
+def _check(args: argparse.Namespace, src: Path, out: Path):
+    """Refuse the CSV options and the survey's conflicts; check --out before any reading.
+    The OutputFolder of a survey, else None."""
     from jointbench.bench.output import OutputFolder
-    from jointbench.identification.bag_import import (bag_log, fit_grid, read_bag,
-                                                      topics_needed)
-    from jointbench.identification.bag_survey import held_config, moved_windows
-    from jointbench.identification.log import write_log
 
     if args.map or args.units or args.rate or args.delimiter:
         raise UsageError("--map, --units, --rate and --delimiter are for CSV files; a bag "
                          "maps its columns with --topic, --motor-name, --torque-name ...")
-    from dataclasses import replace
-
-    from jointbench.identification.bag_import import BAG_MOTOR_SIDE
-    from jointbench.identification.log_import import MOTOR_SIDE
-
-    spec = _spec(args)
-    if spec_csv.motor_side == MOTOR_SIDE:   # --motor-side not given: a bag's own default
-        spec_csv = replace(spec_csv, motor_side=BAG_MOTOR_SIDE)
-    src, out = Path(args.file), Path(args.out)
-    if args.survey:
-        if args.joint is not None:
-            raise UsageError("--survey finds the moved joints itself: leave out --joint")
-        named = [f for f, v in (("--link-name", args.link_name), ("--motor-name", args.motor_name),
-                                ("--torque-name", args.torque_name),
-                                ("--reference-name", args.reference_name)) if v]
-        if named:
-            raise UsageError(f"--survey takes each axis' own names (NAME, NAME_motor): leave "
-                             f"out {', '.join(named)}")
-        folder = OutputFolder(out, ("*.csv",))
-    else:
+    if not args.survey:
         if args.joint is None:
             raise UsageError(f"{src}: give --joint NAME (the axis to import), or --survey for "
                              "one log per moved joint")
         check_output_file(out)
+        return None
+    if args.joint is not None:
+        raise UsageError("--survey finds the moved joints itself: leave out --joint")
+    named = [f for f, v in (("--link-name", args.link_name), ("--motor-name", args.motor_name),
+                            ("--torque-name", args.torque_name),
+                            ("--reference-name", args.reference_name)) if v]
+    if named:
+        raise UsageError(f"--survey takes each axis' own names (NAME, NAME_motor): leave out "
+                         f"{', '.join(named)}")
+    return OutputFolder(out, ("*.csv",))
+
+
+def run_bag(args: argparse.Namespace, spec_csv) -> int:
+    """Read the bag, fit the time grid, convert, write (atomically; a survey's folder all or
+    nothing); print what was done. `spec_csv`: the ImportSpec of the shared options."""
+    from jointbench.identification.bag_import import (BAG_MOTOR_SIDE, bag_log, fit_grid,
+                                                      read_bag, topics_needed)
+    from jointbench.identification.log import write_log
+    from jointbench.identification.log_import import MOTOR_SIDE
+
+    src, out = Path(args.file), Path(args.out)
+    folder = _check(args, src, out)
+    spec = _spec(args)
+    if spec_csv.motor_side == MOTOR_SIDE:   # --motor-side not given: a bag's own default
+        spec_csv = replace(spec_csv, motor_side=BAG_MOTOR_SIDE)
     bag = read_bag(src, topics_needed(spec, args.joint), spec.stamp)
     grid = fit_grid(bag.topic(spec.topic).stamps_ns, spec.topic, str(src))
-    if not args.survey:
-        result = bag_log(bag, spec, args.joint, grid, spec_csv)
-        write_log(result.log, out)
-        _print(result, out, args.json)
-        return 0
+    if folder is not None:
+        return _survey(args, bag, spec, grid, spec_csv, folder)
+    result = bag_log(bag, spec, args.joint, grid, spec_csv)
+    write_log(result.log, out)
+    for text in result.warnings:
+        print(f"jointbench import: warning: {text}", file=sys.stderr)
+    report = _report(out, result, args.json)
+    print(json.dumps(report) if args.json else report)
+    return 0
+
+
+def _survey(args: argparse.Namespace, bag, spec, grid, spec_csv, folder) -> int:
+    """One log per moved joint into the --out folder (all or nothing)."""
+    from jointbench.identification.bag_import import bag_log
+    from jointbench.identification.bag_survey import held_config, moved_windows
+    from jointbench.identification.log import write_log
+
+    out = Path(args.out)
     motions, moved = moved_windows(bag, spec, grid)
+    by_joint = {m.joint: m for m in motions}
     results = {}
-    for m in motions:
-        if m.moved:
-            meta = {"locked_config": held_config(bag, spec, motions, m),
-                    "bag_window_s": f"{m.start * grid.period:.6f} {m.stop * grid.period:.6f}"}
-            results[m.joint] = bag_log(bag, spec, m.joint, grid, spec_csv, (m.start, m.stop),
-                                       meta)
+    for j in moved:
+        m = by_joint[j]
+        meta = {"locked_config": held_config(bag, spec, motions, m),
+                "bag_window_s": f"{m.start * grid.period:.6f} {m.stop * grid.period:.6f}"}
+        results[j] = bag_log(bag, spec, j, grid, spec_csv, (m.start, m.stop), meta)
     with folder.writing() as path:
-        for joint in moved:
-            write_log(results[joint].log, path / f"{joint}.csv")
-    for joint in moved:
-        for text in results[joint].warnings:
-            print(f"jointbench import: warning: {joint}: {text}", file=sys.stderr)
+        for j in moved:
+            write_log(results[j].log, path / f"{j}.csv")
+    for j in moved:
+        for text in results[j].warnings:
+            print(f"jointbench import: warning: {j}: {text}", file=sys.stderr)
     held = [m.joint for m in motions if not m.moved]
     if args.json:
         print(json.dumps({"out": str(out), "moved": moved, "held": held,
                           "time_grid": grid.describe(),
                           "logs": [_report(out / f"{j}.csv", results[j], True) for j in moved]}))
         return 0
-    print(f"survey bag {src}: time {grid.describe()}")
+    print(f"survey bag {args.file}: time {grid.describe()}")
     for j in moved:
-        m = next(x for x in motions if x.joint == j)
+        m = by_joint[j]
         print(f"{j}: moved from {m.start * grid.period:.3f} s to {m.stop * grid.period:.3f} s "
               f"(rolling sd peak {m.peak:.3g}, held level {m.held:.3g})")
     if held:
@@ -147,10 +163,3 @@ def run_bag(args: argparse.Namespace, spec_csv) -> int:
     for j in moved:
         print(_report(out / f"{j}.csv", results[j], False))
     return 0
-
-
-def _print(result, out: Path, as_json: bool) -> None:
-    for text in result.warnings:
-        print(f"jointbench import: warning: {text}", file=sys.stderr)
-    text = _report(out, result, as_json)
-    print(json.dumps(text) if as_json else text)
