@@ -1,4 +1,4 @@
-"""Importing a ROS bag into jointbench logs (docs/log-format.md section "ROS bags").
+"""Importing a ROS bag into jointbench logs (docs/log-format.md section 1.7).
 
 A ROS 2 bag (a `.db3` or `.mcap` file, or its folder with `metadata.yaml`) or a ROS 1 `.bag`
 holds `sensor_msgs/JointState` messages: per message a header stamp, the joint names and

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import shutil
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -405,3 +406,14 @@ def test_bad_bags_exit_2_naming_what_is_missing(experiment, tmp_path, capsys):
     err = _bad(work, capsys, [str(still), "--out", str(work / "logs"), "--survey"])
     assert "no joint moved" in err
     shutil.rmtree(work)
+
+
+def test_without_rosbags_the_extra_is_named(experiment, tmp_path, monkeypatch, capsys):
+    """rosbags missing: exit 2 naming the extra to install, nothing written."""
+    native, stamps = experiment
+    bag = write_bag(tmp_path / "b", frames_of(native, "axis1")[:100], stamps[:100])
+    monkeypatch.setitem(sys.modules, "rosbags.highlevel", None)   # import fails
+    work = tmp_path / "w"
+    work.mkdir()
+    err = _bad(work, capsys, [str(bag), "--out", str(work / "log.csv"), "--joint", "axis1"])
+    assert "pip install 'jointbench[ros]'" in err
