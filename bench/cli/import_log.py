@@ -12,8 +12,8 @@ import sys
 from jointbench.bench.cli.common import UsageError, finite, positive
 
 # The library `run` imports, loaded by the dispatcher before it traps the signals.
-LIBRARY = ("jointbench.bench.api", "jointbench.identification.log_import",
-           "jointbench.identification.log")
+LIBRARY = ("jointbench.identification.log_import", "jointbench.identification.log",
+           "jointbench.identification.bag_import", "jointbench.identification.bag_survey")
 
 # Metadata options: option destination -> metadata key (docs/log-format.md section 1.3).
 META_OPTIONS = {"kp": "kp", "kv": "kv", "ki": "ki", "tau_max": "tau_max",
@@ -24,7 +24,8 @@ META_OPTIONS = {"kp": "kp", "kv": "kv", "ki": "ki", "tau_max": "tau_max",
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """The options of `import`."""
     p.add_argument("file", help="raw CSV file: a header row, then one row of numbers per "
-                                "sample (',' ';' tab or '|'; '#' lines skipped)")
+                                "sample (',' ';' tab or '|'; '#' lines skipped); or a ROS bag "
+                                "(.db3, .mcap, a rosbag2 folder, .bag)")
     p.add_argument("--out", required=True, help="log file to write (never the input)")
     p.add_argument("--map", metavar="COL=RAW,...",
                    help="log column = raw column, e.g. t=time_ms,q_m=motor_counts,"
@@ -71,6 +72,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     meta.add_argument("--meta", action="append", default=[], metavar="KEY=VALUE",
                       help="any other metadata key, e.g. torque_noise_std=0.5 (repeatable)")
     p.add_argument("--json", action="store_true", help="print a JSON summary")
+    from jointbench.bench.cli.import_bag import add_bag_arguments
+    add_bag_arguments(p)
 
 
 def _pairs(text: str | None, flag: str, form: str) -> dict[str, str]:
@@ -114,11 +117,27 @@ def options(args: argparse.Namespace) -> dict:
                 gains_side=args.gains_side, delimiter=args.delimiter)
 
 
+def spec_from_args(args: argparse.Namespace, header: tuple[str, ...]):
+    """The ImportSpec of the options (a bag's conversion); the default mapping takes the raw
+    columns that already carry a log column's name."""
+    from jointbench.identification.log_import import LOG_COLUMNS, ImportSpec
+
+    kwargs = options(args)
+    kwargs.pop("delimiter")
+    if kwargs["columns"] is None:
+        kwargs["columns"] = {c: c for c in LOG_COLUMNS if c in header}
+    return ImportSpec(**kwargs)
+
+
 def run(args: argparse.Namespace) -> int:
     """Parse, `jointbench.import_log` (read, convert, check, write atomically); print what
     was done."""
     from jointbench.bench.api import import_log
+    from jointbench.identification.bag_import import is_bag
 
+    if is_bag(args.file):
+        from jointbench.bench.cli.import_bag import run_bag
+        return run_bag(args, spec_from_args(args, ()))
     report = import_log(args.file, args.out, **options(args))
     for text in report.warnings:
         print(f"jointbench import: warning: {text}", file=sys.stderr)

@@ -34,6 +34,8 @@ COMMANDS: dict[str, Command] = {
                                     "cluster)"),
     "survey": Command("survey", "every axis of a robot in turn: chirp experiment, identification "
                                 "with the defaults, one table against the truth, a figure"),
+    "flexify": Command("flexify", "a rigid MJCF arm (hinges driven by gear motors) made "
+                                  "flexible in the axis convention: rotor, spring, motor"),
     "tune-filter": Command("tune_filter", "search wn and Nd minimising the error against truth "
                                           "over a campaign, beside the eq. (28)-(29) values"),
 }
