@@ -2,7 +2,7 @@
 physical, the memory a command needs, campaign options and resume, messages that name the
 option, line or column, strict JSON and strictly numeric fields, clipped torque. One
 parametrised test per class of attack; Hypothesis fuzzes the campaign options, diagnose and
-design-filter (the loader and identify: tests/test_faults.py)."""
+design-filter (the loader and identify: tests/cli/test_faults.py)."""
 
 from __future__ import annotations
 

@@ -24,7 +24,7 @@ RAW_ARGS = ["--map", "t=time_ms,q_m=motor_counts,q=link_deg,tau_m=current_A,q_re
             "--counts-per-turn", str(CPR), "--torque-constant", str(KT),
             "--kp", "5.83678819", "--kv", "5188.797305", "--ki", "30285.91083",
             "--tau-max", "3000", "--joint", "axis1"]
-DATA = Path(__file__).parent / "data" / "emps"
+DATA = Path(__file__).parents[1] / "data" / "emps"
 GTAU = 35.15065188  # EMPS drive gain [N/V] (tests/data/emps/README.md)
 
 

@@ -1,17 +1,16 @@
-"""The independent simulator (tests/indep_sim.py) as a runner of the battery by visibility
-(bench.campaign.battery.Runner): its axis families at the paper's rate, one of them with a
-link mass so that the `gravity` effect applies."""
+"""The independent simulator (jointbench.testing.simulator) as a runner of the battery by
+visibility (bench.campaign.battery.Runner): its axis families at the paper's rate, one of them
+with a link mass so that the `gravity` effect applies."""
 
 from __future__ import annotations
 
 from dataclasses import replace
 
-from indep_effects import Hidden
-from indep_sim import FAMILIES, AxisFamily, default_reference, simulate
-
 from jointbench.bench.campaign.battery import Effect, Place
 from jointbench.identification.defaults import PAPER_RATE
 from jointbench.identification.log import Log
+from jointbench.testing.hidden_effects import Hidden
+from jointbench.testing.simulator import FAMILIES, AxisFamily, default_reference, simulate
 
 # heavy_link hanging from its hinge: first moment MY = 8 kg m (rest angle 0), a gravity
 # torque of 78 N m (20 % of its torque limit) a quarter turn from rest.

@@ -1,4 +1,5 @@
-"""Hidden effects of docs/effects.md in the independent simulator (tests/indep_sim.py).
+"""Hidden effects of docs/effects.md in the independent simulator
+(jointbench.testing.simulator).
 
 Written again from the effects' text (docs/effects.md 4.1-4.2), not from the bench's modules:
 same names, strength units and options, so a log of either simulator says the same thing in
@@ -189,7 +190,7 @@ def rk4_step(accel: Accel, x: State, h: float, tau0: float, tau_half: float,
 
 def stepper_with_effects(family, gravity: float, T: float, substeps: int, e: Plant,
                          tau_init: float) -> Callable[[State, float], State]:
-    """indep_sim.make_stepper with the hidden effects' terms for an AxisFamily `family`
+    """simulator.make_stepper with the hidden effects' terms for an AxisFamily `family`
     (slower: every term is evaluated at every stage)."""
     Jm, JL, K, FVm, FSm, FV = family.Jm, family.JL, family.K, family.FVm, family.FSm, family.FV
     FS, inv_vs = family.FS + e.link_coulomb, 1.0 / family.v_s

@@ -1,16 +1,16 @@
 """An independent two-mass axis simulator (plain numpy/scipy, no MuJoCo) writing jointbench logs.
 
-Accuracy must never be measured only on MuJoCo data (issue 17, item 5). This module models one
+Accuracy must never be measured only on MuJoCo data. This module models one
 flexible axis from the paper's eqs. (5)-(6) on the joint side (SI, radians):
 
     Jm qm'' = tau - FVm qm' - FSm tanh(qm' / v_s) - K (qm - q)                      (6)
     JL q''  = K (qm - q) - FV q' - FS tanh(q' / v_s) - MX g cos q - MY g sin q      (5), (7)
 
 Coulomb friction is smoothed over `v_s` (a parameter, default 1e-3 rad/s). The hidden effects
-of docs/effects.md (tests/indep_effects.py) add their terms to these equations. The plant is
-integrated by fixed-step RK4, `substeps` steps per control period, with the torque held over
-the period (zero-order hold). The controller is docs/controller.md, written here again from the
-contract's text (not imported), evaluated at 350.87 Hz by default on the quantised motor
+of docs/effects.md (jointbench.testing.hidden_effects) add their terms to these equations. The
+plant is integrated by fixed-step RK4, `substeps` steps per control period, with the torque held
+over the period (zero-order hold). The controller is docs/controller.md, written here again from
+the contract's text (not imported), evaluated at 350.87 Hz by default on the quantised motor
 encoder; the applied torque is the command plus seeded white noise. Only the default gains
 come from the package (`bench.sim.controller.gains_rule`, which needs no MuJoCo).
 
@@ -25,12 +25,12 @@ from typing import Callable
 
 import numpy as np
 
-from indep_effects import (Plant, as_hidden, plant, rk4_step, spring_deflection,
-                           stepper_with_effects, truth_meta)
-
 from jointbench.bench.sim.controller import Gains, gains_rule
 from jointbench.identification.defaults import PAPER_RATE
 from jointbench.identification.log import Log
+from jointbench.testing.hidden_effects import (Plant, as_hidden, plant, rk4_step,
+                                               spring_deflection, stepper_with_effects,
+                                               truth_meta)
 
 TWO_PI = 2.0 * math.pi
 STEP_PHASE = 0.04        # substeps: w1 dt at most this (RK4 loses (w dt)^6 / 72 energy a step)
@@ -142,8 +142,8 @@ def make_stepper(family: AxisFamily, gravity: float, T: float, substeps: int,
                  effects: Plant = Plant(), tau_init: float = 0.0) -> Callable[[State, float], State]:
     """The plant over one control period: `step(x, tau)` integrates eqs. (5)-(6) from state x
     by `substeps` RK4 steps with the torque tau held constant (zero-order hold). With
-    `effects`, their terms (tests/indep_effects.py); a torque lag keeps the rotor's torque,
-    starting at `tau_init`, inside the stepper."""
+    `effects`, their terms (jointbench.testing.hidden_effects); a torque lag keeps the rotor's
+    torque, starting at `tau_init`, inside the stepper."""
     if effects != Plant():
         return stepper_with_effects(family, gravity, T, substeps, effects, tau_init)
     Jm, JL, K = family.Jm, family.JL, family.K
@@ -311,8 +311,8 @@ def simulate(family: AxisFamily, seed: int = 1, duration: float = 60.0, sweep: s
     [rad] in static equilibrium (the motor deflected by the gravity torque / K, the integrator
     holding that torque); `center` defaults to the rest angle (`AxisFamily.rest_angle`).
     `ideal_sensors`: no quantisation and no torque noise; `torque_noise_std` [N m] replaces
-    the family's noise level. `effects`: hidden effects (tests/indep_effects.py: a Hidden,
-    a tuple of them, or simulate --effect's text such as "backlash=0.002,offset=1"); the
+    the family's noise level. `effects`: hidden effects (jointbench.testing.hidden_effects: a
+    Hidden, a tuple of them, or simulate --effect's text such as "backlash=0.002,offset=1"); the
     gravity effect moves the centre `strength` from the rest angle.
     """
     T = 1.0 / sample_rate_hz
@@ -346,7 +346,7 @@ def simulate(family: AxisFamily, seed: int = 1, duration: float = 60.0, sweep: s
     meta.update(gains.to_meta())
     meta.update({
         "joint": family.name,
-        "source": "jointbench tests/indep_sim.py: numpy two-mass axis, no MuJoCo",
+        "source": "jointbench.testing.simulator: numpy two-mass axis, no MuJoCo",
         "seed": str(seed), "substeps": str(n_sub), "integrator": "RK4 (fixed step, numpy)",
         "coulomb_smoothing_rad_s": _fmt(family.v_s),
         "chirp": reference.describe(),

@@ -1,5 +1,5 @@
 """The battery by visibility (bench.campaign.battery, .visibility, .detection; benchmarks/
-battery.py), the independent simulator's hidden effects (tests/indep_effects.py) and several
+battery.py), the independent simulator's hidden effects (testing.hidden_effects) and several
 hidden effects at once (simulate --effect A=..,B=..): fast checks of the machinery."""
 
 from __future__ import annotations
@@ -9,10 +9,6 @@ import math
 import numpy as np
 import pytest
 
-from indep_battery import INDEP_PLACES, IndepRunner
-from indep_effects import Hidden, parse_hidden
-from indep_sim import FAMILIES, frictionless, open_loop, simulate
-
 from jointbench.bench.campaign.battery import BENCH_PLACES, BenchRunner, Spec, plan, run_spec
 from jointbench.bench.campaign.detection import found_above, right, summary_lines
 from jointbench.bench.campaign.visibility import SEARCH_TOLERANCE, strength_for, visibility
@@ -20,6 +16,8 @@ from jointbench.bench.cli import main
 from jointbench.bench.effects import parse_effects
 from jointbench.bench.sim.experiment import run_experiment
 from jointbench.identification.log import read_log
+from jointbench.testing import (FAMILIES, INDEP_PLACES, Hidden, IndepRunner, frictionless,
+                                open_loop, parse_hidden, simulate)
 
 BALANCED = FAMILIES["balanced"]
 

@@ -26,7 +26,7 @@ from jointbench.bench.campaign.table import CampaignTable, read_table
 from jointbench.bench.campaign.executors import LocalExecutor, SerialExecutor
 from jointbench.identification.summary import coverage, parameter_stats, wilson_interval
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 SHORT = RunSettings(duration=10.0)
 
 

@@ -14,9 +14,9 @@ from __future__ import annotations
 
 import pytest
 
-from indep_sim import FAMILIES, simulate
 from jointbench.bench.analysis.diagnose.run import diagnosis_settings
 from jointbench.identification.discrepancy.inverse import diagnose_inverse
+from jointbench.testing import FAMILIES, simulate
 
 A = 0.4870154211310689   # the battery's drawn strength
 

@@ -21,7 +21,7 @@ DURATION = 30.0
 
 
 def _soft(effects: str | None = None):
-    from indep_sim import FAMILIES, simulate
+    from jointbench.testing import FAMILIES, simulate
     return simulate(FAMILIES["soft"], seed=2, duration=DURATION, effects=effects)
 
 

@@ -1,5 +1,5 @@
 """A backlash and a hardening are two shapes of one spring law, K dz(qm - q, b) + Kh dz(qm - q, d)
-(docs/effects.md 4.2, tests/indep_effects.py): once one is named, the other is tested with the
+(docs/effects.md 4.2, testing.hidden_effects): once one is named, the other is tested with the
 first one's searched value searched again beside it (identification.discrepancy.candidates:
 _coupled), against the first one refitted alone (_refitted).
 
@@ -31,7 +31,7 @@ B, RATIO, D = 0.003, 1.6, 0.010
 
 @pytest.fixture(scope="module")
 def wrist():
-    from indep_sim import FAMILIES, simulate
+    from jointbench.testing import FAMILIES, simulate
     family = FAMILIES["wrist"]
     log = simulate(family, seed=3, duration=30.0, feedforward=False,
                    effects=f"hardening={RATIO}:deflection={D},backlash={B}")
@@ -71,7 +71,7 @@ def test_a_backlash_alone_is_not_given_a_hardening(wrist):
     """The converse, on a log with a backlash only (same family, 4 mrad): a hardening on top
     of it, with the width searched again, adds nothing significant, and the reference it is
     weighed against is the backlash refitted alone (so a better width is not credited to it)."""
-    from indep_sim import FAMILIES, simulate
+    from jointbench.testing import FAMILIES, simulate
     log = simulate(FAMILIES["wrist"], seed=3, duration=30.0, feedforward=False,
                    effects="backlash=0.004")
     nom = nominal(log, diagnosis_settings(log)[0])

@@ -18,7 +18,7 @@ from jointbench.bench.sim import nominal as nominal_axes
 from jointbench.identification.effects import EFFECTS
 from jointbench.identification.log import read_log
 
-EMPS = Path(__file__).parent / "data" / "emps"
+EMPS = Path(__file__).parents[1] / "data" / "emps"
 # The prototype's Table 1 values (models/prototype_axis.xml, rounded).
 PROTOTYPE = dict(Jm=174.8, FVm=235.9, FSm=41.4, K=20341.0, JL=47.45, FV=83.15, FS=8.46,
                  MX=-0.724, MY=-53.42)

@@ -14,7 +14,7 @@ from jointbench.bench.analysis.diagnose import diagnose
 from jointbench.identification.log import read_log
 from jointbench.identification.plots import plot_figure1, plot_frf, plot_validation
 
-EMPS = Path(__file__).parent / "data" / "emps" / "emps_estimation.csv"
+EMPS = Path(__file__).parents[1] / "data" / "emps" / "emps_estimation.csv"
 UNITS = ("[rad]", "[N m]", "[Hz]", "[s]", "[m]", "[N]", "samples", "/Hz]", "(N m)", "(s)",
          "(Hz)", "(deg)", "(rad/s)", "1/s", "(N)", "(rad /", "(m /")
 

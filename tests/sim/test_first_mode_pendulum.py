@@ -5,20 +5,13 @@ mode (battery seed 2026, pair case #94), and the checks that now reject such a p
 from __future__ import annotations
 
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.linalg import eigh
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-from indep_battery import BATTERY_FAMILIES  # noqa: E402
-from indep_effects import Hidden  # noqa: E402
-from indep_sim import simulate  # noqa: E402
-
-from jointbench.identification import first_mode as fm  # noqa: E402
+from jointbench.identification import first_mode as fm
+from jointbench.testing import BATTERY_FAMILIES, Hidden, simulate
 
 PENDULUM = BATTERY_FAMILIES["pendulum"]
 HARDENING, DEFLECTION, DAMPING = 0.05, 0.0203, 5.94   # case #94's draw, rounded

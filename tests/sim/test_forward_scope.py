@@ -5,26 +5,21 @@ forward_worse over the judged segments)."""
 from __future__ import annotations
 
 import math
-import sys
-from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-from indep_sim import FAMILIES, simulate  # noqa: E402
-
-from jointbench.bench.analysis.diagnose.forward import (MIN_JUDGED, PHASE_LIMIT,  # noqa: E402
+from jointbench.bench.analysis.diagnose.forward import (MIN_JUDGED, PHASE_LIMIT,
                                                         forward_scope, phase_errors,
                                                         plant_substeps, replay_tau0)
-from jointbench.bench.analysis.diagnose.verdict import forward_worse  # noqa: E402
-from jointbench.bench.sim import nominal as nominal_axes  # noqa: E402
-from jointbench.bench.sim.replay import replay  # noqa: E402
-from jointbench.identification.defaults import PAPER_RATE  # noqa: E402
-from jointbench.identification.discrepancy import SEGMENTS  # noqa: E402
-from jointbench.identification.log import Log  # noqa: E402
+from jointbench.bench.analysis.diagnose.verdict import forward_worse
+from jointbench.bench.sim import nominal as nominal_axes
+from jointbench.bench.sim.replay import replay
+from jointbench.identification.defaults import PAPER_RATE
+from jointbench.identification.discrepancy import SEGMENTS
+from jointbench.identification.log import Log
+from jointbench.testing import FAMILIES, simulate
 
 RATE = PAPER_RATE
 N = 4000          # samples: 100 per segment

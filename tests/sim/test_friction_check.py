@@ -11,7 +11,7 @@ from jointbench.bench.present.experiment import friction_warnings
 from jointbench.bench.sim.experiment import run_experiment
 from jointbench.bench.sim.friction import friction_bands
 
-ARM6 = Path(__file__).resolve().parents[1] / "models" / "arm6.xml"
+ARM6 = Path(__file__).resolve().parents[2] / "models" / "arm6.xml"
 
 
 def test_band_is_the_constraint_ramp():

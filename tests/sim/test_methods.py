@@ -23,7 +23,7 @@ from jointbench.bench.campaign.methods import (BadResult, blind, check_estimates
 from jointbench.bench.campaign.settings import CampaignError
 from jointbench.bench.cli import main
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 BIASED = f"biased={REPO / 'examples' / 'biased_ls.py'}:estimate"
 HERE = Path(__file__).resolve()
 

@@ -1,5 +1,5 @@
 """torque_ripple's convention is one in the three places that use it (issue 14, the forward
-view's ripple): the independent simulator's hidden ripple (tests/indep_effects.py: the rotor
+view's ripple): the independent simulator's hidden ripple (testing.hidden_effects: the rotor
 gets + A sin(2 pi q_m / period + phase), q_m the absolute motor angle, joint side), the
 inverse view's fit (identification/effects/torque_ripple.py) and the ripple the extended
 model's replay applies (bench/effects/torque_ripple.py through the MJCF numeric)."""
@@ -7,20 +7,15 @@ model's replay applies (bench/effects/torque_ripple.py through the MJCF numeric)
 from __future__ import annotations
 
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-from indep_sim import FAMILIES, simulate  # noqa: E402
-
-from jointbench.bench.analysis.diagnose import diagnose  # noqa: E402
-from jointbench.bench.effects import loop_effects_from_model  # noqa: E402
-from jointbench.bench.effects.torque_ripple import extend  # noqa: E402
-from jointbench.bench.sim import nominal as nominal_axes  # noqa: E402
+from jointbench.bench.analysis.diagnose import diagnose
+from jointbench.bench.effects import loop_effects_from_model
+from jointbench.bench.effects.torque_ripple import extend
+from jointbench.bench.sim import nominal as nominal_axes
+from jointbench.testing import FAMILIES, simulate
 
 
 def _wrapped(a: float) -> float:
@@ -51,7 +46,7 @@ def test_inverse_fit_reads_the_independent_ripple(amplitude, phase, period):
 
 def test_replayed_ripple_is_the_fitted_one():
     """The extended MJCF's `{axis}_ripple` numeric, read back by the replay's loop, adds
-    A sin(2 pi q_m / period + phase) to the rotor torque, as tests/indep_effects.py does."""
+    A sin(2 pi q_m / period + phase) to the rotor torque, as testing.hidden_effects does."""
     spec = nominal_axes.two_mass_axis(Jm=1.0, FVm=0.0, FSm=0.0, K=100.0, JL=1.0,
                                       timestep=0.001, name="axis1")
     p = {"ripple_amplitude": 2.5, "ripple_period_rad": 0.0123, "ripple_phase_rad": -0.7}

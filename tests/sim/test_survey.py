@@ -64,7 +64,7 @@ def test_table_against_the_truth(surveyed):
     """The truth is the compiled model's (models.truth), f1 its sqrt(K (1/Jm + 1/JL)) / 2 pi;
     the estimates meet issue 17's bar. Tolerances: K, Jm, JL within 0.5 % (the issue's bar;
     measured at seed 1: 0.23 % at most on these axes) and 3 corrected sigma (as
-    tests/test_first_mode.py); the frictions within 3 corrected sigma (measured: 1.96 at
+    tests/sim/test_first_mode.py); the frictions within 3 corrected sigma (measured: 1.96 at
     most, FVm of axis1; their errors in % are larger, FVm -4.7 %, since a 60 s chirp
     excites the motor's viscous term weakly); f1 within 2 % (test_first_mode's bound;
     measured +0.66 % at most)."""

@@ -14,7 +14,7 @@ from jointbench.identification.identify import identify
 from jointbench.identification.log import read_log, write_log
 from jointbench.identification.validate import validate_on
 
-EMPS = Path(__file__).parent / "data" / "emps"
+EMPS = Path(__file__).parents[1] / "data" / "emps"
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,4 @@
-"""The independent two-mass simulator (tests/indep_sim.py) against analytic values and the log
+"""The independent two-mass simulator (jointbench.testing) against analytic values and the log
 format: free oscillation at sqrt(K (1/Jm + 1/JL)), energy conservation, the controller's first
 ticks by hand, determinism, and a log that reads back and passes the reader's checks."""
 
@@ -10,13 +10,13 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from indep_sim import (FAMILIES, AxisFamily, Reference, default_substeps, energy, frictionless,
-                       open_loop, simulate)
 from jointbench.bench.sim.controller import Gains, control_law
 from jointbench.identification.checks import check_signals
 from jointbench.identification.defaults import PAPER_RATE, settings_for
 from jointbench.identification.identify import identify
 from jointbench.identification.log import read_log, unit_warnings, write_log
+from jointbench.testing import (FAMILIES, AxisFamily, Reference, default_substeps, energy,
+                                frictionless, open_loop, simulate)
 
 T = 1.0 / PAPER_RATE
 # The keys the brief asks for, as bench/sim/experiment.py writes them.

@@ -9,8 +9,10 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parent.parent
-PACKAGES = ("bench", "identification", "models")
+ROOT = Path(__file__).resolve().parents[2]
+# Folders of the package and their import names (pyproject.toml's package-dir).
+PACKAGES = {"bench": "jointbench.bench", "identification": "jointbench.identification",
+            "models": "jointbench.models", "tests/indep": "jointbench.testing"}
 MAX_LINES = 400
 # Layers, lowest first: a module may import its own layer or a lower one.
 LAYERS = (("jointbench.identification", "jointbench.models"),
@@ -18,17 +20,18 @@ LAYERS = (("jointbench.identification", "jointbench.models"),
           ("jointbench.bench.sim",),
           ("jointbench.bench.analysis", "jointbench.bench.campaign", "jointbench.bench.present",
            "jointbench.bench.demo", "jointbench.bench.api"),
-          ("jointbench.bench.cli",))
+          ("jointbench.bench.cli",),
+          ("jointbench.testing",))
 
 
 def _modules() -> dict[str, Path]:
     out = {}
-    for pkg in PACKAGES:
-        for path in (ROOT / pkg).rglob("*.py"):
-            parts = path.relative_to(ROOT).with_suffix("").parts
+    for folder, package in PACKAGES.items():
+        for path in (ROOT / folder).rglob("*.py"):
+            parts = path.relative_to(ROOT / folder).with_suffix("").parts
             if parts[-1] == "__init__":
                 parts = parts[:-1]
-            out[".".join(("jointbench",) + parts)] = path
+            out[".".join((package,) + parts)] = path
     return out
 
 

@@ -57,13 +57,13 @@ def test_clean_logs_name_nothing_and_say_why(model, joint, seed, clean_prototype
     assert best.effect in d.reason and "held out" in d.reason and "t = " in d.reason
 
 
-# The independent simulator (tests/indep_sim.py: no MuJoCo, RK4 with substeps, Coulomb
+# The independent simulator (jointbench.testing: no MuJoCo, RK4 with substeps, Coulomb
 # friction smoothed by tanh): its axes are continuous-time, so the 3-point chain's own error
 # shows there (before the nominal's column q(4), the wrist named hardening). stiff_small is
 # left to benchmarks (7 s to simulate); all five, both seeds, 60 s: docs/effects.md 4.3.
 @pytest.mark.parametrize("family", ["wrist", "heavy_link", "soft", "balanced"])
 def test_independent_simulator_clean_logs_name_nothing(family):
-    from indep_sim import FAMILIES, simulate
+    from jointbench.testing import FAMILIES, simulate
 
     d = diagnose(simulate(FAMILIES[family], seed=3, duration=DURATION), forward=False)
     assert d.named_cause == NONE and d.causes == (), d.reason
@@ -209,12 +209,12 @@ def test_forward_veto_only_when_the_replay_is_worse_beyond_its_spread():
 
 def test_torque_lag_found_where_it_is_on_a_continuous_current_loop():
     """A first-order current loop on the independent simulator (continuous within each
-    period, tests/indep_effects.py), 4 ms on the wrist family (f1 12 Hz, corner 40 Hz): the
+    period, testing.hidden_effects), 4 ms on the wrist family (f1 12 Hz, corner 40 Hz): the
     lag searched with the motor columns led by T (the measured torque stays the left-hand side)
     comes out within 10 % of it (measured 4.14 ms); lagging the measured torque instead
     made every long lag look better (the fit shrank with the torque) and the search ran to its
     longest lag."""
-    from indep_sim import FAMILIES, simulate as indep_simulate
+    from jointbench.testing import FAMILIES, simulate as indep_simulate
     from jointbench.identification.discrepancy.candidates import candidate
     log = indep_simulate(FAMILIES["wrist"], seed=3, duration=30.0, effects="torque_lag=0.004")
     nom = nominal(log, diagnosis_settings(log)[0])
@@ -231,7 +231,7 @@ def test_asymmetric_friction_needs_its_viscous_part_to_beat_an_offset():
     answer says the log cannot tell them apart (docs/effects.md 4.3). On the
     prototype (viscous and Coulomb comparable) an asymmetry of 0.15 is named with no
     ambiguity (test_issue14_cases_are_named's log)."""
-    from indep_sim import FAMILIES, simulate
+    from jointbench.testing import FAMILIES, simulate
     from jointbench.identification.discrepancy.heldout import t_bar
     from jointbench.identification.discrepancy.inverse import DECIDE
 
@@ -292,7 +292,7 @@ def test_a_motor_side_effect_is_not_diluted_by_the_link_equation():
     measured on the motor equation it changes, its held-out t passes the bar of the first
     round (measured 6.15 for 4.28); on both equations, whose link rows carry the same errors
     in both models, every segment's ratio was pulled towards 1 and t fell under it (3.31)."""
-    from indep_sim import FAMILIES, simulate
+    from jointbench.testing import FAMILIES, simulate
     from jointbench.identification.discrepancy.candidates import candidate, reference
     from jointbench.identification.discrepancy.heldout import t_bar
 
@@ -318,7 +318,7 @@ def test_offset_named_over_an_asymmetry_that_explains_less_states_the_ambiguity(
     searched (issue 14) its best split here is all Coulomb, the offset while the motor moves:
     it explains the same share, to rounding (48.648 % both), and the offset is still named.
     """
-    from indep_sim import FAMILIES, simulate
+    from jointbench.testing import FAMILIES, simulate
     from jointbench.identification.discrepancy.heldout import t_bar
     from jointbench.identification.discrepancy.inverse import DECIDE
 

@@ -22,7 +22,7 @@ from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.identify import identify
 from jointbench.identification.log import read_log
 
-DATA = Path(__file__).parent / "data" / "emps"
+DATA = Path(__file__).parents[1] / "data" / "emps"
 ESTIMATION = DATA / "emps_estimation.csv"
 # tests/data/emps/README.md, "Published reference model (IDIM-LS)": value, and the relative
 # standard deviation % seen with that chain in scipy.

@@ -18,7 +18,7 @@ from jointbench.bench.analysis.diagnose import diagnose
 from jointbench.bench.analysis.diagnose import cross_validate
 from jointbench.identification.log import read_log
 
-DATA = Path(__file__).parent / "data" / "emps"
+DATA = Path(__file__).parents[1] / "data" / "emps"
 GTAU = 35.15065188   # N/V: the pulses column holds volts at the drive input (EMPS README)
 
 

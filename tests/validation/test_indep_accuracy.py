@@ -1,5 +1,5 @@
-"""Issue 17 on data that is not MuJoCo's: the independent simulator's clean logs (tests/
-indep_sim.py: five axis families, 350.87 Hz, 60 s, linear sweep, velocity feed-forward, default
+"""Issue 17 on data that is not MuJoCo's: the independent simulator's clean logs (jointbench.
+testing: five axis families, 350.87 Hz, 60 s, linear sweep, velocity feed-forward, default
 sensors, no hidden effect) identified with the defaults: f1 measured, band and stencil from it,
 instruments for the joint-motor model.
 
@@ -16,11 +16,11 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from indep_sim import FAMILIES, simulate
 from jointbench.bench.present.identify import identify_json
 from jointbench.identification import regressors
 from jointbench.identification.filtering import decimate_parallel
 from jointbench.identification.identify import identify
+from jointbench.testing import FAMILIES, simulate
 
 # measured 2026-12-01 (seed 1): what misses the issue's bounds, and by how much
 F1_OVER: dict[str, str] = {}   # the frequency response alone: heavy_link +11.3 %, soft +2.5 %,
@@ -57,7 +57,7 @@ F1_OVER: dict[str, str] = {}   # the frequency response alone: heavy_link +11.3 
 # feed-forward neither heavy_link's nor soft's link response shows a resonance; the motor
 # response's does (first_mode._from_motor: 5.92 and 3.95 Hz), so the band is designed from it
 # instead of the generic one: Jm +2.42 -> +3.02 and +4.06 -> +3.67 % at seed 1 (corrected
-# sigma 2.1 and 1.6 %; not covered by the bounds here; tests/test_indep_logsweep.py).
+# sigma 2.1 and 1.6 %; not covered by the bounds here; tests/validation/test_indep_logsweep.py).
 JOINT_MOTOR_OVER: dict[str, str] = {}
 # the band rule's pick at seed 1 (measured; stiff_small's chooser band reaches the top already)
 BAND_USED = {"wrist": "chooser", "heavy_link": "wide", "stiff_small": "chooser",

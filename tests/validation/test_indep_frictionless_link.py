@@ -6,7 +6,7 @@ linearly from q_ref cannot follow the stick-slip, and the chooser's fit put K at
 Jm -10.3 %, JL -51.5 % (corrected sigma 23 / 42 / 23 % of the estimate; its model's mode
 3.24 Hz against the measured 3.97 Hz). The wide band (Nd 9, 15.6 Hz) fits K +0.82 %, Jm
 +3.67 %, JL +0.82 % (sigma 1.06 / 1.61 / 1.06 %: the same Jm as with FS = 4, the known
-motor-side residue without feed-forward, tests/test_indep_accuracy.py), but the bands lie
+motor-side residue without feed-forward, tests/validation/test_indep_accuracy.py), but the bands lie
 4.7 sigma of their difference apart and the rule kept the chooser's. The measured first mode,
 which designed the band and is independent of both fits, now settles the disagreement
 (identification/band_choice.py, `mode_gap`). Also the rule itself on stand-in fits."""
@@ -19,11 +19,11 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pytest
 
-from indep_sim import FAMILIES, simulate
 from jointbench.identification.band_choice import MODE_DISAGREEMENT, choose_band, mode_gap
 from jointbench.identification.defaults import PAPER_RATE, default_settings
 from jointbench.identification.identify import identify
 from jointbench.identification.log import Log
+from jointbench.testing import FAMILIES, simulate
 
 
 def test_soft_axis_without_link_coulomb_nor_feedforward():

@@ -1,4 +1,4 @@
-"""Issue 17 on the independent simulator's logarithmic sweeps (tests/indep_sim.py, 60 s, seed 1,
+"""Issue 17 on the independent simulator's logarithmic sweeps (jointbench.testing, 60 s, seed 1,
 350.87 Hz, default sensors), identified with the defaults.
 
 The log sweep spends a fifth of its time above the first mode (heavy_link: 15 s of 60 above
@@ -18,9 +18,9 @@ from __future__ import annotations
 
 import pytest
 
-from indep_sim import FAMILIES, simulate
 from jointbench.identification.first_mode import measure_first_mode
 from jointbench.identification.identify import identify
+from jointbench.testing import FAMILIES, simulate
 
 FEEDFORWARD = ("heavy_link", "stiff_small")   # the log sweeps with feed-forward over 0.5 % (Jm)
 # measured at seed 1 (corrected sigma): heavy_link -1.71 % (0.74), stiff_small +0.52 % (0.56);

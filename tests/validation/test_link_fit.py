@@ -1,5 +1,5 @@
 """The motor-only model with the link reconstructed from q_m (identification/link_sim.py,
-identification/link_fit.py), on the independent simulator (tests/indep_sim.py) where the truth
+identification/link_fit.py), on the independent simulator (jointbench.testing) where the truth
 is known. Tolerances are a few times what was measured (2026-12-01, in each docstring)."""
 
 from __future__ import annotations
@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from indep_sim import FAMILIES, frictionless, simulate
 from jointbench.identification import link_fit
 from jointbench.identification.defaults import choose_filter
 from jointbench.identification.identify import identify
 from jointbench.bench.sim.experiment import run_experiment
 from jointbench.bench.sim.sensors import Sensors
 from jointbench.identification.link_sim import link_response, simulate_link, simulate_link_rk4
+from jointbench.testing import FAMILIES, frictionless, simulate
 
 TS = 1 / 350.87
 
