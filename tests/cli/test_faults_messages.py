@@ -181,6 +181,7 @@ def diagnose_log(draw):
                               ("kv", "-5188"), ("gravity", "1e9"), ("axis", "prismatic")]))
 
 
+@pytest.mark.slow
 @settings(max_examples=12, deadline=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
 @given(case=diagnose_log())

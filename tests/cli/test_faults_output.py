@@ -140,6 +140,7 @@ def test_files_written_are_ours_and_ours_only_while_unchanged(tmp_path):
 
 # --- 1. Folders: all or nothing, our stale files removed, users' files kept ----------------
 
+@pytest.mark.slow
 def test_diagnose_folder_guard_stale_files_and_interruption(tmp_path, logs, monkeypatch):
     out = tmp_path / "report"
     out.mkdir()

@@ -48,6 +48,7 @@ def native(prototype_log, tmp_path_factory):
     return read_log(path)
 
 
+@pytest.mark.slow
 def test_raw_drive_file_identifies_as_the_native_log(native, tmp_path, capsys):
     raw, out = tmp_path / "raw.csv", tmp_path / "log.csv"
     write_raw(native, raw)
