@@ -46,8 +46,12 @@ def test_an_offset_alone_does_not_move_the_nominal(logs):
     a, b = nominal(clean, s), nominal(shifted, s)
     sig = sigmas(a)
     for name in ("Jm", "FVm", "FSm") + LINK:
-        # the same log plus a constant: the same parameters within a tenth of their sigma
-        assert abs(b.value(name) - a.value(name)) < 0.1 * sig[name], name
+        # The same experiment, the same noise draw, plus a constant the integrator takes up:
+        # the closed loop's path differs only where the quantised encoder rounds another way
+        # (and another CPU's last bits move that too), so the fits agree within one sigma of
+        # their own (two independent noise draws would differ by sqrt(2) sigma rms). A constant
+        # left in the residual moves every one of them by 4 sigma (FSm) to 66 sigma (K).
+        assert abs(b.value(name) - a.value(name)) < 1.0 * sig[name], name
     assert b.bias - a.bias == pytest.approx(offset, rel=0.02)   # tau_m holds the offset
     # and K is the spring's: -3.5 % here (noise, no feedforward: 3.8 of this white-noise
     # sigma, which the decimated rows' correlation makes too small); shrunk, -62 %

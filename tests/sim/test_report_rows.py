@@ -14,6 +14,10 @@ import pytest
 from jointbench.identification.identify import identify
 from jointbench.identification.report import parameter_table
 
+# An unphysical fit's branch: what encoder flips (another machine's last bits) move it by, a
+# few 1e-3, is well inside; the nearest other branch, a factor of 2 or more away, is far outside.
+BRANCH = 1e-2
+
 
 def test_near_zero_truth_does_not_run_columns_together(prototype_log):
     result = identify(prototype_log, "joint-motor")
@@ -47,16 +51,20 @@ def _candidates(log) -> dict[str, dict[str, float]]:
 
 def test_demo_discrepancy_rows_survive_machine_level_differences(backlash_log):
     """The demo's example (README): the hardening fit, unphysical (K < 0 along the direction
-    where a hardening with K -> 0 is a backlash), stays on its branch to 4 digits after
-    one-count encoder flips at 40 samples (what another CPU's last bits can do to a
-    quantised simulation); the README's older row (ratio 14.63, K 1306) is another branch."""
+    where a hardening with K -> 0 is a backlash), stays on its branch after one-count encoder
+    flips at 40 samples (what another CPU's last bits can do to a quantised simulation); the
+    README's older row (ratio 14.63, K 1306) is another branch.
+
+    The branch is told apart at BRANCH (1 %), not at the fit's printed digits: a quantised
+    closed loop simulated on another CPU (another SIMD path in MuJoCo, another BLAS kernel)
+    flips encoder counts as the flips below do, and those move this fit by a few 1e-3
+    (measured 4e-3 here, 2.5e-3 on an AVX2 machine's own simulation); the other branch is
+    a factor of 2 away in the ratio and of 5 in K, with the opposite sign."""
     rows = _candidates(backlash_log)
-    # since issue 14's nominal (FS, chain error) and the hardening grid over the whole
-    # deflection range (the same branch: -33.594 and -624.11 with the grid that stopped at
-    # 0.9 x the 99th percentile; -33.576 and -624.46 before the nominal's parameters and
-    # weights were estimated with a motor constant beside them)
+    # the branch of the nominal with FS and the chain's error, the hardening grid over the
+    # whole deflection range, the nominal's weights estimated with a motor constant beside it
     assert rows["hardening"] == pytest.approx(
-        {"hardening_ratio": -33.381, "deflection_rad": 0.0019438, "K": -628.22}, rel=5e-4)
+        {"hardening_ratio": -33.381, "deflection_rad": 0.0019438, "K": -628.22}, rel=BRANCH)
     rng = np.random.default_rng(3)
     q, qm = backlash_log.q.copy(), backlash_log.q_m.copy()
     for x, res in ((q, 2 * np.pi / 2**20), (qm, 2 * np.pi / (2**17 * 100))):
@@ -66,5 +74,5 @@ def test_demo_discrepancy_rows_survive_machine_level_differences(backlash_log):
     # Since issue 14's nominal (FS, the chain's column q(4)) the unphysical hardening fit sits
     # on a flatter branch: the flips move it by 4e-3 (measured), still far from another branch
     # (the older one is a factor of 5 away in K).
-    for effect, rel in (("hardening", 1e-2), ("backlash", 1e-4)):
+    for effect, rel in (("hardening", BRANCH), ("backlash", 1e-4)):
         assert flipped[effect] == pytest.approx(rows[effect], rel=rel), effect
