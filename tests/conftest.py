@@ -12,9 +12,11 @@ The folder a test lives in is its layer, and its marker (pyproject.toml declares
 
 from __future__ import annotations
 
+import inspect
 from pathlib import Path
 
 import matplotlib
+import numpy as np
 import pytest
 
 matplotlib.use("Agg")
@@ -46,24 +48,42 @@ def prototype_log(prototype_run):
     return prototype_run.log
 
 
+def _once(run):
+    """`run` called once per distinct set of arguments (bound to its signature, defaults
+    filled in, compared by repr: frozen dataclasses and plain values), the result kept for the
+    session. Arguments holding arrays are not kept."""
+    signature = inspect.signature(run)
+    kept = {}
+
+    def get(*args, **options):
+        bound = signature.bind(*args, **options)
+        bound.apply_defaults()
+        if any(isinstance(v, np.ndarray) for v in bound.arguments.values()):
+            return run(*bound.args, **bound.kwargs)
+        key = repr(tuple(bound.arguments.items()))
+        if key not in kept:
+            kept[key] = run(*bound.args, **bound.kwargs)
+        return kept[key]
+
+    return get
+
+
+@pytest.fixture(scope="session")
+def bench_log():
+    """The bench's logs, each simulated once per session: `bench_log(model, joint, **options)`
+    is run_experiment(model, joint, **options).log, the same Log object for the same
+    arguments. Read it, never write into it."""
+    from jointbench.bench.sim.experiment import run_experiment
+
+    once = _once(run_experiment)
+    return lambda *args, **options: once(*args, **options).log
+
+
 @pytest.fixture(scope="session")
 def indep_log():
     """The independent simulator's logs, each simulated once per session (a 60 s log takes
     seconds in numpy): `indep_log(family, **options)` is jointbench.testing.simulate(family,
     **options), the same Log object for the same arguments. Read it, never write into it."""
-    import inspect
-
     from jointbench.testing import simulate
 
-    signature = inspect.signature(simulate)
-    logs = {}
-
-    def get(*args, **options):
-        bound = signature.bind(*args, **options)
-        bound.apply_defaults()
-        key = tuple(bound.arguments.items())
-        if key not in logs:
-            logs[key] = simulate(*bound.args, **bound.kwargs)
-        return logs[key]
-
-    return get
+    return _once(simulate)

@@ -21,17 +21,16 @@ from hypothesis import strategies as st
 
 from jointbench.bench.campaign.settings import CampaignError, RunSettings
 from jointbench.bench.campaign.spec import CampaignSpec
-from jointbench.bench.sim.experiment import run_experiment
 from jointbench.identification.log import read_log, write_log
 from jointbench.models import model_path
 from test_faults_output import run
 
 
 @pytest.fixture(scope="module")
-def sim(tmp_path_factory):
+def sim(tmp_path_factory, bench_log):
     """A 20 s prototype log (seed 1): the file, its Log and its text."""
     path = tmp_path_factory.mktemp("sim") / "native.csv"
-    log = run_experiment("prototype", duration=20.0, seed=1).log
+    log = bench_log("prototype", duration=20.0, seed=1)
     write_log(log, path)
     return path, read_log(path), path.read_text()
 

@@ -36,7 +36,7 @@ def run(args: list[str]) -> tuple[int, str, str]:
 
 
 @pytest.fixture(scope="module")
-def logs(tmp_path_factory) -> dict[str, Path]:
+def logs(tmp_path_factory, bench_log) -> dict[str, Path]:
     """A 10 s prototype log, the same with the velocity gain's sign flipped (an unstable
     loop), one with kv = 1e12 (MuJoCo warns), and a 20 s log with backlash hidden."""
     folder = tmp_path_factory.mktemp("logs")
@@ -49,8 +49,8 @@ def logs(tmp_path_factory) -> dict[str, Path]:
                              .replace(f"# tau_max: {log.meta['tau_max']}", "# tau_max: 1e15"))
     from jointbench.bench.effects import HiddenEffect
     paths["backlash"] = folder / "backlash.csv"
-    write_log(run_experiment("prototype", duration=20.0, seed=1,
-                             effect=HiddenEffect("backlash", 0.002)).log, paths["backlash"])
+    write_log(bench_log("prototype", duration=20.0, seed=1, effect=HiddenEffect("backlash", 0.002)),
+              paths["backlash"])
     return paths
 
 

@@ -45,13 +45,11 @@ def _all_axes_have_units(fig) -> None:
 
 
 @pytest.fixture(scope="module")
-def backlash_diagnosis():
+def backlash_diagnosis(bench_log):
     from jointbench.bench.effects import HiddenEffect
-    from jointbench.bench.sim.experiment import run_experiment
 
-    log = run_experiment("prototype", duration=20.0, seed=1,
-                         effect=HiddenEffect("backlash", 0.002)).log
-    return diagnose(log)
+    return diagnose(bench_log("prototype", duration=20.0, seed=1,
+                              effect=HiddenEffect("backlash", 0.002)))
 
 
 def test_flexible_axis_figures(backlash_diagnosis, captured, tmp_path):

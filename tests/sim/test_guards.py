@@ -17,8 +17,8 @@ from jointbench.identification.sanity import sanity_warnings
 
 
 @pytest.fixture(scope="module")
-def base():
-    return run_experiment("prototype", duration=20.0, seed=1).log
+def base(bench_log):
+    return bench_log("prototype", duration=20.0, seed=1)
 
 
 def _rows(log, a: int, b: int):

@@ -70,8 +70,8 @@ MOTOR_ONLY_OVER: dict[str, str] = {}
 
 
 @pytest.fixture(scope="module")
-def logs():
-    return {name: simulate(fam, seed=1, duration=60.0, sweep="linear")
+def logs(indep_log):
+    return {name: indep_log(fam, seed=1, duration=60.0, sweep="linear")
             for name, fam in FAMILIES.items()}
 
 
@@ -172,7 +172,7 @@ def test_joint_motor_without_noise_sticking_motor():
         assert abs(result.physical[p] / truth[p] - 1) < 0.001, (p, result.physical[p])
 
 
-def test_settings_without_a_mode_identify_as_the_defaults():
+def test_settings_without_a_mode_identify_as_the_defaults(indep_log):
     """`identify(log, settings=...)` without f1 (campaign --wn/--decimate/--stencil,
     tune-filter, the API) still measures the first mode on the log for the instruments: with
     the chooser's own settings it must give the defaults' answer. stiff_small, log sweep
@@ -180,7 +180,7 @@ def test_settings_without_a_mode_identify_as_the_defaults():
     instruments took 8 s Welch segments without f1 and Jm came out -41 % against +0.52 %,
     without a warning."""
     from jointbench.identification.defaults import choose_filter
-    log = simulate(FAMILIES["stiff_small"], seed=1, duration=60.0, sweep="log")
+    log = indep_log(FAMILIES["stiff_small"], seed=1, duration=60.0, sweep="log")
     default = identify(log, "joint-motor")
     given = identify(log, "joint-motor", settings=choose_filter(log).settings)
     assert given.first_mode.found

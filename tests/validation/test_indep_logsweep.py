@@ -30,8 +30,8 @@ JM_OVER = {"heavy_link": "Jm -1.71 % (corrected sigma 0.74 %)",
 
 
 @pytest.fixture(scope="module")
-def ff_logs():
-    return {name: simulate(FAMILIES[name], seed=1, duration=60.0, sweep="log")
+def ff_logs(indep_log):
+    return {name: indep_log(FAMILIES[name], seed=1, duration=60.0, sweep="log")
             for name in FEEDFORWARD}
 
 

@@ -98,11 +98,11 @@ def test_mujoco_one_step_link_is_stepped_as_mujoco_steps_it():
 
 @pytest.mark.parametrize("family", [FAMILIES["heavy_link"], replace(FAMILIES["balanced"], MY=0.3)],
                          ids=["heavy_link", "balanced_with_gravity"])
-def test_simulated_link_follows_the_independent_plant(family):
+def test_simulated_link_follows_the_independent_plant(family, indep_log):
     """The link driven by the logged q_m with the true parameters against the plant's own q
     (smoothed Coulomb, RK4): measured 0.07 % (heavy link, stick-slip) and 0.11 % (gravity) of
     the deflection's rms."""
-    log = simulate(family, 1, 20.0, "linear", True, ideal_sensors=True)
+    log = indep_log(family, 1, 20.0, "linear", True, ideal_sensors=True)
     q, _ = simulate_link(log.q_m, log.ts, *link_params(log))
     assert np.std(q - log.q) < 3e-3 * np.std(log.q_m - log.q)
 
@@ -119,16 +119,16 @@ def test_motor_only_exact_without_coulomb_friction():
     assert result.physical_eqs18_20["K"] > 0     # the start, kept for comparison
 
 
-def test_gravity_kept_when_identified_left_out_otherwise():
+def test_gravity_kept_when_identified_left_out_otherwise(indep_log):
     """An axis with a link mass keeps MX, MY (measured: MY -1.0 %, K -0.03 %); a horizontal
     one leaves them out with a note, reported as 0 with the standard deviation the data gave
     them (measured on the heavy link: K +0.14 %, Jm +1.3 %)."""
-    heavy = simulate(FAMILIES["heavy_link"], 1, 20.0, "linear", True, ideal_sensors=True)
+    heavy = indep_log(FAMILIES["heavy_link"], 1, 20.0, "linear", True, ideal_sensors=True)
     flat = identify(heavy, "motor-only")
     assert flat.physical["MY"] == 0.0 and any("left out" in n for n in flat.notes)
     assert flat.physical_sigma_corrected["MY"] > 0
-    tilted = simulate(replace(FAMILIES["balanced"], MY=0.3), 1, 20.0, "linear", True,
-                      ideal_sensors=True)
+    tilted = indep_log(replace(FAMILIES["balanced"], MY=0.3), 1, 20.0, "linear", True,
+                       ideal_sensors=True)
     result, truth = identify(tilted, "motor-only"), tilted.truth()
     assert abs(pct(result.physical["MY"], truth["MY"])) < 5
     for name, log, res in (("K", heavy, flat), ("JL", heavy, flat), ("K", tilted, result),
