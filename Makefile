@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test bench bench-peers bench-campaign bench-diagnose battery validate clean
+.PHONY: demo check test bench bench-peers bench-campaign bench-diagnose battery validate clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -17,6 +17,11 @@ $(STAMP): $(BIN)/python pyproject.toml
 demo: $(STAMP)
 	$(BIN)/jointbench demo --out demo_out
 
+# The edit loop: tests/unit and tests/cli without the tests marked slow (about half a minute).
+check: $(STAMP)
+	$(BIN)/python -m pytest -q tests/unit tests/cli -m 'not slow'
+
+# Everything: unit, cli, sim and validation (what CI runs).
 test: $(STAMP)
 	$(BIN)/python -m pytest -q
 

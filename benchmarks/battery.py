@@ -28,22 +28,18 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))
+import numpy as np
 
-from indep_battery import INDEP_PLACES, IndepRunner  # noqa: E402
-
-import numpy as np  # noqa: E402
-
-from jointbench.bench.campaign.battery import (BENCH_PLACES, BenchRunner, Spec,  # noqa: E402
+from jointbench.bench.campaign.battery import (BENCH_PLACES, BenchRunner, Spec,
                                                draw_strength, plan, run_spec)
-from jointbench.bench.campaign.detection import (BINS, curve,  # noqa: E402
+from jointbench.bench.campaign.detection import (BINS, curve,
                                                  distinguishing_visibility, found_above, right,
                                                  summary_lines)
-from jointbench.identification.effects import EFFECTS, NONE  # noqa: E402
-from jointbench.identification.log_write import atomic_write_text  # noqa: E402
-from jointbench.identification.output import finite_json  # noqa: E402
-from jointbench.identification.saturation import clipped_samples  # noqa: E402
+from jointbench.identification.effects import EFFECTS, NONE
+from jointbench.identification.log_write import atomic_write_text
+from jointbench.identification.output import finite_json
+from jointbench.identification.saturation import clipped_samples
+from jointbench.testing import INDEP_PLACES, IndepRunner
 
 PLACES = (*BENCH_PLACES, *INDEP_PLACES)
 _RUNNERS: dict = {}

@@ -22,14 +22,10 @@ Wall times are printed; nothing is asserted.
 from __future__ import annotations
 
 import argparse
-import sys
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-
-from jointbench.bench.cli import main as jointbench  # noqa: E402
+from jointbench.bench.cli import main as jointbench
 
 
 def main() -> None:

@@ -39,7 +39,6 @@ named on axis5's true model).
 from __future__ import annotations
 
 import argparse
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -47,16 +46,13 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-
-from jointbench.bench.analysis.diagnose.against_model import diagnose_against_model  # noqa: E402
-from jointbench.bench.analysis.diagnose.model_cases import (Case, draw_cases, score,  # noqa: E402
+from jointbench.bench.analysis.diagnose.against_model import diagnose_against_model
+from jointbench.bench.analysis.diagnose.model_cases import (Case, draw_cases, score,
                                                             true_errors)
-from jointbench.bench.analysis.diagnose.model_edit import spec_truth  # noqa: E402
-from jointbench.bench.analysis.diagnose.model_precision import POINTS  # noqa: E402
-from jointbench.bench.sim.experiment import run_experiment  # noqa: E402
-from jointbench.models import model_path  # noqa: E402
+from jointbench.bench.analysis.diagnose.model_edit import spec_truth
+from jointbench.bench.analysis.diagnose.model_precision import POINTS
+from jointbench.bench.sim.experiment import run_experiment
+from jointbench.models import model_path
 
 AXES = [("prototype", "axis1")] + [("arm6", f"axis{i}") for i in range(1, 7)]
 

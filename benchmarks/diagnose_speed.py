@@ -13,14 +13,10 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "benchmarks"))
+import battery
 
-import battery  # noqa: E402
-
-from jointbench.bench.campaign.battery import plan, run_spec  # noqa: E402
+from jointbench.bench.campaign.battery import plan, run_spec
 
 CASES = (0, 60, 65, 89, 93, 96, 100, 102)
 

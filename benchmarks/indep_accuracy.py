@@ -1,8 +1,8 @@
-"""Accuracy of `identify` on logs of the independent (non-MuJoCo) simulator, tests/indep_sim.py.
+"""Accuracy of `identify` on logs of the independent (non-MuJoCo) simulator, jointbench.testing.
 
     .venv/bin/python benchmarks/indep_accuracy.py [--duration 60] [--seed 1] [--families a,b]
 
-For every axis family of `indep_sim.FAMILIES` (JL/Jm 0.5-10, f1 4-20 Hz), with and without
+For every axis family of `jointbench.testing.FAMILIES` (JL/Jm 0.5-10, f1 4-20 Hz), with and without
 velocity feedforward, linear and logarithmic sweeps (60 s, seed 1, default sensors: quantised
 encoders and torque noise), the log is identified by
 `jointbench.identification.identify.identify(log, model)` for the models joint-motor and
@@ -36,21 +36,16 @@ import sys
 import statistics
 import time
 from dataclasses import replace
-from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))
-
-from indep_sim import FAMILIES, AxisFamily, simulate  # noqa: E402
-
-from jointbench.identification.band_choice import choose_band, wide_settings  # noqa: E402
-from jointbench.identification.defaults import choose_filter, settings_for  # noqa: E402
-from jointbench.identification.estimate import NotIdentifiable  # noqa: E402
-from jointbench.identification.filtering import FilterSettings  # noqa: E402
-from jointbench.identification.identify import Identification, identify  # noqa: E402
-from jointbench.identification.log import Log, LogError  # noqa: E402
-from jointbench.identification.output import pct_error  # noqa: E402
-from jointbench.identification.physical import InversionError  # noqa: E402
+from jointbench.identification.band_choice import choose_band, wide_settings
+from jointbench.identification.defaults import choose_filter, settings_for
+from jointbench.identification.estimate import NotIdentifiable
+from jointbench.identification.filtering import FilterSettings
+from jointbench.identification.identify import Identification, identify
+from jointbench.identification.log import Log, LogError
+from jointbench.identification.output import pct_error
+from jointbench.identification.physical import InversionError
+from jointbench.testing import FAMILIES, AxisFamily, simulate
 
 MODELS = ("joint-motor", "motor-only")
 PARAMS = ("K", "Jm", "JL")

@@ -42,7 +42,6 @@ import io
 import math
 import os
 import platform
-import sys
 import tempfile
 import time
 from dataclasses import dataclass
@@ -50,12 +49,9 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-
-from jointbench.bench.sim.experiment import run_experiment  # noqa: E402
-from jointbench.identification.identify import identify  # noqa: E402
-from jointbench.identification.log import Log  # noqa: E402
+from jointbench.bench.sim.experiment import run_experiment
+from jointbench.identification.identify import identify
+from jointbench.identification.log import Log
 
 PARAMS = ("K", "Jm", "JL")
 # the wrong nominal model both iterative peers start from (factor x truth)

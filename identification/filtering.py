@@ -160,7 +160,7 @@ def crossing_share(v0: np.ndarray, v1: np.ndarray, ts: float, rate: float = 0.0)
     and v1 = (a + 2 rate sign(v0)) (1 - theta) T give c theta^2 + (v1 - v0 - c) theta + v0 = 0
     with c = 2 rate sign(v0) T, whose one root in [0, 1] this is (the quadratic is v0 at 0 and
     v1 at 1). At 17.5 samples a period (20 Hz at the paper's rate) the linear guess comes 0.2 sample
-    late on average, and that alone leaves Jm +2.6 % (tests/test_filtering.py)."""
+    late on average, and that alone leaves Jm +2.6 % (tests/unit/test_filtering.py)."""
     v0, v1 = np.asarray(v0, dtype=float), np.asarray(v1, dtype=float)
     a = np.sign(v0)
     flip = (a != np.sign(v1)) & np.isfinite(v0) & np.isfinite(v1)

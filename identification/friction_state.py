@@ -6,7 +6,7 @@ anywhere in [-FS, FS], for as long as the drive stays inside that band. Without 
 feed-forward, or near the antiresonance (the motor a node of the mode, the spring force
 sweeping through the friction band within a sample), such stick phases recur at every
 reversal, and a sign column, every reversal taken as slip-through, biases Jm (the whole
-chain: tests/test_indep_accuracy.py::test_joint_motor_without_noise).
+chain: tests/validation/test_indep_accuracy.py::test_joint_motor_without_noise).
 
 `friction_integrals` integrates, within every sample interval independently, the one-mass
 equation J v' = J (drive(t) - visc v) - FS s(t) with s the friction state (Karnopp: s =

@@ -1,11 +1,38 @@
-"""Shared, session-scoped experiments: each virtual run is simulated once per test session."""
+"""Shared, session-scoped experiments: each virtual run is simulated once per test session.
+
+The folder a test lives in is its layer, and its marker (pyproject.toml declares them):
+
+    tests/unit        unit         pure numerics on synthetic arrays, no MuJoCo simulation
+    tests/cli         cli          the command line, in-process or as a subprocess
+    tests/sim         sim          experiments on the bench (MuJoCo) or the independent simulator
+    tests/validation  validation   accuracy bars against the truth, the paper and EMPS
+
+`make check` runs unit and cli without the tests marked slow; `make test` runs everything.
+"""
 
 from __future__ import annotations
 
+import inspect
+from pathlib import Path
+
 import matplotlib
+import numpy as np
 import pytest
 
 matplotlib.use("Agg")
+
+LAYERS = ("unit", "cli", "sim", "validation")
+HERE = Path(__file__).resolve().parent
+
+
+def pytest_collection_modifyitems(config, items):
+    """Mark every test with its folder's layer; a test outside the four folders is an error."""
+    for item in items:
+        parts = Path(str(item.fspath)).resolve().relative_to(HERE).parts
+        if len(parts) < 2 or parts[0] not in LAYERS:
+            raise pytest.UsageError(f"{item.nodeid}: a test file belongs in one of tests/"
+                                    f"{{{','.join(LAYERS)}}}/")
+        item.add_marker(getattr(pytest.mark, parts[0]))
 
 
 @pytest.fixture(scope="session")
@@ -19,3 +46,44 @@ def prototype_run():
 @pytest.fixture(scope="session")
 def prototype_log(prototype_run):
     return prototype_run.log
+
+
+def _once(run):
+    """`run` called once per distinct set of arguments (bound to its signature, defaults
+    filled in, compared by repr: frozen dataclasses and plain values), the result kept for the
+    session. Arguments holding arrays are not kept."""
+    signature = inspect.signature(run)
+    kept = {}
+
+    def get(*args, **options):
+        bound = signature.bind(*args, **options)
+        bound.apply_defaults()
+        if any(isinstance(v, np.ndarray) for v in bound.arguments.values()):
+            return run(*bound.args, **bound.kwargs)
+        key = repr(tuple(bound.arguments.items()))
+        if key not in kept:
+            kept[key] = run(*bound.args, **bound.kwargs)
+        return kept[key]
+
+    return get
+
+
+@pytest.fixture(scope="session")
+def bench_log():
+    """The bench's logs, each simulated once per session: `bench_log(model, joint, **options)`
+    is run_experiment(model, joint, **options).log, the same Log object for the same
+    arguments. Read it, never write into it."""
+    from jointbench.bench.sim.experiment import run_experiment
+
+    once = _once(run_experiment)
+    return lambda *args, **options: once(*args, **options).log
+
+
+@pytest.fixture(scope="session")
+def indep_log():
+    """The independent simulator's logs, each simulated once per session (a 60 s log takes
+    seconds in numpy): `indep_log(family, **options)` is jointbench.testing.simulate(family,
+    **options), the same Log object for the same arguments. Read it, never write into it."""
+    from jointbench.testing import simulate
+
+    return _once(simulate)

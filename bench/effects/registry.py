@@ -1,6 +1,6 @@
 """The bench half of every effect, by name, in the order of
 jointbench.identification.effects.EFFECTS: the module `bench/effects/NAME.py` of each effect
-the identification half discovers (tests/test_effect_registry.py checks that no bench module
+the identification half discovers (tests/unit/test_effect_registry.py checks that no bench module
 is left without one)."""
 
 from __future__ import annotations

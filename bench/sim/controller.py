@@ -54,7 +54,7 @@ def gains_rule(Jm: float, JL: float, K: float, tau_max: float, T: float) -> Gain
     collocated, so crossing at the mode is safe; 0.1 w_s keeps the sampling delay's phase loss
     under 20 degrees). The PI zero sits a factor four below wv (ki = kv wv / 4) and the
     position loop crosses a factor four below wv too (kp = wv / 4): the usual cascade
-    separation. Stability on both shipped models is checked by tests/test_controller.py.
+    separation. Stability on both shipped models is checked by tests/unit/test_controller.py.
     """
     w1 = math.sqrt(K * (1.0 / Jm + 1.0 / JL))
     wv = min(w1, 0.1 * 2.0 * math.pi / T)

@@ -253,7 +253,7 @@ def _coupled(e: Effect, base: tuple[tuple[str, dict], ...]) -> list[int]:
     and two of them share its one deflection column. One searched alone under the other's
     value carries that value's error: a dead band fitted alone widens to take up a hardening
     beyond it, and a hardening tested on top of that width cannot undo it (a wrist hardening
-    beside a backlash, tests/test_diagnose_spring_law.py: what the hardening adds to the
+    beside a backlash, tests/sim/test_diagnose_spring_law.py: what the hardening adds to the
     backlash has t = 2.1 with the width held, 8.2 with it searched again)."""
     if not e.search or e.block != 1:
         return []

@@ -24,7 +24,7 @@ NOMINAL_RIGID = RIGID[:3]   # J FV FS: the offset is the `offset` effect
 # second difference reads q'' + T^2 / 12 q(4) + ..., an error of 0.4 % of the spring torque at
 # 12 Hz at the paper's rate. A free column q(4) carries it, so that no effect is credited with it:
 # without it a dead band of a few tenths of a mrad "explains" half the residual of an exactly
-# linear axis (tests/indep_sim.py's wrist, frictionless, ideal sensors). The motor equation
+# linear axis (tests/indep/simulator.py's wrist, frictionless, ideal sensors). The motor equation
 # gets no such column: on a log with rows clipped out it trades with K. Numerics, not physics: never reported.
 NUMERICS = ("d4q",)
 
@@ -199,7 +199,7 @@ def _with_bias(sig: Signals, W: np.ndarray) -> np.ndarray:
     only K's motor column sets, then shrinks as a whole; even with the right weights, the
     part of the offset that sign(qm') and the mean deflection take would move K. With the
     constant beside them the parameters and weights do not move with an offset
-    (tests/test_diagnose_offset_nominal.py)."""
+    (tests/sim/test_diagnose_offset_nominal.py)."""
     return np.column_stack([W, stack(sig, np.ones(len(sig.qm)), None)])
 
 

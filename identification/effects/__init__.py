@@ -5,7 +5,7 @@ effect; its module constant `ORDER` places it in `EFFECTS`, the one order of the
 docs/effects.md's tables, the candidates `diagnose` tests and reports, and the battery's
 labels follow it. The bench half (jointbench.bench.effects) finds each effect's MuJoCo half
 by the same name. Adding an effect is its module here, `bench/effects/NAME.py`, its term in
-the independent simulator and its rows in docs/effects.md (tests/test_effect_registry.py
+the independent simulator and its rows in docs/effects.md (tests/unit/test_effect_registry.py
 checks the four).
 """
 

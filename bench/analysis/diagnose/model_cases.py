@@ -2,7 +2,7 @@
 a copy of a shipped MJCF with some of K, Jm, JL, FS, FVm off by a known factor, the log of
 the true model, and the score of a diagnosis of that log against the copy.
 
-Used by tests/test_diagnose_model.py (a few cases) and benchmarks/diagnose_model.py (the
+Used by tests/validation/test_diagnose_model.py (a few cases) and benchmarks/diagnose_model.py (the
 battery of at least 20)."""
 
 from __future__ import annotations

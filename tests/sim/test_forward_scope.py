@@ -1,0 +1,192 @@
+"""The forward view's replay steps and its scope for a torque periodic in the motor angle
+(bench.analysis.diagnose.forward: plant_substeps, phase_errors, forward_scope; verdict's
+forward_worse over the judged segments)."""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from jointbench.bench.analysis.diagnose.forward import (MIN_JUDGED, PHASE_LIMIT,
+                                                        forward_scope, phase_errors,
+                                                        plant_substeps, replay_tau0)
+from jointbench.bench.analysis.diagnose.verdict import forward_worse
+from jointbench.bench.sim import nominal as nominal_axes
+from jointbench.bench.sim.replay import replay
+from jointbench.identification.defaults import PAPER_RATE
+from jointbench.identification.discrepancy import SEGMENTS
+from jointbench.identification.log import Log
+from jointbench.testing import FAMILIES, simulate
+
+RATE = PAPER_RATE
+N = 4000          # samples: 100 per segment
+PERIOD = 0.01     # rad
+
+
+def _log(meta: dict[str, str], rate: float = RATE, q_m: np.ndarray | None = None) -> Log:
+    t = np.arange(N) / rate
+    q_m = np.zeros(N) if q_m is None else q_m
+    return Log(t=t, q_m=q_m, tau_m=np.ones(N), meta={"sample_rate_hz": str(rate), **meta})
+
+
+def test_plant_substeps_follow_the_log():
+    # a MuJoCo plant: its own steps (its discretisation is its physics)
+    assert plant_substeps(_log({"integrator": "mjINT_RK4", "substeps": "1"})) == 1
+    assert plant_substeps(_log({"integrator": "mjINT_RK4", "substeps": "3"})) == 3
+    # a continuous plant (measured, another simulator): steps no longer than the friction's
+    # time constant, 2 ms by default: ceil(2.85 / 2) = 2 at the paper's rate, 1 at 1 kHz
+    assert plant_substeps(_log({})) == 2
+    assert plant_substeps(_log({"integrator": "RK4 (fixed step, numpy)", "substeps": "9"})) == 2
+    assert plant_substeps(_log({}, rate=1000.0)) == 1
+    # the log's own time constant: ceil(2.85 / 0.25) = 12
+    assert plant_substeps(_log({"friction_timeconst_s": "0.00025"})) == 12
+
+
+def test_a_continuous_plant_replays_with_resolved_friction():
+    """The independent simulator's soft axis without feedforward, noise-free: its true
+    parameters replay the log at 25.8 % torque error with one MuJoCo step a sample (the
+    friction constraint's 2 ms time constant under the 2.85 ms step), 1.79 % with the two
+    steps plant_substeps gives (8 steps: 1.78 %)."""
+    fam = FAMILIES["soft"]
+    log = simulate(fam, 7, 12.0, feedforward=False, ideal_sensors=True)
+    spec = nominal_axes.two_mass_axis(Jm=fam.Jm, FVm=fam.FVm, FSm=fam.FSm, K=fam.K, JL=fam.JL,
+                                      FV=fam.FV, FS=fam.FS, timestep=log.ts,
+                                      tau_max=fam.tau_max, gravity=log.gravity, name="soft")
+    model, axis = nominal_axes.compile_axis(spec)
+
+    def error(n: int) -> float:
+        r = replay(model, axis, log, substeps=n, tau0=replay_tau0(log))
+        return 100 * float(np.linalg.norm(r.tau_m - log.tau_m) / np.linalg.norm(log.tau_m))
+
+    n = plant_substeps(log)
+    assert n == 2
+    assert error(n) < 3.0
+    assert error(1) > 5 * error(n)
+
+
+def test_phase_errors_analytic():
+    """A replay a constant e off a motion of constant step dq: 2 pi / p sqrt(e^2 + (dq/2)^2)."""
+    dq, e = 0.001, 0.0007
+    q = dq * np.arange(N)
+    s = phase_errors(q, [q + e, q - 0.5 * e], PERIOD)
+    # the last sample's step is 0 (np.diff appended with the last value): segment 39 differs
+    want = 2 * math.pi / PERIOD * math.hypot(e, dq / 2)
+    assert s[:-1] == pytest.approx(np.full(SEGMENTS - 1, want), rel=1e-9)
+    assert s[-1] < want
+
+
+def _diagnosis(q_m: np.ndarray, off_nominal: np.ndarray, off_extended: np.ndarray,
+               effect: str = "torque_ripple"):
+    # replays whose torque follows the logged one (forward.follows): the phase decides
+    tau = 10.0 + np.sin(np.arange(len(q_m)))
+    view = lambda off: SimpleNamespace(q_m=q_m + off, tau_m=tau + 0.1)   # noqa: E731
+    return SimpleNamespace(log=SimpleNamespace(q_m=q_m, meta={}, tau_m=tau),
+                           forward_nominal=view(off_nominal),
+                           forward_extended=view(off_extended),
+                           causes=(SimpleNamespace(effect=effect),),
+                           extended_parameters={"ripple_period_rad": PERIOD})
+
+
+def test_forward_scope():
+    q = np.zeros(N)
+    seg = np.arange(N) * SEGMENTS // N
+    small = np.full(N, 0.02 * PERIOD)   # phase error 0.13 rad
+    large = np.full(N, 0.5 * PERIOD)    # pi rad: the replayed ripple is out of phase
+    # both replays keep the phase everywhere: every segment judged, no note
+    scope = forward_scope(_diagnosis(q, small, -small))
+    assert scope.judged and scope.keep is None and scope.note == ""
+    # not a periodic effect: every segment, whatever the replays' position errors
+    scope = forward_scope(_diagnosis(q, large, large, effect="backlash"))
+    assert scope.judged and scope.keep is None
+    # the extended replay loses the phase in the second half: only the first half is judged
+    scope = forward_scope(_diagnosis(q, small, np.where(seg < 20, small, large)))
+    assert scope.judged and scope.keep.tolist() == [k < 20 for k in range(SEGMENTS)]
+    assert "20 of 40 segments" in scope.note
+    # the nominal loses it everywhere but MIN_JUDGED - 1 segments: the view cannot judge
+    scope = forward_scope(_diagnosis(q, np.where(seg < MIN_JUDGED - 1, small, large), small))
+    assert not scope.judged and scope.keep is None
+    assert scope.note.startswith("the forward view cannot judge torque_ripple on this log")
+    # the limit: a phase error just under sqrt(2 ln 2) is judged, just over is not
+    at = PHASE_LIMIT * PERIOD / (2 * math.pi)
+    assert forward_scope(_diagnosis(q, small, np.full(N, 0.99 * at))).keep is None
+    assert not forward_scope(_diagnosis(q, small, np.full(N, 1.01 * at))).judged
+
+
+def test_forward_worse_on_the_judged_segments():
+    rng = np.random.default_rng(3)
+    tau = rng.standard_normal(N)
+    seg = np.arange(N) * SEGMENTS // N
+    nominal = tau + 0.5 * rng.standard_normal(N)
+    # the extended replay is 3 times worse in the first half, 2 times better in the second
+    extended = tau + np.where(seg < 20, 1.5, 0.25) * rng.standard_normal(N)
+    t_all, _ = forward_worse(tau, nominal, extended)
+    t_first, p_first = forward_worse(tau, nominal, extended, seg_mask(lambda k: k < 20))
+    t_second, p_second = forward_worse(tau, nominal, extended, seg_mask(lambda k: k >= 20))
+    assert t_first > 10 and p_first < 1e-6
+    assert t_second < -10 and p_second > 0.999
+    assert t_second < t_all < t_first
+
+
+def seg_mask(which) -> np.ndarray:
+    return np.array([which(k) for k in range(SEGMENTS)])
+
+
+def test_gain_reason_judges_a_ripple_where_the_phase_is_kept():
+    """verdict.gain_reason on a torque_ripple: the replays keep its phase in the first half
+    only; the extended replay is 1.2 times worse there and far better in the second half (a
+    gain over 1 on the whole log): overruled, with the judged segments' errors. When the
+    phase is kept in fewer than MIN_JUDGED segments, the forward view does not overrule."""
+    from jointbench.bench.analysis.diagnose.verdict import gain_reason
+
+    rng = np.random.default_rng(5)
+    seg = np.arange(N) * SEGMENTS // N
+    tau = 10 + rng.standard_normal(N)
+    q = np.zeros(N)
+    small, large = np.full(N, 0.02 * PERIOD), np.full(N, 0.5 * PERIOD)
+    nominal_tau = tau + rng.standard_normal(N)
+    extended_tau = tau + np.where(seg < 20, 1.2, 0.1) * rng.standard_normal(N)
+
+    def diagnosis(off_extended):
+        d = _diagnosis(q, small, off_extended)
+        d.log.tau_m = tau
+        for view, t in ((d.forward_nominal, nominal_tau), (d.forward_extended, extended_tau)):
+            view.tau_m = t
+            view.tau_rel_pct = 100 * np.linalg.norm(t - tau) / np.linalg.norm(tau)
+        d.inverse = SimpleNamespace(named=SimpleNamespace(effect="torque_ripple",
+                                                          before_pct=20.0, after_pct=10.0))
+        return d
+
+    d = diagnosis(np.where(seg < 20, small, large))
+    assert d.forward_extended.tau_rel_pct < d.forward_nominal.tau_rel_pct   # gain > 1 overall
+    why = gain_reason(d)
+    assert "worse in the forward view on the 20 segments it judges" in why
+    # judged nowhere but MIN_JUDGED - 1 segments: no forward verdict
+    assert gain_reason(diagnosis(np.where(seg < MIN_JUDGED - 1, small, large))) == ""
+
+
+def test_a_nominal_replay_that_follows_nothing_judges_nothing():
+    """A nominal replay not significantly closer to the logged torque than a zero torque
+    (forward.follows): the forward view cannot judge, whatever the extended replay does."""
+    from jointbench.bench.analysis.diagnose.forward import follows
+
+    rng = np.random.default_rng(6)
+    tau = 10 * np.sin(np.linspace(0, 300, N)) + rng.standard_normal(N)
+    assert follows(tau, tau + 0.5 * rng.standard_normal(N))
+    lost = rng.standard_normal(N) * np.std(tau)          # a replay unrelated to the log
+    assert not follows(tau, lost) and not follows(tau, np.zeros(N) + 1e-9)
+    d = _diagnosis(np.zeros(N), np.zeros(N), np.zeros(N), effect="offset")
+    d.forward_nominal.tau_m, d.forward_nominal.tau_rel_pct = lost, 141.0
+    scope = forward_scope(d)
+    assert not scope.judged and "the nominal's replay does not follow it" in scope.note
+
+
+def test_phase_errors_of_a_plant_that_held_the_torque_too():
+    """A log of a MuJoCo plant held the ripple over the sample as the replay does: only the
+    position error counts."""
+    dq, e = 0.001, 0.0007
+    q = dq * np.arange(N)
+    s = phase_errors(q, [q + e], PERIOD, held=True)
+    assert s == pytest.approx(np.full(SEGMENTS, 2 * math.pi / PERIOD * e), rel=1e-9)
