@@ -27,7 +27,7 @@ from jointbench.bench.results import (CampaignReport, DiagnosisResult, Estimate,
                                       ImportReport, SurveyResult)
 from jointbench.bench.sim.experiment import run_experiment
 from jointbench.bench.api_args import check
-from jointbench.bench.output import write_log
+from jointbench.bench.output_files import write_log
 from jointbench.identification.log import Log, read_log
 
 __all__ = ["Estimate", "Fit", "DiagnosisResult", "CampaignReport", "SurveyResult",
@@ -139,9 +139,9 @@ def import_log(file: str | os.PathLike, out: str | os.PathLike | None = None, *,
         `out` is the input file or a file jointbench did not write.
     """
     # argument checks: here, before any reading
-    from jointbench.bench.output import check_file
+    from jointbench.bench.output_files import check_file
     from jointbench.bench.cli.import_memory import read_within_memory
-    from jointbench.identification.log_import import LOG_COLUMNS, ImportSpec, convert
+    from jointbench.identification.log.raw import LOG_COLUMNS, ImportSpec, convert
 
     src = Path(file)
     target = None if out is None else Path(out)

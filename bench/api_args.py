@@ -7,8 +7,8 @@ the same input (bench.cli: exit status 2).
   `sample_rate_hz` within the rates a log may have as `--rate`, `duration` at least the
   chirp's fades as `--duration`, and within the memory limit as `check_memory`);
 - a `Log` given as an object: numpy arrays of real numbers, one length, finite, at least 3
-  samples, its sampling what the log reader accepts (identification.log_read.validate);
-- output paths: checked by the one output layer (bench.output.check_file) before any work;
+  samples, its sampling what the log reader accepts (identification.log.read.validate);
+- output paths: checked by the one output layer (bench.output_files.check_file) before any work;
 - `id_models`: a sequence of model names (a single string is refused: it would be read as
   letters).
 """
@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from jointbench.identification.log_schema import Log, LogError
+from jointbench.identification.log.schema import Log, LogError
 
 SEED_LIMIT = 2**32
 MAX_SUBSTEPS = 1000      # as `simulate --substeps`
@@ -93,7 +93,7 @@ def log_object(name: str, log: Any) -> None:
     if not isinstance(log, Log):
         path_like(name, log)
         return
-    from jointbench.identification.log_read import validate
+    from jointbench.identification.log.read import validate
 
     for col in LOG_COLUMNS + tuple(f"extra['{k}']" for k in log.extra):
         value = getattr(log, col) if col in LOG_COLUMNS else log.extra[col[7:-2]]
@@ -125,11 +125,11 @@ def log_object(name: str, log: Any) -> None:
 
 
 def output_path(name: str, value: Any) -> None:
-    """None, or a file name the output layer accepts (bench.output.check_file)."""
+    """None, or a file name the output layer accepts (bench.output_files.check_file)."""
     if value is None:
         return
     path_like(name, value)
-    from jointbench.bench.output import check_file
+    from jointbench.bench.output_files import check_file
 
     check_file(value, name)
 
@@ -150,7 +150,7 @@ def _simulate(a: dict) -> None:
     from jointbench.bench.effects import HiddenEffect
     from jointbench.bench.sim.experiment import SAMPLE_RATE_HZ, run_experiment
     from jointbench.bench.sim.reference import Chirp
-    from jointbench.identification.log_read import MAX_RATE_HZ, MIN_RATE_HZ
+    from jointbench.identification.log.read import MAX_RATE_HZ, MIN_RATE_HZ
 
     path_like("model", a["model"])
     if a["joint"] is not None and not isinstance(a["joint"], (str, int)):

@@ -125,7 +125,7 @@ def survey(model: str | os.PathLike = "arm6", joints: Sequence[str] | None = Non
     """Every axis of a robot in turn, the others locked (`jointbench survey`).
 
     Each axis: the chirp experiment, its identification with the defaults, the estimates
-    against the truth (bench.campaign.survey).
+    against the truth (bench.campaign.robot_survey).
 
     Parameters
     ----------
@@ -163,9 +163,9 @@ def survey(model: str | os.PathLike = "arm6", joints: Sequence[str] | None = Non
     >>> s = jb.survey("arm6", ["axis1"], duration=10)   # doctest: +SKIP
     """
     # argument checks: here, before any run
-    from jointbench.bench.campaign.survey import run_survey, survey_axes
+    from jointbench.bench.campaign.robot_survey import run_survey, survey_axes
     from jointbench.bench.cli.resources import check_survey_memory
-    from jointbench.bench.output import OutputFolder
+    from jointbench.bench.output_files import OutputFolder
     from jointbench.bench.present.survey import FILES, write_survey
     from jointbench.bench.sim.experiment import SAMPLE_RATE_HZ
 

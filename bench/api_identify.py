@@ -10,7 +10,7 @@ from typing import Callable
 from jointbench.bench.api_args import check
 from jointbench.bench.api_log import LogLike, as_log, log_name
 from jointbench.bench.results.identify import Fit
-from jointbench.identification.checks import estimate_flags
+from jointbench.identification.checks.fit import estimate_flags
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.identify import identify as identify_log
 from jointbench.identification.log import Log, unit_warnings
@@ -29,10 +29,10 @@ def _check_band(log: Log, wn: float, flag: str, value: float) -> None:
 
 def _filter_settings(log: Log, wn: float | None, order: int, Nd: int | None, chain: dict,
                      f1_hz: float | None):
-    """(FilterSettings, first mode) overriding the chosen filter (identification.defaults
+    """(FilterSettings, first mode) overriding the chosen filter (identification.filter_choice
     .choose_filter: eqs. 28-29 from the log's first mode, or `f1_hz`) with the options given;
     (None, None) when every option is at its default (identify then chooses the band)."""
-    from jointbench.identification.defaults import choose_filter
+    from jointbench.identification.filter_choice import choose_filter
 
     if wn is None and Nd is None and order == 4 and \
             chain == {"zoh": True, "filter_torque": True, "skip": 0, "stencil": None}:
@@ -132,7 +132,7 @@ def identify(log: LogLike, model: str = "auto", settings: FilterSettings | None 
     check("identify", locals())
     from jointbench.identification.physical import InversionError
     from jointbench.identification.saturation import clipping_warnings
-    from jointbench.identification.sanity import sanity_warnings
+    from jointbench.identification.checks.plausibility import sanity_warnings
 
     say = warn or (lambda text: None)
     loaded = as_log(log)
@@ -175,8 +175,8 @@ def identify(log: LogLike, model: str = "auto", settings: FilterSettings | None 
         debiased = debias_fit(loaded, result, replicas=debias, progress=replica_progress,
                               friction_timeconst=friction_timeconst)
     if other is not None:
-        from jointbench.bench.present.validate import forward_validation
-        from jointbench.identification.validate import validate_on
+        from jointbench.bench.present.cross_validation import forward_validation
+        from jointbench.identification.cross_validation import validate_on
         validation = validate_on(result, other, f1_hz)
         forward = forward_validation(result, loaded, other)
     for text in sanity_warnings(result, loaded):   # mislabelled, too short, explains too little

@@ -9,11 +9,11 @@ from pathlib import Path
 import numpy as np
 
 from jointbench.bench.sim.experiment import run_experiment
-from jointbench.identification.defaults import choose_filter
+from jointbench.identification.filter_choice import choose_filter
 from jointbench.identification.frequency import FRF, first_mode_hz, measured_frf, model_frf, two_mass_tf
 from jointbench.identification.identify import identify
 from jointbench.identification.log import atomic_write_text, write_log
-from jointbench.identification.report import (PAPER_TABLE1, PAPER_TABLE2, expected_x, parameter_table,
+from jointbench.identification.paper_tables import (PAPER_TABLE1, PAPER_TABLE2, expected_x, parameter_table,
                                    physical_table)
 
 

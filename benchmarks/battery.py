@@ -36,8 +36,8 @@ from jointbench.bench.campaign.detection import (BINS, curve,
                                                  distinguishing_visibility, found_above, right,
                                                  summary_lines)
 from jointbench.identification.effects import EFFECTS, NONE
-from jointbench.identification.log_write import atomic_write_text
-from jointbench.identification.output import finite_json
+from jointbench.identification.log.write import atomic_write_text
+from jointbench.identification.output_values import finite_json
 from jointbench.identification.saturation import clipped_samples
 from jointbench.testing import INDEP_PLACES, IndepRunner
 
@@ -155,7 +155,7 @@ def figure(records: list[dict], path: Path) -> None:
     import matplotlib.pyplot as plt
     import matplotlib.ticker
 
-    from jointbench.identification.log_write import save_figure_atomic
+    from jointbench.identification.log.write import save_figure_atomic
 
     fig, ax = plt.subplots(figsize=(7.5, 4.5))
     effects = sorted({r["effects"][0] for r in records if r["kind"] == "single"})

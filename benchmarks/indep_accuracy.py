@@ -38,12 +38,12 @@ import time
 from dataclasses import replace
 
 from jointbench.identification.band_choice import choose_band, wide_settings
-from jointbench.identification.defaults import choose_filter, settings_for
+from jointbench.identification.filter_choice import choose_filter, settings_for
 from jointbench.identification.estimate import NotIdentifiable
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.identify import Identification, identify
 from jointbench.identification.log import Log, LogError
-from jointbench.identification.output import pct_error
+from jointbench.identification.output_values import pct_error
 from jointbench.identification.physical import InversionError
 from jointbench.testing import FAMILIES, AxisFamily, simulate
 

@@ -33,8 +33,8 @@ from pathlib import Path
 
 import numpy as np
 
-from jointbench.identification.log_import import ImportResult, ImportSpec, RawTable, convert
-from jointbench.identification.log_schema import LogError
+from jointbench.identification.log.raw import ImportResult, ImportSpec, RawTable, convert
+from jointbench.identification.log.schema import LogError
 
 BAG_SUFFIXES = (".db3", ".mcap", ".bag")
 DEFAULT_TOPIC = "/joint_states"

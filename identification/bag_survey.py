@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from jointbench.identification.bag_import import MOTOR_SUFFIX, Bag, BagSpec, Source, TimeGrid
-from jointbench.identification.log_schema import LogError
+from jointbench.identification.log.schema import LogError
 
 MOTION_WINDOW_S = 0.25  # the rolling window of the motion measure [s]
 MOVED_RATIO = 100.0     # moved: peak over 100 x the held level

@@ -35,7 +35,7 @@ import numpy as np
 from scipy import signal
 from scipy.optimize import brentq
 
-from jointbench.identification.defaults import STENCIL_DISTORTION_MAX, stencil_for
+from jointbench.identification.filter_choice import STENCIL_DISTORTION_MAX, stencil_for
 from jointbench.identification.filtering import FilterSettings, stencil_gain
 from jointbench.identification.log import Log
 

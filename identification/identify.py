@@ -10,11 +10,11 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from jointbench.identification import link_fit, regressors
-from jointbench.identification.checks import check_excitation, check_signals
+from jointbench.identification.checks.fit import check_excitation, check_signals
 from jointbench.identification.estimate import LSResult, NotIdentifiable, block_weighted, least_squares
-from jointbench.identification.band_checks import band_warnings, check_f1
+from jointbench.identification.checks.band import band_warnings, check_f1
 from jointbench.identification.band_choice import MODE_DISAGREEMENT, BandChoice, choose_band
-from jointbench.identification.defaults import choose_filter, is_paper_prototype, stencil_for
+from jointbench.identification.filter_choice import choose_filter, is_paper_prototype, stencil_for
 from jointbench.identification.first_mode import (FirstMode, given_first_mode,
                                                   measure_first_mode)
 from jointbench.identification.filtering import FilterSettings
@@ -51,7 +51,7 @@ class Identification:
     stencil_reason: str = ""              # why this central difference
     paper_axis: bool = False              # the paper's prototype (log metadata): paper columns
     # auto's fallback to rigid: why the flexible model was rejected, and its estimate if any
-    # (identification.sanity reads both: a mislabelled log, data too short)
+    # (identification.checks.plausibility reads both: a mislabelled log, data too short)
     rejected: tuple[str, dict[str, float]] | None = None
     # motor-only: the weighted inversion of eqs. (18)-(20)'s X's, from which the link
     # reconstruction (identification/link_fit.py, `physical`) starts; {} when it fails

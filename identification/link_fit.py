@@ -40,7 +40,7 @@ from jointbench.identification.instruments import instrument_log
 from jointbench.identification.link_sim import (inverse, simulate_link, simulate_link_rk4,
                                                  spectra)
 from jointbench.identification.log import Log
-from jointbench.identification.log_schema import PLANT_INTEGRATOR_KEY, PLANT_STEPS_KEY
+from jointbench.identification.log.schema import PLANT_INTEGRATOR_KEY, PLANT_STEPS_KEY
 from jointbench.identification.saturation import exclude_clipped
 
 NAMES = ("Jm", "FVm", "FSm", "K", "Kc", "Kgx", "Kgy", "a", "b")

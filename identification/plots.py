@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from jointbench.identification.design import butterworth_magnitude, central_difference_magnitude
-from jointbench.identification.log_write import save_figure_atomic
+from jointbench.identification.log.write import save_figure_atomic
 
 if TYPE_CHECKING:
     import matplotlib.figure

@@ -1,4 +1,4 @@
-"""A raw CSV table, as a drive or a data logger writes it (identification.log_import converts
+"""A raw CSV table, as a drive or a data logger writes it (identification.log.raw converts
 it into a jointbench log): a header row of the raw columns' names, then one row of numbers
 per sample. Numbers are read as the log reader reads them (log_schema.is_number: ASCII, no
 digit separator), the rows held as 8-byte floats so that the memory a table takes is known
@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from jointbench.identification.log_read import read_lines
-from jointbench.identification.log_schema import LogError, is_number, shown
+from jointbench.identification.log.read import read_lines
+from jointbench.identification.log.schema import LogError, is_number, shown
 
 DELIMITERS = (",", ";", "\t", "|")
 NUMBER_CHARACTERS = ".+-_# \"'"   # never a delimiter: part of a number, a comment or quoting
@@ -129,6 +129,6 @@ def parse_raw(lines, path: str, delimiter: str | None = None,
 def read_raw(path: str | os.PathLike, delimiter: str | None = None,
              max_values: int | None = None) -> RawTable:
     """`parse_raw` on a file, streamed with the log reader's checks (size limit, binary
-    content; identification.log_read.read_lines). Raises LogError (TooLarge past
+    content; identification.log.read.read_lines). Raises LogError (TooLarge past
     `max_values`)."""
     return read_lines(path, lambda lines, name: parse_raw(lines, name, delimiter, max_values))

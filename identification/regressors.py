@@ -25,9 +25,9 @@ from jointbench.identification.filtering import (Drive, FilterSettings, as_accel
                                                  coulomb_integrals,
                                                  decimate_parallel, derivatives, kink_corrected,
                                                  lowpass, stencil_view, zoh_align)
-from jointbench.identification.jitter import LogNoise, stage_column
+from jointbench.identification.coulomb_noise import LogNoise, stage_column
 from jointbench.identification.log import Log, LogError
-from jointbench.identification.log_schema import PLANT_INTEGRATOR_KEY, PLANT_STEPS_KEY
+from jointbench.identification.log.schema import PLANT_INTEGRATOR_KEY, PLANT_STEPS_KEY
 from jointbench.identification.parameters import JOINT_MOTOR, MOTOR_ONLY, MOTOR_ONLY_CORRECTED, RIGID
 
 MOTOR_RESOLUTION_KEY = "motor_encoder_resolution_rad"

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from jointbench.identification.log_schema import Log, LogError
+from jointbench.identification.log.schema import Log, LogError
 
 CLIP_RELATIVE = 1e-6       # |tau| within this of the limit (relative) counts as at the limit
 PLATEAU_RUNS = 3           # a flat top: the extreme value in at least this many separate runs

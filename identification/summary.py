@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from jointbench.identification.output import ZERO_TRUTH
+from jointbench.identification.output_values import ZERO_TRUTH
 
 NOMINAL_2SIGMA = 0.9545  # P(|z| <= 2) for a standard normal z
 

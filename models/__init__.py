@@ -31,7 +31,7 @@ MODELS_DIR = Path(__file__).resolve().parent
 SHIPPED = {"prototype": "prototype_axis.xml", "prototype_axis": "prototype_axis.xml",
            "arm6": "arm6.xml"}
 # A gear ratio beyond this turns a motor-side encoder step or torque into a value the log
-# format refuses (identification.log_read.MAX_ABS_VALUE is 1e12): a typo, not a gearbox.
+# format refuses (identification.log.read.MAX_ABS_VALUE is 1e12): a typo, not a gearbox.
 MAX_GEAR_RATIO = 1e6
 
 

@@ -44,7 +44,7 @@ from jointbench.bench.sim.nominal import SOLREF_FRICTION, compile_axis, two_mass
 from jointbench.bench.sim.replay import ReplayError, ReplayResult, forward_errors, replay
 from jointbench.identification.identify import Identification
 from jointbench.identification.log import Log, LogError
-from jointbench.identification.output import rms
+from jointbench.identification.output_values import rms
 from jointbench.identification.parameters import FRICTIONS, STIFFNESS_AND_INERTIAS, TWO_MASS
 from jointbench.identification.uncertainty import hac_covariance
 from jointbench.models import Axis

@@ -26,7 +26,7 @@ from jointbench.bench.sim.defaults import AMPLITUDE_REDUCTION
 from jointbench.bench.sim.experiment import default_chirp, run_experiment
 from jointbench.bench.sim.sensors import Sensors
 from jointbench.identification.effects import EFFECTS, NONE
-from jointbench.identification.defaults import PAPER_RATE
+from jointbench.identification.filter_choice import PAPER_RATE
 from jointbench.identification.log import Log
 from jointbench.identification.parameters import TWO_MASS
 from jointbench.models import load_model, torque_limit

@@ -36,7 +36,7 @@ from typing import Any, Callable, Mapping
 from jointbench.bench.campaign.settings import ID_MODELS, CampaignError
 from jointbench.bench.campaign.spec import PARAMS, CampaignSpec
 from jointbench.identification.log import Log
-from jointbench.identification.log_schema import (BOOLEAN_META, FORMAT_KEY, NUMERIC_META,
+from jointbench.identification.log.schema import (BOOLEAN_META, FORMAT_KEY, NUMERIC_META,
                                                   PLANT_INTEGRATOR_KEY)
 from jointbench.identification.parameters import PARAMETERS
 

@@ -34,11 +34,11 @@ from jointbench.bench.effects import parse_effects
 from jointbench.bench.sim.axes import build_experiment_model
 from jointbench.bench.sim.experiment import DEFAULT_SUBSTEPS, SAMPLE_RATE_HZ, run_experiment
 from jointbench.bench.sim.sensors import Sensors
-from jointbench.identification.defaults import choose_filter
+from jointbench.identification.filter_choice import choose_filter
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.first_mode import FirstMode
 from jointbench.identification.identify import identify
-from jointbench.identification.log_write import format_meta_number
+from jointbench.identification.log.write import format_meta_number
 from jointbench.identification.physical import invert_motor_only
 
 

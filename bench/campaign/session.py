@@ -22,9 +22,9 @@ from jointbench.bench.campaign.settings import CampaignError
 from jointbench.bench.campaign.spec import CampaignSpec
 from jointbench.bench.campaign.summary import summary_paths
 from jointbench.bench.campaign.table import CampaignTable
-from jointbench.bench.output import check_file, write_text
+from jointbench.bench.output_files import check_file, write_text
 from jointbench.bench.results.campaign import CampaignReport
-from jointbench.identification.output import finite_json
+from jointbench.identification.output_values import finite_json
 
 # progress(total runs, runs already in the table, engine) -> the per-run callback (ok) or None
 ProgressFactory = Callable[[int, int, str], Callable[[bool], None] | None]
@@ -33,7 +33,7 @@ ProgressFactory = Callable[[int, int, str], Callable[[bool], None] | None]
 def check_outputs(spec: CampaignSpec, out: Path | None, junit: Path | None,
                   gates: Sequence[Gate], workers: int | None) -> None:
     """Before any run: the JUnit report has gates and its own file, the table is neither the
-    model nor an MJCF file, the table and its summaries can be written (bench.output: a
+    model nor an MJCF file, the table and its summaries can be written (bench.output_files: a
     campaign table or absent, the summaries ours or absent) (the memory each local worker needs is
     checked by run_campaign, before any run). Raises CampaignError, OutputError."""
     if junit is not None:

@@ -31,7 +31,7 @@ class CampaignError(ValueError):
 class RunSettings:
     """What one virtual experiment and its identification use. None: the project default
     (amplitude: the automatic chirp; motor_bits 17, link_bits 20; wn, Nd, stencil: what
-    `identify` chooses from the log's first mode, identification.defaults.choose_filter).
+    `identify` chooses from the log's first mode, identification.filter_choice.choose_filter).
 
     Raises CampaignError for an unknown or repeated identification model, a stencil other than
     3 or 5, or a replica count of 1."""

@@ -20,7 +20,7 @@ import numpy as np
 from jointbench.bench.campaign.settings import (ID_MODELS, SWEEPABLE, CampaignError, RunSettings,
                                                 debiased_models)
 from jointbench.bench.sim.reference import Chirp
-from jointbench.identification.defaults import PAPER_RATE
+from jointbench.identification.filter_choice import PAPER_RATE
 from jointbench.identification.parameters import (MOTOR_ONLY_PHYSICAL, PARAMETERS,
                                                   STIFFNESS_AND_INERTIAS, TWO_MASS)
 

@@ -21,8 +21,8 @@ import numpy as np
 
 from jointbench.bench.sim.axes import build_experiment_model
 from jointbench.bench.sim.experiment import run_experiment
-from jointbench.identification import output
-from jointbench.identification.defaults import PAPER_F1, PAPER_ND, PAPER_RATE, PAPER_WN, nd_from_f1
+from jointbench.identification import output_values as output
+from jointbench.identification.filter_choice import PAPER_F1, PAPER_ND, PAPER_RATE, PAPER_WN, nd_from_f1
 from jointbench.identification.design import design_bandpass
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.first_mode import measure_first_mode

@@ -20,7 +20,7 @@ from typing import Callable
 import numpy as np
 
 from jointbench.identification.filtering import lowpass
-from jointbench.identification.output import rms
+from jointbench.identification.output_values import rms
 
 VISIBILITY_BAND = 1.4      # the low-pass corner in units of the first mode f1
 SEARCH_TOLERANCE = 0.10    # relative: |visibility / target - 1| at which the search stops

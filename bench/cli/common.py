@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Callable
 
 from jointbench.bench.options import key_numbers
-from jointbench.bench.output import check_file
+from jointbench.bench.output_files import check_file
 
 # Exit status (docs/cli.md).
 EXIT_OK = 0
@@ -58,7 +58,7 @@ def trap_signals() -> Callable[[], None]:
 def check_output_file(out: Path, flag: str = "--out") -> None:
     """Refuse, before any computation, an output path whose folder is missing or read-only,
     that is not a regular file (a device node, a FIFO, a folder), or that is an existing
-    non-empty file jointbench did not write (bench.output: the one output layer)."""
+    non-empty file jointbench did not write (bench.output_files: the one output layer)."""
     check_file(out, flag)
 
 

@@ -20,7 +20,7 @@ def add_arguments(d: argparse.ArgumentParser) -> None:
     d.add_argument("--seed", type=seed, default=1, help="noise seed (default 1)")
 
 
-# Every file the demo may write in --out (bench.output.OutputFolder).
+# Every file the demo may write in --out (bench.output_files.OutputFolder).
 FILES = ("prototype.csv", "report.md", "figure1.png", "figure2.png", "figure2_joint_motor.png",
          "frequency_response.png", "discrepancy/*")
 
@@ -28,7 +28,7 @@ FILES = ("prototype.csv", "report.md", "figure1.png", "figure2.png", "figure2_jo
 def run(args: argparse.Namespace) -> int:
     """Run the demo into --out (checked first; written all or nothing)."""
     from jointbench.bench.demo import run_demo
-    from jointbench.bench.output import OutputFolder
+    from jointbench.bench.output_files import OutputFolder
     from jointbench.bench.sim.experiment import SAMPLE_RATE_HZ
 
     from jointbench.bench.campaign.spec import MIN_DURATION_S

@@ -89,7 +89,7 @@ def run(args: argparse.Namespace) -> int:
     """Flexify, check the convention, write atomically; print the drives and their sources."""
     from jointbench.bench.sim.axes import build_experiment_model
     from jointbench.bench.sim.flexify import flexify, to_xml
-    from jointbench.bench.output import write_text
+    from jointbench.bench.output_files import write_text
 
     src, out = Path(args.model), Path(args.out)
     if not src.is_file():

@@ -38,7 +38,7 @@ def add_arguments(i: argparse.ArgumentParser) -> None:
     i.add_argument("--validate", metavar="OTHER.csv",
                    help="predict another log's torque with the identified model (inverse "
                         "view, that log's own filter) and report the error beside the fit's "
-                        "(identification/validate.py)")
+                        "(identification/cross_validation.py)")
     i.add_argument("--refine", action="store_true",
                    help="continue from the least-squares estimate by closed-loop output error "
                         "(DIDIM-style): replay the log in MuJoCo under its controller on the "

@@ -78,7 +78,7 @@ def _report(out: Path, result, as_json: bool) -> dict | str:
 def _check(args: argparse.Namespace, src: Path, out: Path):
     """Refuse the CSV options and the survey's conflicts; check --out before any reading.
     The OutputFolder of a survey, else None."""
-    from jointbench.bench.output import OutputFolder
+    from jointbench.bench.output_files import OutputFolder
 
     if args.map or args.units or args.rate or args.delimiter:
         raise UsageError("--map, --units, --rate and --delimiter are for CSV files; a bag "
@@ -106,7 +106,7 @@ def run_bag(args: argparse.Namespace, spec_csv) -> int:
     from jointbench.identification.bag_import import (BAG_MOTOR_SIDE, bag_log, fit_grid,
                                                       read_bag, topics_needed)
     from jointbench.identification.log import write_log
-    from jointbench.identification.log_import import MOTOR_SIDE
+    from jointbench.identification.log.raw import MOTOR_SIDE
 
     src, out = Path(args.file), Path(args.out)
     folder = _check(args, src, out)

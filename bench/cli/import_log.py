@@ -1,5 +1,5 @@
 """`jointbench import RAW.csv --out LOG.csv`: a measured file (own column names, units, motor
-side, current) converted into a jointbench log (docs/log-format.md; identification/log_import.py
+side, current) converted into a jointbench log (docs/log-format.md; identification/log/raw.py
 does the conversion). Prints what it did and the checks it ran; exit 2 for what it cannot
 convert, naming the file, line and column."""
 
@@ -12,7 +12,7 @@ import sys
 from jointbench.bench.cli.common import UsageError, finite, positive
 
 # The library `run` imports, loaded by the dispatcher before it traps the signals.
-LIBRARY = ("jointbench.identification.log_import", "jointbench.identification.log",
+LIBRARY = ("jointbench.identification.log.raw", "jointbench.identification.log",
            "jointbench.identification.bag_import", "jointbench.identification.bag_survey")
 
 # Metadata options: option destination -> metadata key (docs/log-format.md section 1.3).
@@ -120,7 +120,7 @@ def options(args: argparse.Namespace) -> dict:
 def spec_from_args(args: argparse.Namespace, header: tuple[str, ...]):
     """The ImportSpec of the options (a bag's conversion); the default mapping takes the raw
     columns that already carry a log column's name."""
-    from jointbench.identification.log_import import LOG_COLUMNS, ImportSpec
+    from jointbench.identification.log.raw import LOG_COLUMNS, ImportSpec
 
     kwargs = options(args)
     kwargs.pop("delimiter")

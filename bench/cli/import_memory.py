@@ -66,7 +66,7 @@ def _refusal(src: Path, text: str, limit: float) -> UsageError:
 def read_within_memory(src: Path, delimiter: str | None):
     """The RawTable of `src` (log_import.read_raw), or UsageError before the table would
     need more than the memory limit (module docstring)."""
-    from jointbench.identification.log_import import TooLarge, read_raw
+    from jointbench.identification.log.raw import TooLarge, read_raw
 
     limit = memory_limit_mb()
     budget = budget_values(limit)

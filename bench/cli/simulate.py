@@ -98,7 +98,7 @@ def _check_numbers(args: argparse.Namespace) -> None:
     from dataclasses import fields
 
     from jointbench.bench.sim.reference import Chirp
-    from jointbench.identification.log_read import MAX_RATE_HZ, MIN_RATE_HZ
+    from jointbench.identification.log.read import MAX_RATE_HZ, MIN_RATE_HZ
 
     if not 1 <= args.substeps <= MAX_SUBSTEPS:
         raise UsageError(f"--substeps {args.substeps}: must lie in [1, {MAX_SUBSTEPS}]")
@@ -127,9 +127,9 @@ def run(args: argparse.Namespace) -> int:
     from jointbench.bench.sim.axes import build_experiment_model
     from jointbench.bench.sim.experiment import SAMPLE_RATE_HZ, run_experiment, stderr_progress
     from jointbench.bench.sim.sensors import Sensors
-    from jointbench.identification.defaults import design_rate_hz
+    from jointbench.identification.filter_choice import design_rate_hz
     from jointbench.identification.log import write_log
-    from jointbench.identification.output import finite_json
+    from jointbench.identification.output_values import finite_json
 
     args.model = args.model or "prototype"
     effect = parse_effects(args.effect) if args.effect else None
@@ -189,13 +189,13 @@ def run_replay(args: argparse.Namespace) -> int:
     src = Path(args.replay)
     out = Path(args.out) if args.out else None
     _check_replay_options(args, src, out)
-    from jointbench.bench.output import record
+    from jointbench.bench.output_files import record
     from jointbench.bench.present.replay import (format_report, plot_replay, replay_log_file,
                                                  report_json)
     from jointbench.bench.sim.nominal import write_xml
     from jointbench.bench.sim.replay import simulated_log
     from jointbench.identification.log import write_log
-    from jointbench.identification.output import finite_json
+    from jointbench.identification.output_values import finite_json
     from jointbench.identification.plots import save_figure_atomic
 
     rep = replay_log_file(src, model=args.model, joint=args.joint,

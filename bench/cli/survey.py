@@ -1,6 +1,6 @@
 """`jointbench survey`: every axis of a robot in turn (the others locked), the chirp
 experiment and its identification with the defaults, one table against the truth, one figure
-and the logs (bench.campaign.survey; docs/cli.md)."""
+and the logs (bench.campaign.robot_survey; docs/cli.md)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import sys
 from jointbench.bench.cli.common import EXIT_FAILURE, UsageError, positive, seed
 
 # The library `run` imports, loaded by the dispatcher before it traps the signals.
-LIBRARY = ("jointbench.bench.api", "jointbench.bench.campaign.survey", "jointbench.bench.present.survey")
+LIBRARY = ("jointbench.bench.api", "jointbench.bench.campaign.robot_survey", "jointbench.bench.present.survey")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

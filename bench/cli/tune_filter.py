@@ -65,7 +65,7 @@ def _check_grid(duration: float, wn_grid: tuple, Nd_grid: tuple, workers: int | 
     from jointbench.bench.campaign.settings import RunSettings
     from jointbench.bench.campaign.spec import check_settings
     from jointbench.bench.cli.resources import check_memory
-    from jointbench.identification.defaults import PAPER_RATE
+    from jointbench.identification.filter_choice import PAPER_RATE
 
     check_settings(RunSettings(duration=duration))
     for w in wn_grid:
@@ -105,7 +105,7 @@ def run(args: argparse.Namespace) -> int:
     from jointbench.bench.campaign.executors import make_executor
     from jointbench.bench.campaign.run import Progress
     from jointbench.bench.campaign.tuning import geometric_wn, linear_nd, result_text, tune_filter
-    from jointbench.identification.output import finite_json
+    from jointbench.identification.output_values import finite_json
 
     if not 1 <= args.seeds <= MAX_SEEDS:
         raise ValueError(f"--seeds {args.seeds}: must lie in [1, {MAX_SEEDS}]")

@@ -6,9 +6,9 @@ from __future__ import annotations
 import math
 
 from jointbench.bench.analysis.debias import DebiasResult
-from jointbench.identification.output import pct_error
+from jointbench.identification.output_values import pct_error
 from jointbench.identification.parameters import units
-from jointbench.identification.report import cell as num
+from jointbench.identification.paper_tables import cell as num
 
 
 def debiased_json(res: DebiasResult, truth: dict[str, float] | None = None) -> dict:

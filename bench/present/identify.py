@@ -10,13 +10,13 @@ from jointbench.bench.present.refine import refined_json, refinement_table
 from jointbench.identification.identify import Identification
 from jointbench.identification.log import Log
 from jointbench.identification.parameters import STIFFNESS_AND_INERTIAS
-from jointbench.identification.report import parameter_table, physical_table, to_json
+from jointbench.identification.paper_tables import parameter_table, physical_table, to_json
 
 
 def identify_json(result: Identification, truth: dict[str, float] | None, flags: list[dict],
                   warnings: list[str], refined: RefineResult | None = None,
                   debiased: DebiasResult | None = None) -> dict:
-    """The `identify --json` object: `identification.report.to_json` with the estimate flags,
+    """The `identify --json` object: `identification.paper_tables.to_json` with the estimate flags,
     the log's unit warnings and, when run, the "refined" and "debiased" objects."""
     answer = to_json(result, truth)
     answer["flags"] = flags

@@ -7,9 +7,9 @@ import math
 
 from jointbench.bench.analysis.refine import ALL_PARAMETERS, RefineResult
 from jointbench.identification.identify import Identification
-from jointbench.identification.output import pct_error
+from jointbench.identification.output_values import pct_error
 from jointbench.identification.parameters import STIFFNESS_AND_INERTIAS, units
-from jointbench.identification.report import cell as num
+from jointbench.identification.paper_tables import cell as num
 
 
 def refined_json(res: RefineResult, ident: Identification,

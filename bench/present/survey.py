@@ -1,4 +1,4 @@
-"""A survey (bench.campaign.survey) as text, as the `survey --json` object, as its CSV table
+"""A survey (bench.campaign.robot_survey) as text, as the `survey --json` object, as its CSV table
 and as its figure: what `jointbench survey` prints and writes."""
 
 from __future__ import annotations
@@ -8,8 +8,8 @@ import io
 import math
 from pathlib import Path
 
-from jointbench.bench.campaign.survey import ACCURACY_BAR_PCT, Estimate, JointSurvey, Survey
-from jointbench.identification.output import finite_json, pct_error
+from jointbench.bench.campaign.robot_survey import ACCURACY_BAR_PCT, Estimate, JointSurvey, Survey
+from jointbench.identification.output_values import finite_json, pct_error
 from jointbench.identification.parameters import FRICTIONS, STIFFNESS_AND_INERTIAS, units
 
 F1 = "f1"   # the first mode's row of the table [Hz]
@@ -146,7 +146,7 @@ def survey_json(sv: Survey, out: Path | None) -> dict:
         "workers": sv.workers, "wall_s": sv.wall_s})
 
 
-# The files `survey --out DIR` writes (bench.output.OutputFolder).
+# The files `survey --out DIR` writes (bench.output_files.OutputFolder).
 TABLE, FIGURE, LOGS = "survey.csv", "survey.png", "logs"
 FILES = (TABLE, FIGURE, f"{LOGS}/*")
 COLUMNS = ("joint", "parameter", "unit", "estimate", "sigma", "sigma_corrected", "truth",
@@ -221,10 +221,10 @@ def plot_survey(sv: Survey):
 
 
 def write_survey(sv: Survey, folder: Path) -> None:
-    """The logs, the table and the figure into `folder` (inside bench.output.OutputFolder's
+    """The logs, the table and the figure into `folder` (inside bench.output_files.OutputFolder's
     `writing()`: atomic files, all or nothing)."""
     from jointbench.identification.log import write_log
-    from jointbench.identification.log_write import atomic_write_text, save_figure_atomic
+    from jointbench.identification.log.write import atomic_write_text, save_figure_atomic
 
     (folder / LOGS).mkdir(exist_ok=True)
     for j in logged(sv):

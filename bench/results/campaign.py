@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 from jointbench.bench.campaign.gates import GateResult, gates_text
 from jointbench.bench.campaign.summary import summary_text as campaign_text
-from jointbench.identification.output import finite_json
+from jointbench.identification.output_values import finite_json
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Callable
 from jointbench.bench.analysis.diagnose import Diagnosis, summary_text
 from jointbench.bench.analysis.diagnose import write as write_diagnosis
 from jointbench.bench.api_args import path_like
-from jointbench.identification.output import finite_json
+from jointbench.identification.output_values import finite_json
 
 if TYPE_CHECKING:
     from jointbench.bench.analysis.diagnose.against_model import ModelDiagnosis

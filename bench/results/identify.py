@@ -12,13 +12,13 @@ from jointbench.bench.analysis.debias import DebiasResult
 from jointbench.bench.api_args import output_path
 from jointbench.bench.analysis.refine import RefineResult
 from jointbench.bench.present.identify import identify_json, identify_text
-from jointbench.bench.present.validate import forward_text
+from jointbench.bench.present.cross_validation import forward_text
 from jointbench.identification.identify import Identification
 from jointbench.identification.log import Log
-from jointbench.identification.output import finite_json
+from jointbench.identification.output_values import finite_json
 from jointbench.identification.parameters import units
 from jointbench.identification.plots import plot_validation
-from jointbench.identification.validate import Validation
+from jointbench.identification.cross_validation import Validation
 
 if TYPE_CHECKING:
     import matplotlib.figure
@@ -76,7 +76,7 @@ class Fit:
     truth : dict of str to float or None
         The log's ground truth (None for measured data).
     flags : tuple of dict
-        The estimate flags (identification.checks.estimate_flags).
+        The estimate flags (identification.checks.fit.estimate_flags).
     warnings : tuple of str
         Warnings on the log and the estimate: units, clipped torque, sanity (a mislabelled
         or too short log, a model that explains too little), the band against the first

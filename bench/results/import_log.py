@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 from jointbench.identification.log import Log
 
 if TYPE_CHECKING:
-    from jointbench.identification.log_import import ImportResult
+    from jointbench.identification.log.raw import ImportResult
 
 
 @dataclass(frozen=True)

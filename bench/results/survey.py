@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from jointbench.bench.campaign.survey import Survey
+    from jointbench.bench.campaign.robot_survey import Survey
 
 
 @dataclass(frozen=True)

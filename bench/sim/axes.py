@@ -24,7 +24,7 @@ from jointbench.bench.effects import HiddenEffect, apply_to_spec, as_effects, st
 from jointbench.models import (Axis, ModelStructureError, find_axes, load_model, select_axis,
                                torque_limit)
 from jointbench.models.truth import AxisTruth, axis_truth
-from jointbench.identification.defaults import PAPER_RATE
+from jointbench.identification.filter_choice import PAPER_RATE
 from jointbench.identification.effects import EFFECTS
 
 LOCKS = ("rigid", "brake")

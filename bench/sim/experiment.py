@@ -32,7 +32,7 @@ from jointbench.bench.effects import (HiddenEffect, LoopEffects, as_effects, eff
 from jointbench.bench.sim.reference import Chirp
 from jointbench.bench.sim.sensors import Sensors
 from jointbench.identification.log import Log, format_meta_number
-from jointbench.identification.defaults import PAPER_RATE
+from jointbench.identification.filter_choice import PAPER_RATE
 
 SAMPLE_RATE_HZ = PAPER_RATE  # the paper's acquisition rate, the mission's
 DEFAULT_SUBSTEPS = 1      # RK4; see README "Substeps" for the convergence check

@@ -18,7 +18,7 @@ import mujoco
 import numpy as np
 
 from jointbench.identification.log import format_meta_number
-from jointbench.identification.log_schema import (PLANT_INTEGRATOR_KEY, PLANT_STEPS_KEY,
+from jointbench.identification.log.schema import (PLANT_INTEGRATOR_KEY, PLANT_STEPS_KEY,
                                                    PLANT_TIMECONST_KEY, Log)
 
 SOFT_ERROR_MAX = 0.01   # friction error RMS over the torque RMS above which the model is warned

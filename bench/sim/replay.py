@@ -32,7 +32,7 @@ from jointbench.bench.sim.loop import LoopChecks, first_warning, run_loop
 from jointbench.bench.sim.nominal import static_link_position
 from jointbench.bench.sim.sensors import Sensors
 from jointbench.identification.log import Log, LogError
-from jointbench.identification.output import rms
+from jointbench.identification.output_values import rms
 from jointbench.models import Axis
 
 DISTURBANCE_AT = ("link", "motor")

@@ -1,7 +1,7 @@
 """A second view of `torque_lag` in a band that reaches the excitation's top.
 
 **Why the lag alone.** A first-order lag T shifts the applied torque's phase by about w T:
-its evidence grows with frequency, by physics. The chooser's band (identification.defaults:
+its evidence grows with frequency, by physics. The chooser's band (identification.filter_choice:
 decimated cutoff about 1.4 f1) keeps only the bottom of a sweep that runs far above the first
 mode, so on a low-f1 axis a lag shows in the few segments of the chirp's top part (for a
 5 ms lag on a 4 Hz axis swept to 30 Hz: 0.15 rad at the 5.4 Hz cutoff, 0.8 rad at the

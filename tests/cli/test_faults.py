@@ -23,7 +23,7 @@ from jointbench.bench.cli import main
 from jointbench.bench.sim.controller import Gains
 from jointbench.bench.sim.experiment import SimulationError, run_experiment
 from jointbench.bench.sim.reference import Chirp
-from jointbench.identification import checks
+from jointbench.identification.checks import fit as checks
 from jointbench.identification.estimate import NotIdentifiable, least_squares
 from jointbench.identification.identify import identify
 from jointbench.identification.log import Log, LogError, parse_log, read_log, write_log
@@ -124,7 +124,7 @@ def test_single_sine_does_not_identify_the_flexible_models(sine_run, tmp_path, c
 
 
 def identify_settings(log: Log):
-    from jointbench.identification.defaults import settings_for
+    from jointbench.identification.filter_choice import settings_for
     return settings_for(log)[0]
 
 
@@ -204,7 +204,7 @@ def test_unphysical_estimates_are_flagged(tmp_path, capsys):
     assert rc == 0 and answer["physical"]["J"] == pytest.approx(-50, rel=0.02)
     flag = next(f for f in answer["flags"] if f["parameter"] == "J")
     assert flag["flag"] == "unphysical" and "an inertia cannot be" in flag["message"]
-    (warning,) = answer["warnings"]   # the likely cause (identification.sanity)
+    (warning,) = answer["warnings"]   # the likely cause (identification.checks.plausibility)
     assert "every inertia is negative" in warning and "wrong sign" in warning
     rc, out, _ = cli(["identify", str(path), "--model", "rigid"], capsys)
     assert rc == 0 and re.search(r"flag: J = -[0-9.]+ is negative: an inertia cannot be", out)

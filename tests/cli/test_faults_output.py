@@ -19,7 +19,7 @@ import pytest
 import jointbench.bench.campaign.run  # noqa: F401 - bound to run_experiment before any patch
 from jointbench.bench.cli import main
 from jointbench.bench.cli.common import Terminated
-from jointbench.bench.output import MANIFEST, OutputError, OutputFolder, is_ours
+from jointbench.bench.output_files import MANIFEST, OutputError, OutputFolder, is_ours
 from jointbench.bench.sim.experiment import run_experiment
 from jointbench.identification.log import format_log, write_log
 
@@ -127,7 +127,7 @@ def test_unwritable_targets_exit_2(tmp_path, where):
 
 def test_files_written_are_ours_and_ours_only_while_unchanged(tmp_path):
     path = tmp_path / "fig.png"
-    from jointbench.bench.output import check_file, record
+    from jointbench.bench.output_files import check_file, record
     path.write_bytes(b"\x89PNG not really")
     with pytest.raises(OutputError, match="did not write"):
         check_file(path)
@@ -260,7 +260,7 @@ def test_output_folder_touches_only_its_own_files(tmp_path):
         (p / "a.txt").write_text("A1")
         (p / "sub").mkdir()
         (p / "sub" / "c.txt").write_text("C1")
-    from jointbench.bench.output import read_manifest
+    from jointbench.bench.output_files import read_manifest
     assert is_ours(out / "a.txt") and is_ours(out / "sub" / "c.txt", read_manifest(out),
                                               "sub/c.txt")
     snapshot = _digest(out)

@@ -16,7 +16,7 @@ import pytest
 from jointbench.bench.cli import main
 from jointbench.bench.cli.import_memory import BASE_MB, BYTES_PER_VALUE, budget_values
 from jointbench.identification.log import read_log
-from jointbench.identification.log_import import parse_raw
+from jointbench.identification.log.raw import parse_raw
 
 MAP = ["--map", "t=time,q_m=motor,q=link,tau_m=cur"]
 RATE_HZ = 350.0

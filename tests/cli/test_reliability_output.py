@@ -13,7 +13,7 @@ import pytest
 
 import jointbench as jb
 from jointbench.bench.cli import main
-from jointbench.bench.output import OutputError, OutputFolder
+from jointbench.bench.output_files import OutputError, OutputFolder
 from jointbench.identification.log import LogError, read_log
 
 FOREIGN = "a user's own file\n"

@@ -41,14 +41,14 @@ def test_simulate_imports_no_scipy(tmp_path):
 
 
 def test_paper_constants_load_without_the_filter_modules():
-    """identification.defaults holds the paper's constants for the bench; its filter
+    """identification.filter_choice holds the paper's constants for the bench; its filter
     chooser's modules (scipy) load only when a filter is chosen."""
-    code = ("import sys\nfrom jointbench.identification.defaults import PAPER_RATE\n"
+    code = ("import sys\nfrom jointbench.identification.filter_choice import PAPER_RATE\n"
             "from jointbench.bench.sim.experiment import SAMPLE_RATE_HZ\n"
             "assert SAMPLE_RATE_HZ == PAPER_RATE\n"
             "heavy = [m for m in ('scipy', 'jointbench.identification.filtering',\n"
             "         'jointbench.identification.first_mode') if m in sys.modules]\n"
-            "from jointbench.identification.defaults import default_settings\n"
+            "from jointbench.identification.filter_choice import default_settings\n"
             "s = default_settings(PAPER_RATE)\n"
             "print('heavy:' + ','.join(heavy), s.wn, s.Nd)")
     proc = subprocess.run([sys.executable, "-c", code], env=_env(), capture_output=True,

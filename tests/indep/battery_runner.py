@@ -7,7 +7,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from jointbench.bench.campaign.battery import Effect, Place
-from jointbench.identification.defaults import PAPER_RATE
+from jointbench.identification.filter_choice import PAPER_RATE
 from jointbench.identification.log import Log
 from jointbench.testing.hidden_effects import Hidden
 from jointbench.testing.simulator import FAMILIES, AxisFamily, default_reference, simulate

@@ -26,7 +26,7 @@ from typing import Callable
 import numpy as np
 
 from jointbench.bench.sim.controller import Gains, gains_rule
-from jointbench.identification.defaults import PAPER_RATE
+from jointbench.identification.filter_choice import PAPER_RATE
 from jointbench.identification.log import Log
 from jointbench.testing.hidden_effects import (Plant, as_hidden, plant, rk4_step,
                                                spring_deflection, stepper_with_effects,

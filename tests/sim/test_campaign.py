@@ -376,7 +376,7 @@ def test_filter_overrides_keep_the_chooser_for_what_is_not_given():
     force 3 points); an explicit --stencil 3 is kept; nothing given: identify's own choice."""
     from jointbench.bench.campaign.run import _filter
     from jointbench.bench.sim.experiment import run_experiment
-    from jointbench.identification.defaults import choose_filter
+    from jointbench.identification.filter_choice import choose_filter
 
     log = run_experiment("arm6", "axis1", duration=10.0, seed=0).log
     base = choose_filter(log).settings

@@ -13,7 +13,7 @@ import pytest
 
 from jointbench.bench.analysis.diagnose import diagnose, run
 from jointbench.bench.campaign.battery import Case, run_case
-from jointbench.identification.defaults import PAPER_RATE
+from jointbench.identification.filter_choice import PAPER_RATE
 from jointbench.identification.discrepancy import Candidate, InverseDiagnosis
 
 

@@ -77,7 +77,7 @@ def test_the_wide_view_confirms_only_a_lag_that_agrees_between_the_bands(clean_s
     assert jackknife((1.0,) * 10) == 0.0
     # the led columns' 3-point derivative at a 28 Hz top at the paper's rate: 4.1 % of T
     from dataclasses import replace
-    from jointbench.identification.defaults import PAPER_RATE
+    from jointbench.identification.filter_choice import PAPER_RATE
     wide = replace(diagnosis_settings(clean_soft)[0], Nd=5)
     assert wide.ts == pytest.approx(1 / PAPER_RATE, rel=1e-3)
     assert discretisation(wide, 1e-3) == pytest.approx(

@@ -18,7 +18,7 @@ import pytest
 
 from jointbench.bench.analysis.diagnose.run import diagnosis_settings
 from jointbench.bench.campaign.battery import Case, run_case
-from jointbench.identification.defaults import PAPER_RATE
+from jointbench.identification.filter_choice import PAPER_RATE
 from jointbench.identification.discrepancy import nominal
 from jointbench.identification.discrepancy import stacked as st
 from jointbench.identification.discrepancy.heldout import fitted_rss, fold_of_rows, scores

@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 
 from jointbench.bench.sim.experiment import run_experiment
-from jointbench.identification.defaults import choose_filter
+from jointbench.identification.filter_choice import choose_filter
 from jointbench.identification.first_mode import measure_first_mode
 from jointbench.identification.identify import identify
 from jointbench.identification.log import Log
-from jointbench.identification.report import to_json
+from jointbench.identification.paper_tables import to_json
 
 ARM = tuple(f"axis{j}" for j in range(1, 7))
 # joint-motor K, Jm, JL at 350.87 Hz with defaults (seed 1, 60 s), over 0.5 %: measured

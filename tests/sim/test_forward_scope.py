@@ -16,7 +16,7 @@ from jointbench.bench.analysis.diagnose.forward import (MIN_JUDGED, PHASE_LIMIT,
 from jointbench.bench.analysis.diagnose.verdict import forward_worse
 from jointbench.bench.sim import nominal as nominal_axes
 from jointbench.bench.sim.replay import replay
-from jointbench.identification.defaults import PAPER_RATE
+from jointbench.identification.filter_choice import PAPER_RATE
 from jointbench.identification.discrepancy import SEGMENTS
 from jointbench.identification.log import Log
 from jointbench.testing import FAMILIES, simulate

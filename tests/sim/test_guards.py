@@ -13,7 +13,7 @@ from jointbench.bench.analysis.diagnose import cross_validate, diagnose
 from jointbench.bench.analysis.diagnose.run import diagnosis_settings
 from jointbench.bench.sim.experiment import run_experiment
 from jointbench.identification.identify import identify
-from jointbench.identification.sanity import sanity_warnings
+from jointbench.identification.checks.plausibility import sanity_warnings
 
 
 @pytest.fixture(scope="module")

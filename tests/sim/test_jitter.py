@@ -1,4 +1,4 @@
-"""The Coulomb state under the log's own noise (identification/jitter.py) against MuJoCo and
+"""The Coulomb state under the log's own noise (identification/coulomb_noise.py) against MuJoCo and
 against synthetic plants whose noise is known."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from jointbench.identification.filtering import FilterSettings, derivatives, lowpass
-from jointbench.identification.jitter import (chain_jitter, noise_nodes, stage_state,
+from jointbench.identification.coulomb_noise import (chain_jitter, noise_nodes, stage_state,
                                               torque_noise_sweep)
 
 TS = 1 / 350.87

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from jointbench.identification.identify import identify
-from jointbench.identification.report import parameter_table
+from jointbench.identification.paper_tables import parameter_table
 
 # An unphysical fit's branch: what encoder flips (another machine's last bits) move it by, a
 # few 1e-3, is well inside; the nearest other branch, a factor of 2 or more away, is far outside.

@@ -19,7 +19,7 @@ from rosbags.rosbag1 import Writer as Writer1  # noqa: E402
 from rosbags.rosbag2 import StoragePlugin, Writer  # noqa: E402
 from rosbags.typesys import Stores, get_typestore  # noqa: E402
 
-from jointbench.bench.campaign.survey import ACCURACY_BAR_PCT  # noqa: E402
+from jointbench.bench.campaign.robot_survey import ACCURACY_BAR_PCT  # noqa: E402
 from jointbench.bench.cli import main  # noqa: E402
 from jointbench.bench.sim.experiment import run_experiment  # noqa: E402
 from jointbench.identification.bag_import import fit_grid  # noqa: E402
@@ -27,7 +27,7 @@ from jointbench.identification.bag_survey import (MOTION_WINDOW_S, motion,  # no
                                                   rolling_sd)
 from jointbench.identification.identify import identify  # noqa: E402
 from jointbench.identification.log import read_log, write_log  # noqa: E402
-from jointbench.identification.log_schema import LogError  # noqa: E402
+from jointbench.identification.log.schema import LogError  # noqa: E402
 from jointbench.identification.parameters import STIFFNESS_AND_INERTIAS  # noqa: E402
 
 DURATION = 30.0

@@ -13,7 +13,7 @@ from contextlib import redirect_stdout
 import pytest
 
 from jointbench.bench.cli import main
-from jointbench.bench.output import MANIFEST
+from jointbench.bench.output_files import MANIFEST
 from jointbench.bench.sim.axes import build_experiment_model
 
 ARGS = ["survey", "--model", "arm6", "--joints", "axis1,4", "--duration", "60", "--seed", "1",
@@ -132,7 +132,7 @@ def test_output_guard_and_bad_input(tmp_path, capsys):
 def test_a_failed_axis_is_reported_and_the_others_written(tmp_path, monkeypatch, capsys):
     """An axis whose simulation fails: its reason in the table, the JSON and on stderr,
     exit 1; the other axis is identified and written."""
-    import jointbench.bench.campaign.survey as survey
+    import jointbench.bench.campaign.robot_survey as survey
 
     real = survey.run_experiment
 

@@ -12,7 +12,7 @@ import pytest
 from jointbench.bench.cli import main
 from jointbench.identification.identify import identify
 from jointbench.identification.log import read_log, write_log
-from jointbench.identification.validate import validate_on
+from jointbench.identification.cross_validation import validate_on
 
 EMPS = Path(__file__).parents[1] / "data" / "emps"
 

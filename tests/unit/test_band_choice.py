@@ -15,7 +15,7 @@ from jointbench.identification.filtering import stencil_gain
 from jointbench.identification.band_choice import (CONSISTENCY_Z, butterworth_flat_top_hz,
                                                    choose_band, excitation_top_hz,
                                                    stencil_top_hz, wide_settings)
-from jointbench.identification.defaults import PAPER_RATE, STENCIL_DISTORTION_MAX, default_settings
+from jointbench.identification.filter_choice import PAPER_RATE, STENCIL_DISTORTION_MAX, default_settings
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.log import Log
 

@@ -1,4 +1,4 @@
-"""Unit tests of identification/defaults.py, the one filter chooser, against the paper's
+"""Unit tests of identification/filter_choice.py, the one filter chooser, against the paper's
 section 4 and the design numbers of the ERRATA (no MuJoCo)."""
 
 from __future__ import annotations
@@ -8,8 +8,8 @@ import math
 
 import pytest
 
-from jointbench.identification.band_checks import MIN_CUTOFF_OVER_F1
-from jointbench.identification.defaults import (GENERIC_ND, GENERIC_WN_RATIO, PAPER_F1,
+from jointbench.identification.checks.band import MIN_CUTOFF_OVER_F1
+from jointbench.identification.filter_choice import (GENERIC_ND, GENERIC_WN_RATIO, PAPER_F1,
                                                 PAPER_ND, PAPER_RATE, PAPER_WN,
                                                 default_settings, design_rate_hz,
                                                 generic_settings, nd_from_f1, settings_for,

@@ -99,7 +99,7 @@ def test_a_one_step_a_sample_simulator_keeps_the_linear_placement():
     joint-motor columns keep the reversals placed linearly between samples (inside=False),
     without stick phases; from parameters, the motor's is MuJoCo's per-stage friction of the
     log's time constant over the log's noise (the raw positions, the encoder resolution, the
-    held torque and the parameters: identification/jitter.py). Any other log (a real axis: no
+    held torque and the parameters: identification/coulomb_noise.py). Any other log (a real axis: no
     such key) gets the sub-sample model with its stick phases."""
     t = np.arange(50) * TS
     log = Log(t=t, q_m=np.sin(t), tau_m=np.cos(t), q=np.sin(t),

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from jointbench.bench.sim.controller import Gains, control_law
-from jointbench.identification.checks import check_signals
-from jointbench.identification.defaults import PAPER_RATE, settings_for
+from jointbench.identification.checks.fit import check_signals
+from jointbench.identification.filter_choice import PAPER_RATE, settings_for
 from jointbench.identification.identify import identify
 from jointbench.identification.log import read_log, unit_warnings, write_log
 from jointbench.testing import (FAMILIES, AxisFamily, Reference, default_substeps, energy,

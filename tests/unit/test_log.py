@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from jointbench.identification import log as log_module
-from jointbench.identification import log_read, log_write
+from jointbench.identification.log import read as log_read, write as log_write
 from jointbench.identification.log import (Log, LogError, atomic_write_text, parse_log, read_log,
                                 unit_warnings, write_log)
 

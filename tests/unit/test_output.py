@@ -1,4 +1,4 @@
-"""Unit tests of identification/output.py: strict JSON values and the small error measures of
+"""Unit tests of identification/output_values.py: strict JSON values and the small error measures of
 the presentation layer."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from jointbench.identification.output import finite_json, pct_error, rms
+from jointbench.identification.output_values import finite_json, pct_error, rms
 
 
 def test_finite_json_makes_strict_json():

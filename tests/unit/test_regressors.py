@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from jointbench.identification.defaults import default_settings, generic_settings
+from jointbench.identification.filter_choice import default_settings, generic_settings
 from jointbench.identification.estimate import least_squares
 from jointbench.identification.log import Log, LogError
 from jointbench.identification.parameters import JOINT_MOTOR, MOTOR_ONLY, RIGID

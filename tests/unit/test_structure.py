@@ -16,7 +16,7 @@ PACKAGES = {"bench": "jointbench.bench", "identification": "jointbench.identific
 MAX_LINES = 400
 # Layers, lowest first: a module may import its own layer or a lower one.
 LAYERS = (("jointbench.identification", "jointbench.models"),
-          ("jointbench.bench.effects", "jointbench.bench.options", "jointbench.bench.output",
+          ("jointbench.bench.effects", "jointbench.bench.options", "jointbench.bench.output_files",
            "jointbench.bench.memory"),
           ("jointbench.bench.sim",),
           ("jointbench.bench.analysis", "jointbench.bench.campaign", "jointbench.bench.present",

@@ -25,7 +25,7 @@ from jointbench.bench.sim.axes import build_experiment_model
 from jointbench.bench.cli import main
 from jointbench.bench.sim.experiment import default_chirp, run_experiment
 from jointbench.identification.design import design_bandpass
-from jointbench.identification.defaults import default_settings, design_rate_hz
+from jointbench.identification.filter_choice import default_settings, design_rate_hz
 from jointbench.identification.identify import identify
 from jointbench.identification.log import read_log
 from jointbench.models import model_path
@@ -92,7 +92,7 @@ def test_arm_truth_within_3_sigma_after_bias_correction(arm_runs):
     1 / 4 / 6, the motor Coulomb friction's bias left once the reversals were placed by the
     identified friction (+0.26 / +0.22 / +0.20 %, 5-7 sigma, before that). With the motor's
     state taken as MuJoCo's RK4 step applies it, over the log's noise (identification/
-    jitter.py), least squares alone is within 3 sigma (z 1.4 / 2.4 / 1.2). The bias correction
+    coulomb_noise.py), least squares alone is within 3 sigma (z 1.4 / 2.4 / 1.2). The bias correction
     (bench/analysis/debias.py, 4 closed-loop replicas on the nominal axis with the friction
     time constant the log carries) keeps it there."""
     from jointbench.bench.analysis.debias import debias
@@ -116,7 +116,7 @@ def test_arm_jm_bias_is_the_motor_coulomb_friction(arm_runs, tmp_path):
     friction removed (frictionloss 0 on axis4_motor, nothing else changed) brought Jm from
     +0.16 % to +0.02 % with the reversals placed by the identified friction (+0.22 % to
     +0.06 % before that). With the motor's state taken as MuJoCo's RK4 step applies it, over
-    the log's noise (identification/jitter.py), the friction adds nothing measurable: Jm is
+    the log's noise (identification/coulomb_noise.py), the friction adds nothing measurable: Jm is
     0.050 % off with it and 0.048 % without."""
     spec = mujoco.MjSpec.from_file(str(model_path("arm6")))
     spec.joint("axis4_motor").frictionloss = 0.0

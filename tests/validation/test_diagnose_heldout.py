@@ -25,7 +25,7 @@ import pytest
 from jointbench.bench.analysis.diagnose import diagnose
 from jointbench.bench.analysis.diagnose.run import diagnosis_settings
 from jointbench.bench.campaign.battery import Case, run_case
-from jointbench.identification.defaults import PAPER_RATE
+from jointbench.identification.filter_choice import PAPER_RATE
 from jointbench.identification.discrepancy import (FOLDS, NOMINAL_TWO_MASS, WHY_IN_NOMINAL,
                                                    design, design_many, diagnose_inverse,
                                                    nominal)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from jointbench.bench.cli import main
-from jointbench.identification import defaults, filtering
+from jointbench.identification import filter_choice as defaults, filtering
 from jointbench.identification import regressors as models
 from jointbench.identification.estimate import NotIdentifiable, least_squares
 from jointbench.identification.identify import identify

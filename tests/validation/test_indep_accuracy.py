@@ -179,7 +179,7 @@ def test_settings_without_a_mode_identify_as_the_defaults(indep_log):
     (the chooser's band is already the widest, so the band rule keeps it): before, the
     instruments took 8 s Welch segments without f1 and Jm came out -41 % against +0.52 %,
     without a warning."""
-    from jointbench.identification.defaults import choose_filter
+    from jointbench.identification.filter_choice import choose_filter
     log = indep_log(FAMILIES["stiff_small"], seed=1, duration=60.0, sweep="log")
     default = identify(log, "joint-motor")
     given = identify(log, "joint-motor", settings=choose_filter(log).settings)

@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from jointbench.identification.band_choice import MODE_DISAGREEMENT, choose_band, mode_gap
-from jointbench.identification.defaults import PAPER_RATE, default_settings
+from jointbench.identification.filter_choice import PAPER_RATE, default_settings
 from jointbench.identification.identify import identify
 from jointbench.identification.log import Log
 from jointbench.testing import FAMILIES, simulate

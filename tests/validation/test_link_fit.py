@@ -11,7 +11,7 @@ import pytest
 from scipy import signal
 
 from jointbench.identification import link_fit
-from jointbench.identification.defaults import choose_filter
+from jointbench.identification.filter_choice import choose_filter
 from jointbench.identification.identify import identify
 from jointbench.bench.sim.experiment import run_experiment
 from jointbench.bench.sim.sensors import Sensors

@@ -10,7 +10,7 @@ from scipy import signal
 
 from jointbench.bench.analysis.diagnose.types import BLOCK_NAMES, Diagnosis
 from jointbench.identification.plots import save_figure_atomic
-from jointbench.identification.report import signal_units
+from jointbench.identification.paper_tables import signal_units
 
 
 def _pyplot():

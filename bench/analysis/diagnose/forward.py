@@ -34,7 +34,7 @@ from jointbench.identification.discrepancy.heldout import ALPHA, segment_sums, s
 from jointbench.identification.effects import EFFECTS
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.log import Log
-from jointbench.identification.log_schema import PLANT_INTEGRATOR_KEY, PLANT_STEPS_KEY
+from jointbench.identification.log.schema import PLANT_INTEGRATOR_KEY, PLANT_STEPS_KEY
 
 
 def _axis_name(d: Diagnosis) -> str:

@@ -39,7 +39,7 @@ from jointbench.bench.sim.sensors import Sensors
 from jointbench.identification.filtering import decimate_parallel, lowpass, zoh_align
 from jointbench.identification.identify import Identification
 from jointbench.identification.log import Log
-from jointbench.identification.output import rms
+from jointbench.identification.output_values import rms
 
 FLOOR_SEEDS = (1, 2)   # noise realisations of the floor (each one replay)
 

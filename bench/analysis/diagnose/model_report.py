@@ -1,7 +1,7 @@
 """What `jointbench diagnose LOG --model ROBOT.xml` prints and writes: the parameter errors,
 the named causes, the forward gain (and its cross-validation), the JSON answer of docs/cli.md
 (`parameter_errors` added), and with --out DIR: corrected.xml, extended.xml, report.md and
-diagnosis.json, all or nothing (bench.output.OutputFolder), each atomically."""
+diagnosis.json, all or nothing (bench.output_files.OutputFolder), each atomically."""
 
 from __future__ import annotations
 
@@ -15,9 +15,9 @@ from jointbench.bench.analysis.diagnose.against_model import (FLOOR_PCT, MODELS,
                                                               ModelDiagnosis, ParameterError)
 from jointbench.bench.analysis.diagnose.model_precision import CONFIDENCE, POINTS, describe
 from jointbench.bench.effects import axis_keys
-from jointbench.bench.output import OutputFolder
+from jointbench.bench.output_files import OutputFolder
 from jointbench.identification.log import atomic_write_text
-from jointbench.identification.output import finite_json
+from jointbench.identification.output_values import finite_json
 from jointbench.identification.parameters import units
 
 FILES = ("corrected.xml", "extended.xml", "report.md", "diagnosis.json")

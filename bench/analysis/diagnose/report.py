@@ -1,6 +1,6 @@
 """What `diagnose` prints and writes: the summary text, the JSON answer, and with --out DIR the
 figures, nominal.xml, extended.xml, report.md and diagnosis.json. The folder is written all
-or nothing, never over a file that is not ours (bench.output.OutputFolder), every file
+or nothing, never over a file that is not ours (bench.output_files.OutputFolder), every file
 atomically (temporary file, then rename)."""
 
 from __future__ import annotations
@@ -18,11 +18,11 @@ from jointbench.bench.analysis.diagnose.figures import (plot_forward, plot_forwa
 from jointbench.bench.analysis.diagnose.forward import write_models
 from jointbench.bench.analysis.diagnose.types import BLOCK_NAMES, Diagnosis
 from jointbench.bench.effects import axis_keys
-from jointbench.bench.output import OutputFolder
+from jointbench.bench.output_files import OutputFolder
 from jointbench.identification.discrepancy import ALPHA, FOLDS, MATERIAL, SEGMENTS
 from jointbench.identification.effects import EFFECTS
 from jointbench.identification.log import atomic_write_text
-from jointbench.identification.output import finite_json
+from jointbench.identification.output_values import finite_json
 
 
 def report_markdown(d: Diagnosis, figures: dict[str, str]) -> str:
@@ -127,7 +127,7 @@ RULE = ("Every effect of docs/effects.md added to the nominal model and fitted o
 
 
 FIGURES = ("structure", "spectrum", "inverse", "forward", "forward_frf")
-# Every file `diagnose --out DIR` may write (bench.output.OutputFolder refuses to replace one
+# Every file `diagnose --out DIR` may write (bench.output_files.OutputFolder refuses to replace one
 # that is not ours, and removes ours that a new run does not write again).
 FILES = tuple(f"{k}.png" for k in FIGURES) + ("nominal.xml", "extended.xml", "report.md",
                                                 "diagnosis.json", "cross_validation.json")
@@ -141,7 +141,7 @@ def output_folder(out: Path) -> OutputFolder:
 def write(d: Diagnosis, out: Path, say: Callable[[str], None],
           extra: dict[str, str] | None = None) -> Diagnosis:
     """Write the figures, models, report.md, diagnosis.json and the `extra` files (name ->
-    text) into `out`, all or nothing (bench.output.OutputFolder)."""
+    text) into `out`, all or nothing (bench.output_files.OutputFolder)."""
     say(f"figures and report in {out}")
     with output_folder(out).writing() as folder:
         figures: dict[str, str] = {}

@@ -22,7 +22,7 @@ from jointbench.bench.analysis.diagnose.report import write
 from jointbench.bench.analysis.diagnose.types import Diagnosis, ForwardView
 from jointbench.bench.analysis.diagnose.verdict import (clipped_reason, gain_reason,
                                                         nominal_reason)
-from jointbench.identification.defaults import choose_filter
+from jointbench.identification.filter_choice import choose_filter
 from jointbench.identification.discrepancy import (NUMERICS, Candidate, InverseDiagnosis, Nominal,
                                                    diagnose_inverse)
 from jointbench.identification.discrepancy.candidates import joint_parameters
@@ -34,7 +34,7 @@ from jointbench.identification.saturation import clipping_warnings
 
 def diagnosis_settings(log: Log) -> tuple[FilterSettings, str]:
     """The bandpass of section 3.2 for this log, and how it was chosen: the one chooser
-    (identification.defaults.choose_filter: the first mode measured on the log, eqs. 28-29,
+    (identification.filter_choice.choose_filter: the first mode measured on the log, eqs. 28-29,
     the paper's filter for the prototype, a stated generic band when no resonance is found)."""
     c = choose_filter(log)
     # the effects' columns (identification/effects) pair samples as eq. (22) does: the band

@@ -12,7 +12,7 @@ from jointbench.identification.discrepancy import Candidate, InverseDiagnosis
 from jointbench.identification.effects import NONE
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.log import Log
-from jointbench.identification.output import finite_json
+from jointbench.identification.output_values import finite_json
 
 BLOCK_NAMES = ("motor equation (eq. 6): torque residual, % of the measured torque RMS",
                "link equation (eq. 5): residual, % of the spring torque K (qm - q) RMS")

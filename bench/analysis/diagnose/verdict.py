@@ -3,7 +3,7 @@ answer is then "inconclusive", with the reason.
 
 - **A nominal that cannot be this axis.** Jm, K, JL (or the rigid J) not positive: the fit
   describes no physical axis, so no effect measured against it means anything
-  (identification.sanity.mislabel_reason names the likely mislabelling: q and q_m swapped, the
+  (identification.checks.plausibility.mislabel_reason names the likely mislabelling: q and q_m swapped, the
   torque's sign). Positions that look like degrees (identification.log.unit_warnings):
   every parameter but the Coulomb frictions is then 180 / pi times off. The nominal's first
   mode sqrt(K (1/Jm + 1/JL)) / 2 pi is not checked against the one measured on the log: with
@@ -35,7 +35,7 @@ import numpy as np
 from jointbench.bench.analysis.diagnose.forward import forward_scope
 from jointbench.bench.analysis.diagnose.types import Diagnosis
 from jointbench.identification.discrepancy.heldout import ALPHA, segment_sums, segment_t
-from jointbench.identification.sanity import mislabel_reason
+from jointbench.identification.checks.plausibility import mislabel_reason
 
 DEGREES = "look like degrees"   # identification.log.unit_warnings' words for that warning
 USABLE_MIN = 0.5   # "none" needs at least half of the experiment's rows (a majority of it)

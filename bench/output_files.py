@@ -15,7 +15,7 @@ Rules:
   (an `extended.xml` the new report does not mention) stays beside the new ones; the
   manifest is written last, with `"complete": true`;
 - files are written atomically with the permissions the umask allows
-  (identification.log_write.atomic_write).
+  (identification.log.write.atomic_write).
 
 Standard library only, no numerical import.
 """
@@ -75,7 +75,7 @@ def read_manifest(folder: Path) -> dict[str, str]:
 
 def _write_manifest(folder: Path, files: dict[str, str], complete: bool = True) -> None:
     import json
-    from jointbench.identification.log_write import atomic_write_text
+    from jointbench.identification.log.write import atomic_write_text
 
     doc = {"written_by": "jointbench", "complete": complete, "files": dict(sorted(files.items()))}
     atomic_write_text(folder / MANIFEST, json.dumps(doc, indent=1) + "\n")
@@ -145,7 +145,7 @@ def record(path: str | os.PathLike) -> None:
 
 def write_text(path: str | os.PathLike, text: str) -> Path:
     """Write `text` atomically and record it in the folder's manifest."""
-    from jointbench.identification.log_write import atomic_write_text
+    from jointbench.identification.log.write import atomic_write_text
 
     atomic_write_text(path, text)
     record(path)
@@ -308,8 +308,8 @@ def write_log(log, path: str | os.PathLike, flag: str = "path") -> Path:
     TypeError
         `log` is not a Log or `path` not a file name.
     """
-    from jointbench.identification.log_schema import Log
-    from jointbench.identification.log_write import write_log as write
+    from jointbench.identification.log.schema import Log
+    from jointbench.identification.log.write import write_log as write
 
     if not isinstance(log, Log):
         raise TypeError(f"log: expected a jointbench Log, got {type(log).__name__}")

@@ -6,7 +6,7 @@ bench.campaign.executors). An axis is simulated exactly as `jointbench simulate 
 --joint J --duration D --seed S` would (same log, bit for bit) and identified as `jointbench
 identify` would: the joint-motor model (eq. 13) when the log has the link position q and the
 axis is flexible, else `auto`; the filter from the first mode measured on the log
-(identification.defaults.choose_filter), never from the truth.
+(identification.filter_choice.choose_filter), never from the truth.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.first_mode import FirstMode
 from jointbench.identification.identify import identify
 from jointbench.identification.log import Log
-from jointbench.identification.output import pct_error
+from jointbench.identification.output_values import pct_error
 from jointbench.identification.parameters import FRICTIONS, STIFFNESS_AND_INERTIAS
 from jointbench.models import load_model, select_axis
 

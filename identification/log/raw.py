@@ -17,12 +17,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from jointbench.identification.log_read import (MAX_ABS_VALUE, MAX_RATE_HZ, MIN_RATE_HZ,
+from jointbench.identification.log.read import (MAX_ABS_VALUE, MAX_RATE_HZ, MIN_RATE_HZ,
                                                 sampling_jitter, unit_warnings, validate)
-from jointbench.identification.log_schema import (BOOLEAN_META, NONNEGATIVE_META, NUMERIC_META,
+from jointbench.identification.log.schema import (BOOLEAN_META, NONNEGATIVE_META, NUMERIC_META,
                                                   OPTIONAL_COLUMNS, REQUIRED_COLUMNS, Log,
                                                   LogError, meta_boolean, meta_number)
-from jointbench.identification.log_write import check_writable
+from jointbench.identification.log.write import check_writable
 # the raw table's reader, re-exported: the command line and the tests import it from here
 from jointbench.identification.raw_table import RawTable, TooLarge, parse_raw, read_raw
 

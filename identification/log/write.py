@@ -18,7 +18,7 @@ from typing import IO, TYPE_CHECKING, Callable
 
 import numpy as np
 
-from jointbench.identification.log_schema import FORMAT_KEY, FORMAT_VERSION, Log
+from jointbench.identification.log.schema import FORMAT_KEY, FORMAT_VERSION, Log
 
 if TYPE_CHECKING:
     import matplotlib.figure
@@ -42,7 +42,7 @@ def check_writable(log: Log) -> None:
     metadata key that is empty or holds ':' or '#' or a line break, a value with a line break
     (docs/log-format.md: one `# key: value` line each), columns that are not 1-D arrays of
     one length, non-finite samples."""
-    from jointbench.identification.log_schema import LogError, shown
+    from jointbench.identification.log.schema import LogError, shown
 
     for key, value in log.meta.items():
         key, value = str(key), str(value)
@@ -164,8 +164,8 @@ def write_log(log: Log, path: str | os.PathLike) -> None:
     LogError
         Naming the key, column or sample, or the reader's file, line and column.
     """
-    from jointbench.identification.log_read import read_log
-    from jointbench.identification.log_schema import LogError
+    from jointbench.identification.log.read import read_log
+    from jointbench.identification.log.schema import LogError
 
     check_writable(log)
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 
 from jointbench.identification.identify import Identification
-from jointbench.identification.output import finite_json, pct_error
+from jointbench.identification.output_values import finite_json, pct_error
 from jointbench.identification.parameters import units
 
 # The paper's published values (section 4), for side-by-side tables.

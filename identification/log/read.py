@@ -20,7 +20,7 @@ from typing import Callable, Iterable, Iterator, TypeVar
 
 import numpy as np
 
-from jointbench.identification.log_schema import (BOOLEAN_META, FORMAT_KEY, FORMAT_VERSION,
+from jointbench.identification.log.schema import (BOOLEAN_META, FORMAT_KEY, FORMAT_VERSION,
                                                   NONNEGATIVE_META, NUMERIC_META,
                                                   OPTIONAL_COLUMNS,
                                                   REQUIRED_COLUMNS, Log, LogError, is_number,
@@ -321,7 +321,7 @@ def read_lines(path: str | os.PathLike, parse: Callable[[Iterator[tuple[int, str
     """`parse(lines, name)` on the numbered text lines of the file at `path`, streamed with
     the reader's checks: LogError for a missing file or a folder, a file over `max_bytes`
     (default `max_log_bytes()`), binary content, over-long lines and read errors. Shared by
-    `read_log` and the import of measured files (identification/log_import.py)."""
+    `read_log` and the import of measured files (identification/log/raw.py)."""
     limit = max_log_bytes() if max_bytes is None else int(max_bytes)
     path = Path(path)
     name = str(path)

@@ -1,21 +1,21 @@
 """The jointbench log: read, validate and write the CSV of docs/log-format.md.
 
-One import for the log: the schema (`Log`, `LogError`: identification.log_schema), the reader
-(parse, validate, stream, size limits: identification.log_read) and the writer (CSV text and
-atomic writes: identification.log_write). Errors are `LogError`, which names the file, the
+One import for the log: the schema (`Log`, `LogError`: identification.log.schema), the reader
+(parse, validate, stream, size limits: identification.log.read) and the writer (CSV text and
+atomic writes: identification.log.write). Errors are `LogError`, which names the file, the
 line and the column at fault.
 """
 
 from __future__ import annotations
 
-from jointbench.identification.log_read import (DEFAULT_MAX_BYTES, DEGREES_SPAN_RAD,
+from jointbench.identification.log.read import (DEFAULT_MAX_BYTES, DEGREES_SPAN_RAD,
                                                 JITTER_TOLERANCE, MAX_BYTES_ENV, MAX_LINE_BYTES,
                                                 max_log_bytes, parse_log, parse_size, read_log,
                                                 unit_warnings, validate)
-from jointbench.identification.log_schema import (BOOLEAN_META, FORMAT_KEY, FORMAT_VERSION,
+from jointbench.identification.log.schema import (BOOLEAN_META, FORMAT_KEY, FORMAT_VERSION,
                                                   NUMERIC_META, OPTIONAL_COLUMNS,
                                                   REQUIRED_COLUMNS, Log, LogError)
-from jointbench.identification.log_write import (atomic_write, atomic_write_text,
+from jointbench.identification.log.write import (atomic_write, atomic_write_text,
                                                  format_log, format_meta_number,
                                                  save_figure_atomic, write_log)
 

@@ -2,8 +2,8 @@
 and the metadata keys the analyses read as numbers or booleans.
 
 A `Log` holds the sampled signals as numpy arrays and the metadata as strings; typed
-accessors convert the keys the analyses use. Reading is `identification.log_read`, writing
-`identification.log_write`; `identification.log` exports all three.
+accessors convert the keys the analyses use. Reading is `identification.log.read`, writing
+`identification.log.write`; `identification.log` exports all three.
 """
 
 from __future__ import annotations

@@ -89,7 +89,7 @@ def nd_from_f1(rate_hz: float, f1_hz: float) -> int:
     paper's ratio of cutoff to first mode (section 4: 0.8 x 350.87 / (2 x 5.4) = 25.99 gives
     its Nd = 26), so that the band holds the mode; rounded down instead when rounding would
     put the cutoff under MIN_CUTOFF_OVER_F1 f1 (few decimation steps: 2.4 rounds down to 2 at 1.66 f1)."""
-    from jointbench.identification.band_checks import MIN_CUTOFF_OVER_F1
+    from jointbench.identification.checks.band import MIN_CUTOFF_OVER_F1
 
     x = 0.8 * rate_hz / (2 * f1_hz * 5.4 / 3.9)
     nd = max(1, int(round(x)))

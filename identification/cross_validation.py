@@ -15,11 +15,11 @@ import numpy as np
 
 from jointbench.identification import regressors
 from jointbench.identification.band_choice import band_for
-from jointbench.identification.defaults import settings_for
+from jointbench.identification.filter_choice import settings_for
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.identify import Identification
 from jointbench.identification.log import Log, LogError
-from jointbench.identification.output import finite_json, rms
+from jointbench.identification.output_values import finite_json, rms
 
 # each model's rows on another log, given the identified physical parameters p (the
 # joint-motor model's Coulomb reversals are placed by them, as identify places them)
