@@ -1,9 +1,13 @@
-"""The jointbench log: read, validate and write the CSV of docs/log-format.md.
+"""The jointbench log: the CSV of docs/log-format.md, one package.
 
-One import for the log: the schema (`Log`, `LogError`: identification.log.schema), the reader
-(parse, validate, stream, size limits: identification.log.read) and the writer (CSV text and
-atomic writes: identification.log.write). Errors are `LogError`, which names the file, the
-line and the column at fault.
+- `schema`: the `Log` and its metadata keys, `LogError` (which names the file, the line and
+  the column at fault);
+- `read`: parse, validate, stream, size limits;
+- `write`: CSV text and atomic writes;
+- `raw`: a measured file in its own columns and units converted into a log (`jointbench
+  import`).
+
+The names of `schema`, `read` and `write` are importable from the package itself.
 """
 
 from __future__ import annotations
