@@ -8,7 +8,6 @@ from __future__ import annotations
 import functools
 import math
 import pickle
-import sys
 import tempfile
 import time
 from dataclasses import dataclass, field, replace
@@ -282,37 +281,6 @@ def lost_outcome(task: RunTask, error: str) -> RunOutcome:
 
 # --------------------------------------------------------------------------------------------
 # Driver
-
-
-class Progress:
-    """A one-line progress bar on a stream (stderr), redrawn at most 10 times a second."""
-
-    def __init__(self, total: int, done: int = 0, stream=None, enabled: bool = True,
-                 label: str = "campaign"):
-        self.total, self.done, self.failed = total, done, 0
-        self.start_done = done
-        self.stream = stream or sys.stderr
-        self.enabled = enabled
-        self.label = label
-        self.t0 = time.perf_counter()
-        self._last = 0.0
-
-    def update(self, ok: bool) -> None:
-        self.done += 1
-        self.failed += 0 if ok else 1
-        now = time.perf_counter()
-        if self.enabled and (now - self._last > 0.1 or self.done == self.total):
-            self._last = now
-            rate = (self.done - self.start_done) / max(now - self.t0, 1e-9)
-            eta = (self.total - self.done) / rate if rate > 0 else math.inf
-            width = 30
-            fill = int(width * self.done / max(self.total, 1))
-            self.stream.write(f"\r{self.label}: [{'#' * fill}{'.' * (width - fill)}] "
-                              f"{self.done}/{self.total} runs, {self.failed} failed, "
-                              f"{rate:.2f} runs/s, eta {eta:.0f} s ")
-            if self.done == self.total:
-                self.stream.write("\n")
-            self.stream.flush()
 
 
 @dataclass(frozen=True)

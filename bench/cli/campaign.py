@@ -155,14 +155,14 @@ def spec_arguments(args: argparse.Namespace, parse_effect: Callable[[str], objec
 
 def _progress(args: argparse.Namespace, out: Path):
     """The campaign's start line and progress bar on stderr (none with --quiet)."""
-    from jointbench.bench.campaign.run import Progress
+    from jointbench.bench.cli.progress import bar, runs
 
     def start(total: int, done: int, engine: str):
         if args.quiet:
             return None
         print(f"campaign: {total} runs ({done} already in {out}) on {engine}",
               file=sys.stderr)
-        return Progress(total, done, enabled=sys.stderr.isatty()).update
+        return runs(bar("campaign", total, "run", initial=done))
     return start
 
 

@@ -83,11 +83,21 @@ def _check_filter_options(args: argparse.Namespace) -> None:
         raise UsageError(f"--skip {args.skip}: must be >= 0")
 
 
-def _debias_progress(done: int, total: int) -> None:
-    """The replica counter on stderr (rewritten in place on a terminal)."""
-    if sys.stderr.isatty() or done == total:
-        print(f"\ridentify: bias correction, replica {done}/{total}",
-              end="" if done < total else "\n", file=sys.stderr, flush=True)
+def _debias_progress():
+    """The replica bar on stderr (a terminal only), made at the first replica's report and
+    closed at the last."""
+    from jointbench.bench.cli.progress import bar
+
+    state: dict = {}
+
+    def at(done: int, total: int) -> None:
+        if "bar" not in state:
+            state["bar"] = bar("identify: bias correction", total, "replica")
+        b = state["bar"]
+        b.update(max(0, done - b.n))
+        if done >= total:
+            b.close()
+    return at
 
 
 def _refine_progress(msg: str) -> None:
@@ -112,7 +122,7 @@ def run(args: argparse.Namespace) -> int:
                    debias=args.debias, friction_timeconst=args.friction_timeconst,
                    validate=args.validate,
                    progress=None if args.json else _refine_progress,
-                   replica_progress=None if args.json else _debias_progress, warn=_warn)
+                   replica_progress=None if args.json else _debias_progress(), warn=_warn)
     if args.json:
         print(json.dumps(fit.to_json(), allow_nan=False, default=float))
     else:

@@ -125,7 +125,8 @@ def run(args: argparse.Namespace) -> int:
     from jointbench.bench.present.experiment import (experiment_json, experiment_text,
                                                       saturation_warnings)
     from jointbench.bench.sim.axes import build_experiment_model
-    from jointbench.bench.sim.experiment import SAMPLE_RATE_HZ, run_experiment, stderr_progress
+    from jointbench.bench.cli.progress import bar, fraction
+    from jointbench.bench.sim.experiment import SAMPLE_RATE_HZ, run_experiment
     from jointbench.bench.sim.sensors import Sensors
     from jointbench.identification.filter_choice import design_rate_hz
     from jointbench.identification.log import write_log
@@ -134,7 +135,6 @@ def run(args: argparse.Namespace) -> int:
     args.model = args.model or "prototype"
     effect = parse_effects(args.effect) if args.effect else None
     out = _output_file(args)
-    progress = None if args.quiet or not sys.stderr.isatty() else stderr_progress("simulate")
     if args.rate == "auto":  # twice the Fs of eq. (29) for the axis' first mode
         exp = build_experiment_model(args.model, args.joint, config=parse_config(args.config),
                                      lock=args.lock, effect=effect)
@@ -143,11 +143,13 @@ def run(args: argparse.Namespace) -> int:
     else:
         rate = SAMPLE_RATE_HZ if args.rate is None else float(args.rate)
     check_memory(args.duration * rate, f"--duration {args.duration:g} s at {rate:g} Hz")
-    result = run_experiment(args.model, args.joint, duration=args.duration, seed=args.seed,
-                            amplitude=args.amplitude, config=parse_config(args.config),
-                            lock=args.lock, effect=effect,
-                            sensors=Sensors.ideal() if args.ideal_sensors else None,
-                            substeps=args.substeps, progress=progress, sample_rate_hz=rate)
+    with bar("simulate", 100, "%", quiet=args.quiet) as b:
+        result = run_experiment(args.model, args.joint, duration=args.duration, seed=args.seed,
+                                amplitude=args.amplitude, config=parse_config(args.config),
+                                lock=args.lock, effect=effect,
+                                sensors=Sensors.ideal() if args.ideal_sensors else None,
+                                substeps=args.substeps, progress=fraction(b),
+                                sample_rate_hz=rate)
     write_log(result.log, out)
     warnings = saturation_warnings(result)
     for text in warnings:

@@ -10,7 +10,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import sys
 from typing import Callable
 
 from jointbench.bench.cli.common import seed
@@ -103,7 +102,7 @@ def run(args: argparse.Namespace) -> int:
     """`jointbench tune-filter`: the grid search and its validation, printed as tables or JSON.
     Raises ValueError for bad options (exit status 2)."""
     from jointbench.bench.campaign.executors import make_executor
-    from jointbench.bench.campaign.run import Progress
+    from jointbench.bench.cli.progress import bar, runs
     from jointbench.bench.campaign.tuning import geometric_wn, linear_nd, result_text, tune_filter
     from jointbench.identification.output_values import finite_json
 
@@ -122,12 +121,11 @@ def run(args: argparse.Namespace) -> int:
     if not params or any(p not in OBJECTIVE_PARAMS for p in params):
         raise ValueError(f"--params: choose among {', '.join(OBJECTIVE_PARAMS)}")
     executor = make_executor(args.workers, args.scheduler)
-    bar = Progress(2 * args.seeds, enabled=not args.quiet and sys.stderr.isatty(),
-                   label="tune-filter")
     try:
-        r = tune_filter(args.model, args.joint, wn_grid, Nd_grid, args.seeds, executor,
-                        duration=args.duration, seed=args.seed, id_model=args.id_model,
-                        params=params, progress=bar.update)
+        with bar("tune-filter", 2 * args.seeds, "run", quiet=args.quiet) as b:
+            r = tune_filter(args.model, args.joint, wn_grid, Nd_grid, args.seeds, executor,
+                            duration=args.duration, seed=args.seed, id_model=args.id_model,
+                            params=params, progress=runs(b))
     except ValueError as err:
         if "no (wn, Nd) pair" not in str(err):
             raise

@@ -11,7 +11,6 @@ Per control tick k (period T = 1 / PAPER_RATE by default; `bench.sim.loop.run_lo
 from __future__ import annotations
 
 import math
-import sys
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -268,13 +267,3 @@ def default_chirp(exp: ExperimentModel, duration: float = 60.0,
     return Chirp(duration=duration, amplitude=amplitude or AMPLITUDE_RAD,
                  center=float(exp.qpos_init[exp.axis.motor_qpos]),
                  max_acceleration=ACCELERATION_SHARE * exp.tau_max / (t.Jm + t.JL))
-
-
-def stderr_progress(label: str) -> Callable[[float], None]:
-    """A one-line progress indicator on stderr (for long runs from the command line)."""
-    def show(frac: float) -> None:
-        sys.stderr.write(f"\r{label}: {100 * frac:5.1f} %")
-        if frac >= 0.99:
-            sys.stderr.write("\n")
-        sys.stderr.flush()
-    return show
