@@ -12,6 +12,7 @@ other), when the battery recorded it.
 from __future__ import annotations
 
 import numpy as np
+from tabulate import tabulate
 
 from jointbench.bench.campaign.visibility import VISIBILITY_BAND, visibility
 from jointbench.identification.effects import EFFECTS, NONE
@@ -121,20 +122,23 @@ def summary_lines(records: list[dict]) -> list[str]:
     labels, M = confusion(records)
     lines.append("confusion (rows: hidden, columns: first named; clean and single-effect cases)")
     short = [lab[:8] for lab in labels]
-    lines.append(f"{'':20s}" + "".join(f"{s:>9s}" for s in short))
-    lines += [f"{lab:20s}" + "".join(f"{v:9d}" for v in row) for lab, row in zip(labels, M)]
+    lines += tabulate([[lab, *row] for lab, row in zip(labels, M.tolist())], ["", *short],
+                      tablefmt="plain", colalign=("left", *("right",) * len(short)),
+                      disable_numparse=True).splitlines()
     singles = [r for r in records if r["kind"] == "single"]
     effects = [e for e in EFFECTS if any(r["effects"][0] == e for r in singles)]
     heads = [f"{lo * 100:g}-{hi * 100:g} %" if np.isfinite(hi) else f">= {lo * 100:g} %"
              for lo, hi in zip([0.0, *BINS], [*BINS, np.inf])]
-    lines += ["", "detection curve: named right / cases, by in-band visibility",
-              f"{'effect':20s}" + "".join(f"{h:>11s}" for h in heads) + "   found 95 % above"]
+    rows = []
     for e in effects:
         cells = {(lo, hi): f"{k}/{n}" for lo, hi, k, n in curve(records, e) if n}
-        row = "".join(f"{cells.get((lo, hi), '-'):>11s}"
-                      for lo, hi in zip([0.0, *BINS], [*BINS, np.inf]))
         v = found_above(records, e)
-        lines.append(f"{e:20s}{row}   {'not reached' if v is None else f'{100 * v:.1f} %'}")
+        rows.append([e, *(cells.get(b, "-") for b in zip([0.0, *BINS], [*BINS, np.inf])),
+                     "not reached" if v is None else f"{100 * v:.1f} %"])
+    lines += ["", "detection curve: named right / cases, by in-band visibility",
+              *tabulate(rows, ["effect", *heads, "found 95 % above"], tablefmt="plain",
+                        colalign=("left", *("right",) * len(heads), "left"),
+                        disable_numparse=True).splitlines()]
     for kind, what in (("single", "single-effect cases named right"),
                        ("clean", "clean logs with nothing named"),
                        ("pair", "two-effect cases with both named")):
