@@ -18,6 +18,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from tabulate import tabulate
 
 from jointbench.bench.sim.axes import build_experiment_model
 from jointbench.bench.sim.experiment import run_experiment
@@ -181,20 +182,21 @@ def result_text(r: TuneResult) -> str:
              f"{r.seeds} search + {r.seeds} validation experiments of {r.duration:g} s",
              f"objective: RMS over experiments and {', '.join(r.params)} of the relative error "
              "against truth [%]",
-             "", "search grid (rows wn [rad/s], columns Nd):",
-             f"{'wn':>8} " + "".join(f"{n:>6d} " for n in r.Nd_grid)]
+             "", "search grid (rows wn [rad/s], columns Nd):"]
     best = np.nanmin(r.objective)
-    for w, row in zip(r.wn_grid, r.objective):
-        cells = [("     -" if not math.isfinite(v) else f"{v:6.3f}") + ("*" if v == best else " ")
-                 for v in row]
-        lines.append(f"{w:>8.1f} " + "".join(cells))
-    lines += ["", f"{'setting':<34} {'wn':>8} {'Nd':>4} {'search %':>9} {'valid. %':>9}  "
-              + " ".join(f"{p + ' %':>7}" for p in r.params) + "  note"]
-    for c in r.candidates:
-        lines.append(f"{c.label:<34} {c.wn:>8.2f} {c.Nd:>4d} {c.search_rms_pct:>9.4f} "
-                     f"{c.validation_rms_pct:>9.4f}  "
-                     + " ".join(f"{c.validation_per_param[p]:>7.4f}" for p in r.params)
-                     + f"  {c.note}")
+    grid = [[f"{w:.1f}", *(("-" if not math.isfinite(v) else f"{v:.3f}") + ("*" if v == best
+                                                                            else "")
+                            for v in row)] for w, row in zip(r.wn_grid, r.objective)]
+    lines += tabulate(grid, ["wn", *(str(n) for n in r.Nd_grid)], tablefmt="plain",
+                      colalign=("right", *("left",) * len(r.Nd_grid)),
+                      disable_numparse=True).splitlines()
+    rows = [[c.label, f"{c.wn:.2f}", str(c.Nd), f"{c.search_rms_pct:.4f}",
+             f"{c.validation_rms_pct:.4f}", *(f"{c.validation_per_param[p]:.4f}" for p in r.params),
+             c.note] for c in r.candidates]
+    lines += ["", *tabulate(rows, ["setting", "wn", "Nd", "search %", "valid. %",
+                                   *(f"{p} %" for p in r.params), "note"], tablefmt="plain",
+                            colalign=("left", *("right",) * (4 + len(r.params)), "left"),
+                            disable_numparse=True).splitlines()]
     return "\n".join(lines)
 
 
