@@ -1,4 +1,4 @@
-"""Defaults: the paper's constants and the one chooser of the bandpass filter for a log.
+"""The filter of a log: the paper's constants and the one chooser of the bandpass filter.
 
 The paper's values (section 4: 350.87 Hz, wn = 176 rad/s, Nd = 26, f1 = 3.9 Hz) are the
 prototype's, and a default for the prototype only; every other log gets its filter from its
