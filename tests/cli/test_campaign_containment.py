@@ -26,6 +26,9 @@ import jointbench as jb
 from jointbench.bench.campaign.methods import BLIND_META, blind
 from jointbench.bench.campaign.settings import CampaignError
 
+# Each test starts processes and waits on deadlines: left out of `make check`.
+pytestmark = pytest.mark.slow
+
 GRACE_S = 20.0   # how long a killed process group may take to be gone on a loaded machine
 TINY = ["--runs", "1", "--duration", "5", "--id-models", "joint-motor", "--quiet"]
 

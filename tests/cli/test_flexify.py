@@ -69,6 +69,7 @@ def test_user_elements_untouched_and_convention(flexified):
         assert flex.numeric_data[flex.numeric_adr[nid]] == gear
 
 
+@pytest.mark.slow
 def test_survey_recovers_k_and_jm_and_diagnose_names_k(flexified, tmp_path, capsys):
     folder, out = flexified
     sv = tmp_path / "sv"

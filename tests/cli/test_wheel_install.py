@@ -14,6 +14,8 @@ import venv
 import zipfile
 from pathlib import Path
 
+import pytest
+
 import jointbench
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -23,6 +25,7 @@ def _run(args, **kw) -> subprocess.CompletedProcess:
     return subprocess.run(args, capture_output=True, text=True, check=False, **kw)
 
 
+@pytest.mark.slow
 def test_wheel_installs_and_runs(tmp_path):
     # a copy of the sources: setuptools' build/ folder stays out of the checkout
     src = tmp_path / "src"
