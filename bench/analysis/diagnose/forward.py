@@ -27,6 +27,7 @@ from jointbench.bench.effects import loop_effects_from_model, write_effects
 from jointbench.bench.effects.base import positive_part as _pos
 from jointbench.bench.sim import nominal as nominal_axes
 from jointbench.bench.sim.friction import timeconst_for_log
+from jointbench.bench.sim.controller import has_controller
 from jointbench.bench.sim.replay import ReplayError, replay
 from jointbench.identification.discrepancy import SEGMENTS
 from jointbench.identification.discrepancy import nominal as nominal_rows, predict, with_parameters
@@ -136,10 +137,11 @@ def add_forward_view(d: Diagnosis, say: Callable[[str], None],
     """Replay the nominal (unless `nominal_view` is its replay already) and (when an effect
     is named) the extended axis."""
     log = d.log
-    if log.q_ref is None or log.meta_float("kv") is None:
+    if log.q_ref is None or not has_controller(log):
         return dataclasses.replace(d, forward_note=(
-            "not replayed: the log has no q_ref column or no controller gains (kp, kv, ki) "
-            "in its metadata (docs/controller.md)"))
+            "not replayed: the log has no q_ref column or its metadata does not describe the "
+            "controller (the PI cascade's kp, kv, ki or a position loop's `controller` and "
+            "pid_kp..., docs/controller.md)"))
     fn = nominal_view
     try:
         if fn is None:
