@@ -255,17 +255,25 @@ def forward_scope(d: Diagnosis) -> ForwardScope:
     return ForwardScope(keep, True, f"the forward view judges {effect} where {how}")
 
 
-def write_models(d: Diagnosis, out: Path) -> list[Path]:
-    """nominal.xml and, when an effect is named, extended.xml (atomic writes)."""
+def write_models(d: Diagnosis, out: Path, failures: list[str] | None = None) -> list[Path]:
+    """nominal.xml and, when an effect is named, extended.xml (atomic writes), each only when
+    MuJoCo compiles it: a model it refuses (a link mass under mjMINVAL, a negative inertia) is
+    not written, and why goes into `failures` (the report says so instead of naming it)."""
     paths = []
-    try:
-        nominal_axes.write_xml(build_spec(d, extended=False), out / "nominal.xml")
-        paths.append(out / "nominal.xml")
-        if d.named is not None:
-            nominal_axes.write_xml(build_spec(d, extended=True), out / "extended.xml")
-            paths.append(out / "extended.xml")
-    except ValueError:
-        pass
+    for name, extended in (("nominal.xml", False), ("extended.xml", True)):
+        if extended and d.named is None:
+            continue
+        try:
+            nominal_axes.write_xml(build_spec(d, extended=extended), out / name)
+            paths.append(out / name)
+        except (ValueError, TypeError) as err:    # MuJoCo's compile errors are ValueError
+            if failures is not None:
+                failures.append(f"{name} not written: {err}".replace("\n", " "))
+            if not extended:
+                if failures is not None and d.named is not None:
+                    failures.append("extended.xml not written: the nominal axis it extends "
+                                    "cannot be built")
+                break
     return paths
 
 
