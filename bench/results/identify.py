@@ -23,6 +23,11 @@ if TYPE_CHECKING:
     import matplotlib.figure
 
 
+LOWER_BOUND = ("one run: its sigmas are this run's alone, a lower bound for the hardware (the "
+               "run-to-run spread of a real rig, remounting, temperature, wear, is not in them; "
+               "identify several runs, `jointbench identify A.csv B.csv ...`, to measure it)")
+
+
 @dataclass(frozen=True)
 class Estimate:
     """One identified physical parameter.
@@ -137,6 +142,8 @@ class Fit:
         """
         text = identify_text(self.source, self.log, self.result, self.truth, list(self.flags),
                              self.refined, self.debiased)
+        if self.truth is None:    # measured data: nothing but this run stands behind a sigma
+            text += f"\nnote: {LOWER_BOUND}"
         if self.validation is not None:
             text += "\n" + self.validation.text(units(self.log.prismatic)["offset"])
             text += "\n" + forward_text(self.forward, self.validate_source)
