@@ -15,6 +15,7 @@ the command line parses its arguments, calls these and prints the result.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from pathlib import Path
 from typing import Sequence
@@ -80,7 +81,7 @@ def simulate(model: str | os.PathLike = "prototype", joint: str | None = None, *
                           **options).log
 
 
-def import_log(file: str | os.PathLike, out: str | os.PathLike | None = None, *,
+def import_log(file: str | os.PathLike | list | tuple, out: str | os.PathLike | None = None, *,
                columns: dict[str, str] | None = None, units: dict[str, str] | None = None,
                gear_ratio: float | None = None,
                motor_side: Sequence[str] = ("q_m", "tau_m", "q_ref"),
@@ -93,14 +94,19 @@ def import_log(file: str | os.PathLike, out: str | os.PathLike | None = None, *,
 
     Parameters
     ----------
-    file : str or PathLike
-        The raw CSV: a header row, then one row of numbers per sample.
+    file : str or PathLike, or a list of them
+        The raw CSV (a header row, then one row of numbers per sample) or MATLAB .mat file
+        (v5 through scipy; v7.3 needs the extra [mat73]; identification/raw_sources.py).
+        A list: several files converted with the same options, all before any is written
+        (bench/api_import_many.py); `out` is then a folder, each log OUT/STEM.csv, and the
+        answer a list of ImportReport.
     out : str or PathLike, optional
         The log file to write (never the input; checked before reading); not written when
         None.
     columns : dict of str to str, optional
-        Log column -> raw column, e.g. {"t": "time_ms", "q_m": "motor_counts"} (default:
-        the raw columns already named t, q_m, q, tau_m, q_ref).
+        Log column -> raw column or an expression of raw columns, e.g. {"t": "time_ms",
+        "q": "theta-alpha", "tau_m": "-cur"} (default: the raw columns already named t, q_m,
+        q, tau_m, q_ref). Raw columns the map does not name are kept as extra columns.
     units : dict of str to str, optional
         Log column -> unit of the raw column (s|ms|us; rad|deg|rev|counts|m|mm|um;
         Nm|N|A|V).
@@ -135,10 +141,19 @@ def import_log(file: str | os.PathLike, out: str | os.PathLike | None = None, *,
     ValueError
         `out` is the input file or a file jointbench did not write.
     """
+    if isinstance(file, (list, tuple)):     # several files: bench.api_import_many
+        from jointbench.bench.api_import_many import import_many
+        return import_many(import_log, list(file), out, columns=columns, units=units,
+                           gear_ratio=gear_ratio, motor_side=motor_side,
+                           counts_per_turn=counts_per_turn,
+                           link_counts_per_turn=link_counts_per_turn,
+                           torque_constant=torque_constant, rate_hz=rate_hz, meta=meta,
+                           gains_side=gains_side, delimiter=delimiter)
     # argument checks: here, before any reading
     from jointbench.bench.output import check_file
-    from jointbench.identification.log_import import (LOG_COLUMNS, ImportSpec, convert,
-                                                      read_raw)
+    from jointbench.identification.log_import import LOG_COLUMNS, ImportSpec, convert
+    from jointbench.identification.raw_sources import (keep_unmapped, read_source,
+                                                       with_expressions)
 
     src = Path(file)
     target = None if out is None else Path(out)
@@ -146,15 +161,19 @@ def import_log(file: str | os.PathLike, out: str | os.PathLike | None = None, *,
         if src.exists() and target.exists() and target.resolve() == src.resolve():
             raise ValueError(f"--out {target}: is the input file; choose another name")
         check_file(target, "--out")
-    raw = read_raw(src, delimiter)
+    raw, skipped = read_source(src, delimiter)     # a CSV, or a .mat file
     if columns is None:
         columns = {c: c for c in LOG_COLUMNS if c in raw.header}
+    raw, columns = with_expressions(raw, columns, skipped)   # q=theta-alpha, tau_m=-cur
     spec = ImportSpec(columns=dict(columns), units=dict(units or {}), gear_ratio=gear_ratio,
                       motor_side=tuple(motor_side), counts_per_turn=counts_per_turn,
                       link_counts_per_turn=link_counts_per_turn,
                       torque_constant=torque_constant, rate_hz=rate_hz, meta=dict(meta or {}),
                       gains_side=gains_side)
-    result = convert(raw, spec)
+    result = keep_unmapped(convert(raw, spec), raw, columns)
+    if skipped:
+        result = dataclasses.replace(result, steps=result.steps + (
+            "left out of the .mat file: " + "; ".join(f"{k} ({v})" for k, v in skipped.items()),))
     if target is not None:
         write_log(result.log, target)
     return ImportReport(result, target)

@@ -23,13 +23,18 @@ META_OPTIONS = {"kp": "kp", "kv": "kv", "ki": "ki", "tau_max": "tau_max",
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """The options of `import`."""
-    p.add_argument("file", help="raw CSV file: a header row, then one row of numbers per "
-                                "sample (',' ';' tab or '|'; '#' lines skipped)")
-    p.add_argument("--out", required=True, help="log file to write (never the input)")
+    p.add_argument("file", nargs="+",
+                   help="raw CSV file: a header row, then one row of numbers per sample (',' "
+                        "';' tab or '|'; '#' lines skipped), or a MATLAB .mat file (its "
+                        "vectors are the columns); several: all converted, then written to "
+                        "the --out folder as STEM.csv")
+    p.add_argument("--out", required=True, help="log file to write (never the input); with "
+                                                "several files, a folder")
     p.add_argument("--map", metavar="COL=RAW,...",
-                   help="log column = raw column, e.g. t=time_ms,q_m=motor_counts,"
-                        "tau_m=current_A,q=link_deg,q_ref=ref_counts (default: the raw "
-                        "columns named t, q_m, q, tau_m, q_ref)")
+                   help="log column = raw column or an expression of raw columns (+ - * / "
+                        "and parentheses), e.g. t=time_ms,q_m=motor_counts,tau_m=current_A,"
+                        "q=link_deg,q_ref=ref_counts or q=theta-alpha,tau_m=-cur (default: the "
+                        "raw columns named t, q_m, q, tau_m, q_ref); unmapped columns are kept")
     p.add_argument("--units", metavar="COL=UNIT,...",
                    help="units of the raw columns: t in s|ms|us; q_m, q, q_ref in "
                         "rad|deg|rev|counts|m|mm|um; tau_m in Nm|N|A|V (default s, rad "
@@ -111,11 +116,15 @@ def run(args: argparse.Namespace) -> int:
     was done."""
     from jointbench.bench.api import import_log
 
-    report = import_log(args.file, args.out, **options(args))
-    for text in report.warnings:
-        print(f"jointbench import: warning: {text}", file=sys.stderr)
+    files = args.file[0] if len(args.file) == 1 else list(args.file)
+    answer = import_log(files, args.out, **options(args))
+    reports = answer if isinstance(answer, list) else [answer]
+    for report in reports:
+        for text in report.warnings:
+            print(f"jointbench import: warning: {text}", file=sys.stderr)
     if args.json:
-        print(json.dumps(report.to_json()))
+        print(json.dumps(reports[0].to_json() if len(reports) == 1 else
+                         [r.to_json() for r in reports]))
     else:
-        print(report.table())
+        print("\n\n".join(r.table() for r in reports))
     return 0
