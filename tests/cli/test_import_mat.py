@@ -107,3 +107,21 @@ def test_v73_without_h5py_names_the_extra(tmp_path, monkeypatch):
     with pytest.raises(LogError, match=r"\[mat73\]") as err:
         jb.import_log(path, columns=MAP)
     assert "v73.mat" in str(err.value)
+
+
+def test_v73_through_h5py(tmp_path):
+    """A v7.3 file is HDF5 behind a 512-byte MATLAB header; MATLAB stores an n-vector as a
+    1 x n dataset (column-major), which the reader transposes back."""
+    h5py = pytest.importorskip("h5py")
+    log = simulate_lab_rig(seed=5, duration=2.0)
+    path = tmp_path / "v73.mat"
+    with h5py.File(path, "w", userblock_size=512) as f:
+        for name, x in (("time", log.t), ("theta", log.extra["theta"]),
+                        ("alpha", log.extra["alpha"]), ("volts", log.extra["u"]),
+                        ("r", log.q_ref)):
+            f.create_dataset(name, data=np.asarray(x)[None, :])
+    with open(path, "r+b") as f:
+        f.write(b"MATLAB 7.3 MAT-file, Platform: GLNXA64".ljust(116, b" "))
+    rep = jb.import_log(path, columns=MAP)
+    assert np.allclose(rep.log.q, log.q, atol=1e-12)
+    assert np.allclose(rep.log.tau_m, log.tau_m, rtol=1e-9, atol=1e-15)
