@@ -89,7 +89,8 @@ def import_log(file: str | os.PathLike | list | tuple, out: str | os.PathLike | 
                link_counts_per_turn: float | None = None,
                torque_constant: float | None = None, rate_hz: float | None = None,
                meta: dict[str, str] | None = None, gains_side: str = "joint",
-               delimiter: str | None = None) -> ImportReport:
+               delimiter: str | None = None,
+               drive: dict[str, float] | None = None) -> ImportReport:
     """Convert a measured file into a jointbench log (`jointbench import`).
 
     Parameters
@@ -128,6 +129,10 @@ def import_log(file: str | os.PathLike | list | tuple, out: str | os.PathLike | 
         "motor": kv, ki, tau_max in `meta` are motor-side (x N^2, N^2, N).
     delimiter : str, optional
         Column separator (default: found from the header).
+    drive : dict of str to float, optional
+        A voltage drive's constants {"Kt", "R", "Ke", "eta"} (identification/voltage_drive.py)
+        for a torque column in V: tau_m = eta N Kt / R u, and the back-EMF damping
+        eta N^2 Kt Ke / R written as `back_emf_damping` (it is part of FVm).
 
     Returns
     -------
@@ -148,7 +153,7 @@ def import_log(file: str | os.PathLike | list | tuple, out: str | os.PathLike | 
                            counts_per_turn=counts_per_turn,
                            link_counts_per_turn=link_counts_per_turn,
                            torque_constant=torque_constant, rate_hz=rate_hz, meta=meta,
-                           gains_side=gains_side, delimiter=delimiter)
+                           gains_side=gains_side, delimiter=delimiter, drive=drive)
     # argument checks: here, before any reading
     from jointbench.bench.output import check_file
     from jointbench.identification.log_import import LOG_COLUMNS, ImportSpec, convert
@@ -165,12 +170,28 @@ def import_log(file: str | os.PathLike | list | tuple, out: str | os.PathLike | 
     if columns is None:
         columns = {c: c for c in LOG_COLUMNS if c in raw.header}
     raw, columns = with_expressions(raw, columns, skipped)   # q=theta-alpha, tau_m=-cur
+    meta = dict(meta or {})
+    if drive is not None:     # a voltage drive: its constants make the torque constant per V
+        from jointbench.identification.log import LogError
+        from jointbench.identification.voltage_drive import META_KEY, VoltageDrive
+        vd = VoltageDrive.parse(drive, str(src))
+        if (units or {}).get("tau_m") != "V" or torque_constant is not None:
+            raise LogError("--drive gives the torque per volt: the torque column needs "
+                           "--units tau_m=V and no --torque-constant", str(src))
+        torque_constant = vd.volt_to_torque()
+        N = gear_ratio if gear_ratio is not None and "tau_m" in motor_side else 1.0
+        meta.setdefault(META_KEY, f"{vd.back_emf_damping(N):.10g}")
     spec = ImportSpec(columns=dict(columns), units=dict(units or {}), gear_ratio=gear_ratio,
                       motor_side=tuple(motor_side), counts_per_turn=counts_per_turn,
                       link_counts_per_turn=link_counts_per_turn,
-                      torque_constant=torque_constant, rate_hz=rate_hz, meta=dict(meta or {}),
+                      torque_constant=torque_constant, rate_hz=rate_hz, meta=meta,
                       gains_side=gains_side)
     result = keep_unmapped(convert(raw, spec), raw, columns)
+    if drive is not None:
+        result = dataclasses.replace(result, steps=result.steps + (
+            f"voltage drive (Kt {vd.Kt:g}, R {vd.R:g}, Ke {vd.Ke:g}, eta {vd.eta:g}): tau_m = "
+            f"eta N Kt / R u; the back-EMF damping eta N^2 Kt Ke / R = {meta[META_KEY]} N m s/rad "
+            f"is not removed from the torque: it is part of FVm ({META_KEY})",))
     if skipped:
         result = dataclasses.replace(result, steps=result.steps + (
             "left out of the .mat file: " + "; ".join(f"{k} ({v})" for k, v in skipped.items()),))

@@ -54,6 +54,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--torque-constant", type=positive, metavar="KT",
                    help="torque constant in N m/A (N/A prismatic; or per V) for --units "
                         "tau_m=A or V")
+    p.add_argument("--drive", metavar="Kt=..,R=..,Ke=..[,eta=..]",
+                   help="a voltage drive's constants (N m/A, Ohm, V s/rad, efficiency) for "
+                        "--units tau_m=V: tau_m = eta N Kt / R u; the back-EMF damping "
+                        "eta N^2 Kt Ke / R stays in FVm and is written as back_emf_damping")
     p.add_argument("--rate", type=positive, metavar="HZ",
                    help="the drive's fixed sample rate: t rebuilt as k / rate (for rounded "
                         "time stamps), checked within half a period of the logged time")
@@ -108,7 +112,9 @@ def options(args: argparse.Namespace) -> dict:
                 counts_per_turn=args.counts_per_turn,
                 link_counts_per_turn=args.link_counts_per_turn,
                 torque_constant=args.torque_constant, rate_hz=args.rate, meta=meta,
-                gains_side=args.gains_side, delimiter=args.delimiter)
+                gains_side=args.gains_side, delimiter=args.delimiter,
+                drive=_pairs(args.drive, "--drive", "KEY=VALUE (e.g. Kt=0.00768,R=2.6,Ke=0.00768)")
+                if args.drive else None)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -142,6 +142,11 @@ class Fit:
         """
         text = identify_text(self.source, self.log, self.result, self.truth, list(self.flags),
                              self.refined, self.debiased)
+        from jointbench.identification.voltage_drive import fvm_note
+        if "FVm" in self.result.physical:
+            note = fvm_note(float(self.result.physical["FVm"]), self.log.meta)
+            if note:
+                text += f"\nnote: {note}"
         if self.truth is None:    # measured data: nothing but this run stands behind a sigma
             text += f"\nnote: {LOWER_BOUND}"
         if self.validation is not None:

@@ -125,3 +125,35 @@ def test_v73_through_h5py(tmp_path):
     rep = jb.import_log(path, columns=MAP)
     assert np.allclose(rep.log.q, log.q, atol=1e-12)
     assert np.allclose(rep.log.tau_m, log.tau_m, rtol=1e-9, atol=1e-15)
+
+
+def test_voltage_drive_constants_make_the_torque_and_name_the_back_emf(tmp_path):
+    """The lab rig's drive given by its catalogue constants: tau_m = eta N Kt / R u (the log's
+    own), the back-EMF damping eta N^2 Kt Ke / R written and reported inside FVm."""
+    log = _save(tmp_path / "run.mat")
+    r = LAB_RIG
+    rep = jb.import_log(tmp_path / "run.mat", tmp_path / "run.csv",
+                        columns={**MAP, "tau_m": "volts"}, units={"tau_m": "V"},
+                        gear_ratio=r.N, motor_side=("tau_m",),
+                        drive={"Kt": r.Kt, "R": r.R, "Ke": r.Ke,
+                               "eta": r.eta_gear * r.eta_motor},
+                        meta={"gravity": "0"})
+    assert np.allclose(rep.log.tau_m, log.tau_m, rtol=1e-9, atol=1e-15)
+    b = float(rep.log.meta["back_emf_damping"])
+    assert b == pytest.approx(r.back_emf_damping, rel=1e-9)
+    with pytest.raises(LogError, match="--units tau_m=V"):
+        jb.import_log(tmp_path / "run.mat", columns=MAP, drive={"Kt": 1, "R": 1, "Ke": 1})
+    with pytest.raises(LogError, match="--drive needs Ke"):
+        jb.import_log(tmp_path / "run.mat", columns=MAP, units={"tau_m": "V"},
+                      drive={"Kt": 1, "R": 1})
+
+
+
+def test_identify_reports_the_mechanical_fvm_of_a_voltage_drive():
+    from dataclasses import replace
+    log = simulate_lab_rig(seed=3, duration=20.0)
+    b = LAB_RIG.back_emf_damping
+    log = replace(log, meta={**log.meta, "back_emf_damping": f"{b:.10g}"})
+    text = jb.identify(log).table()
+    assert "holds the voltage drive's back-EMF damping" in text
+    assert "mechanical viscous friction" in text
