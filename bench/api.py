@@ -81,6 +81,19 @@ def simulate(model: str | os.PathLike = "prototype", joint: str | None = None, *
                           **options).log
 
 
+def _position_loop_checks(result):
+    """The import's replay check for a position loop's metadata (docs/controller.md section
+    3), which the conversion's check, written for the PI cascade's kp, kv, ki, does not know."""
+    from jointbench.bench.sim.controller import controller_from_log, describe, has_controller
+
+    log = result.log
+    if log.q_ref is None or "controller" not in log.meta or not has_controller(log):
+        return result
+    ok = f"replayable: q_ref and the controller ({describe(controller_from_log(log))})"
+    checks = tuple(ok if c.startswith("not replayable") else c for c in result.checks)
+    return dataclasses.replace(result, checks=checks)
+
+
 def import_log(file: str | os.PathLike | list | tuple, out: str | os.PathLike | None = None, *,
                columns: dict[str, str] | None = None, units: dict[str, str] | None = None,
                gear_ratio: float | None = None,
@@ -192,6 +205,11 @@ def import_log(file: str | os.PathLike | list | tuple, out: str | os.PathLike | 
             f"voltage drive (Kt {vd.Kt:g}, R {vd.R:g}, Ke {vd.Ke:g}, eta {vd.eta:g}): tau_m = "
             f"eta N Kt / R u; the back-EMF damping eta N^2 Kt Ke / R = {meta[META_KEY]} N m s/rad "
             f"is not removed from the torque: it is part of FVm ({META_KEY})",))
+    if src.suffix.lower() == ".mat":     # the CSV reader's first step names a delimiter
+        result = dataclasses.replace(result, steps=(
+            f"read {src}: MATLAB .mat, {len(raw.data)} samples, variables "
+            f"{', '.join(raw.header)}",) + result.steps[1:])
+    result = _position_loop_checks(result)
     if skipped:
         result = dataclasses.replace(result, steps=result.steps + (
             "left out of the .mat file: " + "; ".join(f"{k} ({v})" for k, v in skipped.items()),))

@@ -131,8 +131,9 @@ class Fit:
         """What the estimator chose and why (band, filter, model fallback)."""
         return tuple(self.result.notes)
 
-    def table(self) -> str:
-        """The text `jointbench identify` prints.
+    def table(self, *, one_run: bool = True) -> str:
+        """The text `jointbench identify` prints (`one_run` False: a run among several,
+        bench.results.runs, whose table leaves the single-run note to the pooled one).
 
         Returns
         -------
@@ -147,7 +148,7 @@ class Fit:
             note = fvm_note(float(self.result.physical["FVm"]), self.log.meta)
             if note:
                 text += f"\nnote: {note}"
-        if self.truth is None:    # measured data: nothing but this run stands behind a sigma
+        if one_run and self.truth is None:   # measured data: nothing but this run behind a sigma
             text += f"\nnote: {LOWER_BOUND}"
         if self.validation is not None:
             text += "\n" + self.validation.text(units(self.log.prismatic)["offset"])

@@ -107,7 +107,8 @@ class RunsFit:
 
     def table(self) -> str:
         """Each run's table, then the runs side by side and the pooled estimate."""
-        parts = [f"== run {nm} ==\n{f.table()}" for nm, f in zip(self.names, self.fits)]
+        parts = [f"== run {nm} ==\n{f.table(one_run=False)}"
+                 for nm, f in zip(self.names, self.fits)]
         keys = [k for k in REPORTED if k in self.pooled] + \
             [k for k in self.pooled if k not in REPORTED]
         head = ["parameter"] + list(self.names) + ["run sigma", "run-to-run sd", "ratio",
