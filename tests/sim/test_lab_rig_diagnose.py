@@ -49,3 +49,24 @@ def test_a_link_mass_mujoco_refuses_is_a_clear_error():
     with pytest.raises(ValueError, match="MuJoCo refuses"):
         nominal_axes.two_mass_axis(Jm=0.002, FVm=0.07, FSm=0.0, K=1.6, JL=0.0035, MY=-7e-13,
                                    timestep=0.002)
+
+
+def test_without_a_controller_the_motor_driven_view_runs():
+    """A vendor drive whose loop nobody knows: no controller metadata. The motor-driven view
+    (q_m drives the model) judges the nominal model: the truth leaves the encoders' and the
+    voltage noise's share, a stiffness 10 % off several times more."""
+    from dataclasses import replace as rep
+
+    from jointbench.identification.motor_driven import motor_driven_view
+
+    log = simulate_lab_rig(seed=9, duration=20.0)
+    bare = rep(log, meta={k: v for k, v in log.meta.items()
+                          if k not in ("controller", "pid_kp", "feedback")})
+    d = diagnose(bare)
+    assert d.forward_nominal is None and "motor-driven view" in d.forward_note
+    truth = {k: float(log.meta[f"truth_{k}"]) for k in
+             ("Jm", "FVm", "FSm", "K", "JL", "FV", "FS", "MX", "MY")}
+    good = motor_driven_view(log, truth, 8.0)
+    bad = motor_driven_view(log, {**truth, "K": 1.1 * truth["K"]}, 8.0)
+    assert bad.q_rms > 3 * good.q_rms and bad.tau_rel_pct > 3 * good.tau_rel_pct
+    assert good.q_rel_pct < 2.0

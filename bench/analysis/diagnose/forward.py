@@ -138,10 +138,10 @@ def add_forward_view(d: Diagnosis, say: Callable[[str], None],
     is named) the extended axis."""
     log = d.log
     if log.q_ref is None or not has_controller(log):
-        return dataclasses.replace(d, forward_note=(
-            "not replayed: the log has no q_ref column or its metadata does not describe the "
-            "controller (the PI cascade's kp, kv, ki or a position loop's `controller` and "
-            "pid_kp..., docs/controller.md)"))
+        note = ("not replayed: the log has no q_ref column or its metadata does not describe "
+                "the controller (the PI cascade's kp, kv, ki or a position loop's `controller` "
+                "and pid_kp..., docs/controller.md)")
+        return dataclasses.replace(d, forward_note=_motor_driven_note(d, note))
     fn = nominal_view
     try:
         if fn is None:
@@ -162,6 +162,22 @@ def add_forward_view(d: Diagnosis, say: Callable[[str], None],
     if fe is not None:
         d = dataclasses.replace(d, forward_note=forward_scope(d).note)
     return d
+
+
+def _motor_driven_note(d: Diagnosis, note: str) -> str:
+    """`note`, and the motor-driven view (identification.motor_driven: the measured q_m
+    drives the nominal model, no controller needed) when the log has q and the nominal is a
+    two-mass model."""
+    from jointbench.identification.motor_driven import motor_driven_view
+
+    p = d.nominal_parameters
+    if d.log.q is None or "K" not in p:
+        return note
+    try:
+        view = motor_driven_view(d.log, p, d.settings.decimated_cutoff_hz)
+    except ValueError as err:
+        return f"{note}; the motor-driven view did not run: {err}"
+    return f"{note}; {view.text()}"
 
 
 # A torque periodic in the motor angle (torque_ripple, amplitude A, period p) replayed with a

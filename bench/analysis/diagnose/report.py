@@ -180,6 +180,16 @@ def dumps(d: Diagnosis) -> str:
     return json.dumps(finite_json(d.to_json()), indent=2, allow_nan=False)
 
 
+def _controller(log) -> str:
+    """The controller the replay ran (docs/controller.md), in words."""
+    from jointbench.bench.sim.controller import controller_from_log, describe
+
+    try:
+        return describe(controller_from_log(log))
+    except ValueError:
+        return "controller"
+
+
 def summary_text(d: Diagnosis) -> str:
     """What `jointbench diagnose` prints: the ranking, the named cause and the gain."""
     inv = d.inverse
@@ -192,7 +202,8 @@ def summary_text(d: Diagnosis) -> str:
     if d.forward_nominal is not None:
         f = d.forward_nominal
         L.append(f"forward view, nominal: torque {f.tau_rel_pct:.2f} % RMS, q_m {f.q_m_rms:.3g} "
-                 "RMS" + (f", q {f.q_rms:.3g} RMS" if f.q_rms is not None else ""))
+                 "RMS" + (f", q {f.q_rms:.3g} RMS" if f.q_rms is not None else "")
+                 + f" (closed-loop replay under the log's {_controller(d.log)})")
     if d.forward_note:
         L.append(f"forward view: {d.forward_note}")
     L += ["", f"{'effect':20s} {'signif.':>7s} {'held-out %':>10s} {'t':>7s} "
