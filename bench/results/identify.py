@@ -132,8 +132,13 @@ class Fit:
         return tuple(self.result.notes)
 
     def table(self, *, one_run: bool = True) -> str:
-        """The text `jointbench identify` prints (`one_run` False: a run among several,
-        bench.results.runs, whose table leaves the single-run note to the pooled one).
+        """The text `jointbench identify` prints.
+
+        Parameters
+        ----------
+        one_run : bool
+            False: a run among several (bench.results.runs), whose table leaves the
+            single-run note to the pooled one.
 
         Returns
         -------
