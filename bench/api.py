@@ -25,13 +25,13 @@ from jointbench.bench.api_diagnose import diagnose
 from jointbench.bench.api_identify import identify
 from jointbench.bench.effects import HiddenEffect, parse_effects
 from jointbench.bench.results import (CampaignReport, DiagnosisResult, Estimate, Fit,
-                                      ImportReport, SurveyResult)
+                                      ImportReport, RunsFit, SurveyResult)
 from jointbench.bench.sim.experiment import run_experiment
 from jointbench.identification.log import Log, read_log, write_log
 
 __all__ = ["Estimate", "Fit", "DiagnosisResult", "CampaignReport", "SurveyResult",
            "ImportReport", "Log", "simulate", "identify", "diagnose", "campaign", "survey",
-           "import_log", "read_log", "write_log"]
+           "import_log", "read_log", "write_log", "RunsFit"]
 
 
 def simulate(model: str | os.PathLike = "prototype", joint: str | None = None, *,
@@ -103,7 +103,7 @@ def import_log(file: str | os.PathLike | list | tuple, out: str | os.PathLike | 
                torque_constant: float | None = None, rate_hz: float | None = None,
                meta: dict[str, str] | None = None, gains_side: str = "joint",
                delimiter: str | None = None,
-               drive: dict[str, float] | None = None) -> ImportReport:
+               drive: dict[str, float] | None = None) -> ImportReport | list[ImportReport]:
     """Convert a measured file into a jointbench log (`jointbench import`).
 
     Parameters
@@ -149,8 +149,8 @@ def import_log(file: str | os.PathLike | list | tuple, out: str | os.PathLike | 
 
     Returns
     -------
-    ImportReport
-        `log`, `warnings`; `table()`, `to_json()`.
+    ImportReport or list of ImportReport
+        `log`, `warnings`; `table()`, `to_json()` (a list for a list of files).
 
     Raises
     ------

@@ -110,9 +110,10 @@ def identify(log: LogLike | list[LogLike] | tuple[LogLike, ...], model: str = "a
 
     Returns
     -------
-    Fit
+    Fit or RunsFit
         `parameters` {name: Estimate(value, sigma, sigma_hac, unit)}, `warnings`, `notes`,
-        `flags`; `table()`, `to_json()`, `plot()`.
+        `flags`; `table()`, `to_json()`, `plot()`. For a list of logs a RunsFit: `fits`,
+        `pooled`, `notes`; `table()`, `to_json()`.
 
     Raises
     ------

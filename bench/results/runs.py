@@ -73,8 +73,18 @@ def pool(values: list[float], sigmas: list[float], names: list[str], unit: str =
 
 @dataclass(frozen=True)
 class RunsFit:
-    """Several runs of one axis: `fits` each run's Fit (in the order given), `names` their
-    names, `pooled` {parameter: Pooled} over the parameters every run identified."""
+    """Several runs of one axis identified together (`jointbench identify A.csv B.csv`).
+
+    Parameters
+    ----------
+    fits : tuple of Fit
+        Each run's identification, in the order given.
+    names : tuple of str
+        The runs' names (their file names, numbered when two are equal).
+    pooled : dict of str to Pooled
+        Per parameter every run identified: the pooled value and sigma, the Birge ratio,
+        the run-to-run standard deviation and the runs set apart (module docstring).
+    """
 
     fits: tuple[Fit, ...]
     names: tuple[str, ...]
@@ -82,6 +92,21 @@ class RunsFit:
 
     @classmethod
     def of(cls, fits: list[Fit], names: list[str]) -> "RunsFit":
+        """Pool the runs' fits.
+
+        Parameters
+        ----------
+        fits : list of Fit
+            Each run's identification.
+        names : list of str
+            Their names.
+
+        Returns
+        -------
+        RunsFit
+            The runs and, per parameter with a finite positive sigma in every run, the
+            pooled estimate.
+        """
         common = [k for k in fits[0].parameters if all(k in f.parameters for f in fits)]
         pooled = {}
         for k in common:
@@ -106,7 +131,13 @@ class RunsFit:
         return tuple(out)
 
     def table(self) -> str:
-        """Each run's table, then the runs side by side and the pooled estimate."""
+        """The text `jointbench identify A.csv B.csv ...` prints.
+
+        Returns
+        -------
+        str
+            Each run's table, then the runs side by side and the pooled estimate.
+        """
         parts = [f"== run {nm} ==\n{f.table(one_run=False)}"
                  for nm, f in zip(self.names, self.fits)]
         keys = [k for k in REPORTED if k in self.pooled] + \
@@ -129,8 +160,14 @@ class RunsFit:
         return "\n\n".join(parts) + "\n\n" + "\n".join(pooled)
 
     def to_json(self) -> dict:
-        """{"runs": [{"name", each run's identify JSON}], "pooled": {parameter: {...}},
-        "notes": [...]} (NaN as null)."""
+        """The `identify A.csv B.csv --json` object.
+
+        Returns
+        -------
+        dict
+            {"runs": [{"name", each run's identify JSON}], "pooled": {parameter: {...}},
+            "notes": [...]} (NaN as null).
+        """
         from jointbench.identification.output import finite_json
 
         return finite_json({
