@@ -17,6 +17,9 @@ q (`feedback`):
     I[k]     = I[k-1] + ki T e[k]
     D[k]     = kd (ff (q_ref[k] - q_ref[k-1]) - (y[k] - y[k-1])) / T
     tau_m[k] = clip(kp e[k] + I[k] + D[k], -tau_max, tau_max)
+
+A general discrete transfer function C(z) (section 3.3, `controller: TF`) runs as its
+difference equation on e[k] = q_ref[k] - y[k].
 """
 
 from __future__ import annotations
@@ -122,7 +125,95 @@ class PositionGains:
                                        else ")"))
 
 
-def controller_from_log(log: Log) -> "Gains | PositionGains":
+TF = "TF"   # a general discrete transfer function (section 3.3)
+
+
+@dataclass(frozen=True)
+class TransferGains:
+    """A position loop u = C(z) (q_ref - y) (docs/controller.md section 3.3): C(z) =
+    (b0 + b1 z^-1 + ...) / (a0 + a1 z^-1 + ...), `num` the b, `den` the a (a0 != 0),
+    tau_max [N m], `feedback` "q_m" or "q"."""
+
+    num: tuple[float, ...]
+    den: tuple[float, ...]
+    tau_max: float
+    feedback: str = "q_m"
+
+    def __post_init__(self):
+        if not self.num or not self.den or self.den[0] == 0:
+            raise ValueError("a transfer function needs a numerator and a denominator whose "
+                             "first coefficient is not zero")
+        if self.feedback not in FEEDBACK:
+            raise ValueError(f"feedback must be one of {', '.join(FEEDBACK)}, got "
+                             f"{self.feedback!r}")
+
+    @classmethod
+    def from_control(cls, sys, tau_max: float, feedback: str = "q_m") -> "TransferGains":
+        """From a discrete python-control transfer function (`control.tf(num, den, dt)`,
+        SISO, coefficients in descending powers of z, padded to z^-1 powers)."""
+        num = [float(x) for x in sys.num[0][0]]
+        den = [float(x) for x in sys.den[0][0]]
+        num = [0.0] * (len(den) - len(num)) + num   # b z^-d: the delay of a lower degree
+        return cls(tuple(num), tuple(den), tau_max, feedback)
+
+    def to_meta(self) -> dict[str, str]:
+        return {"controller": TF, "feedback": self.feedback,
+                "tau_max": format_meta_number(self.tau_max),
+                "tf_num": " ".join(format_meta_number(x) for x in self.num),
+                "tf_den": " ".join(format_meta_number(x) for x in self.den)}
+
+    def describe(self) -> str:
+        return (f"transfer function on {self.feedback} (num {list(self.num)}, den "
+                f"{list(self.den)} in powers of z^-1, tau_max {self.tau_max:g})")
+
+
+class TransferController:
+    """State of a transfer-function loop: a0 u[k] = sum b_i e[k-i] - sum_{i>=1} a_i u[k-i],
+    clipped at tau_max (the state keeps the unclipped output: no anti-windup). At k = 0 the
+    past errors equal e[0] and the past outputs the logged initial torque tau0 (at rest)."""
+
+    def __init__(self, gains: TransferGains, T: float, tau0: float = 0.0):
+        self.gains = gains
+        self.tau0 = float(tau0)
+        self.link = gains.feedback == "q"
+        self._e: list[float] | None = None
+        self._u: list[float] = []
+        self.saturated = 0
+
+    def step(self, q_m: float, q_ref: float, q: float | None = None) -> float:
+        g = self.gains
+        y = q if self.link else q_m
+        if y is None:
+            raise ValueError("a loop on q needs the link position")
+        e = q_ref - y
+        if self._e is None:
+            self._e = [e] * (len(g.num) - 1)
+            self._u = [self.tau0] * (len(g.den) - 1)
+        es = [e] + self._e
+        u = (sum(b * x for b, x in zip(g.num, es))
+             - sum(a * x for a, x in zip(g.den[1:], self._u))) / g.den[0]
+        self._e = es[:len(g.num) - 1]
+        self._u = ([u] + self._u)[:len(g.den) - 1]
+        if abs(u) > g.tau_max:
+            self.saturated += 1
+            return math.copysign(g.tau_max, u)
+        return u
+
+
+def _coefficients(log: Log, key: str) -> tuple[float, ...]:
+    text = log.meta.get(key, "").replace(",", " ").split()
+    try:
+        values = tuple(float(x) for x in text)
+    except ValueError:
+        raise LogError(f"metadata '{key}': not a list of numbers: {log.meta.get(key)!r}",
+                       log.path) from None
+    if not values or not all(math.isfinite(v) for v in values):
+        raise LogError(f"cannot replay: the metadata of a TF loop lacks {key} (numbers "
+                       "separated by spaces, docs/controller.md section 3.3)", log.path)
+    return values
+
+
+def controller_from_log(log: Log) -> "Gains | PositionGains | TransferGains":
     """The controller a log's metadata describes (docs/controller.md): the PI cascade
     (`Gains.from_log`) when `controller` is absent or "PI cascade", else a position loop
     whose gains pid_kp (and pid_ki, pid_kd as its kind names them) and tau_max must be
@@ -130,9 +221,19 @@ def controller_from_log(log: Log) -> "Gains | PositionGains":
     kind = log.meta.get("controller", CASCADE).strip()
     if kind.lower() in (CASCADE.lower(), "cascade"):
         return Gains.from_log(log)
+    if kind.upper() == TF:
+        tau_max = log.meta_float("tau_max")
+        if tau_max is None:
+            raise LogError("cannot replay: the metadata of a TF loop lacks tau_max", log.path)
+        feedback = log.meta.get("feedback", "q_m").strip()
+        try:
+            return TransferGains(_coefficients(log, "tf_num"), _coefficients(log, "tf_den"),
+                                 tau_max, feedback)
+        except ValueError as err:
+            raise LogError(f"metadata of a TF loop: {err}", log.path) from None
     if kind.upper() not in POSITION_KINDS:
         raise LogError(f"metadata 'controller': {kind!r} is none of {CASCADE!r}, "
-                       f"{', '.join(POSITION_KINDS)} (docs/controller.md)", log.path)
+                       f"{', '.join(POSITION_KINDS)}, {TF} (docs/controller.md)", log.path)
     kind = kind.upper()
     need = ["tau_max"] + [key for gain, key in POSITION_KEYS.items()
                           if gain == "kp" or gain[1].upper() in kind]
@@ -196,16 +297,20 @@ class PositionController:
         return tau
 
 
-def make_controller(gains: "Gains | PositionGains", T: float, tau0: float = 0.0):
-    """The stepped controller for `gains`: PIController (the cascade) or PositionController."""
+def make_controller(gains: "Gains | PositionGains | TransferGains", T: float,
+                    tau0: float = 0.0):
+    """The stepped controller for `gains`: PIController (the cascade), PositionController or
+    TransferController."""
     if isinstance(gains, PositionGains):
         return PositionController(gains, T, tau0)
+    if isinstance(gains, TransferGains):
+        return TransferController(gains, T, tau0)
     return PIController(gains, T, tau0)
 
 
-def describe(gains: "Gains | PositionGains") -> str:
+def describe(gains: "Gains | PositionGains | TransferGains") -> str:
     """One line naming the controller and its gains (what a replay report prints)."""
-    if isinstance(gains, PositionGains):
+    if isinstance(gains, (PositionGains, TransferGains)):
         return gains.describe()
     ff = "on" if gains.velocity_feedforward else "off"
     return (f"{CASCADE} (kp {gains.kp:g}, kv {gains.kv:g}, ki {gains.ki:g}, tau_max "

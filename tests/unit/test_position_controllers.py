@@ -97,3 +97,31 @@ def test_incomplete_position_loop_metadata_is_named():
     with pytest.raises(LogError, match="'feedback'"):
         controller_from_log(_log({"controller": "P", "pid_kp": "1", "tau_max": "2",
                                   "feedback": "q_ref"}))
+
+
+def test_transfer_function_from_python_control_is_the_pi_loop():
+    """C(z) = (kp + ki T - kp z^-1) / (1 - z^-1) is the PI loop of section 3.1, written as
+    python-control's discrete transfer function."""
+    control = pytest.importorskip("control")
+    from jointbench.bench.sim.controller import TransferGains
+
+    kp, ki = 2.0, 5.0
+    sys_ = control.tf([kp + ki * T, -kp], [1.0, -1.0], T)
+    tf = TransferGains.from_control(sys_, tau_max=100.0)
+    pi = PositionGains("PI", kp=kp, ki=ki, tau_max=100.0)
+    got = control_law(np.array(Q_M), np.array(R), tf, T, 0.7)
+    want = control_law(np.array(Q_M), np.array(R), pi, T, 0.7)
+    assert got == pytest.approx(want, rel=1e-12, abs=1e-15)
+    log = _log(tf.to_meta())
+    assert controller_from_log(log) == tf and has_controller(log)
+
+
+def test_transfer_function_metadata_errors_are_named():
+    with pytest.raises(LogError, match="lacks tf_den"):
+        controller_from_log(_log({"controller": "TF", "tf_num": "1 2", "tau_max": "3"}))
+    with pytest.raises(LogError, match="'tf_num': not a list"):
+        controller_from_log(_log({"controller": "TF", "tf_num": "1 x", "tf_den": "1",
+                                  "tau_max": "3"}))
+    with pytest.raises(LogError, match="first coefficient"):
+        controller_from_log(_log({"controller": "TF", "tf_num": "1", "tf_den": "0 1",
+                                  "tau_max": "3"}))
