@@ -25,13 +25,14 @@ from jointbench.bench.api_diagnose import diagnose
 from jointbench.bench.api_identify import identify
 from jointbench.bench.effects import HiddenEffect, parse_effects
 from jointbench.bench.results import (CampaignReport, DiagnosisResult, Estimate, Fit,
-                                      ImportReport, RunsFit, SurveyResult)
+                                      ImportReport, RunsDiagnosis, RunsFit,
+                                      SurveyResult)
 from jointbench.bench.sim.experiment import run_experiment
 from jointbench.identification.log import Log, read_log, write_log
 
 __all__ = ["Estimate", "Fit", "DiagnosisResult", "CampaignReport", "SurveyResult",
            "ImportReport", "Log", "simulate", "identify", "diagnose", "campaign", "survey",
-           "import_log", "read_log", "write_log", "RunsFit"]
+           "import_log", "read_log", "write_log", "RunsFit", "RunsDiagnosis"]
 
 
 def simulate(model: str | os.PathLike = "prototype", joint: str | None = None, *,
