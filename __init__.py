@@ -21,7 +21,7 @@ __version__ = "0.2.0"
 
 _API = ("simulate", "identify", "diagnose", "campaign", "survey", "import_log", "read_log",
         "write_log", "Log", "Fit", "Estimate", "DiagnosisResult", "CampaignReport",
-        "SurveyResult", "ImportReport")
+        "SurveyResult", "ImportReport", "RunsFit", "RunsDiagnosis")
 __all__ = ["__version__", *_API]
 
 

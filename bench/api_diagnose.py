@@ -5,22 +5,24 @@ DiagnosisResult (bench.results.diagnose)."""
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 from pathlib import Path
 from typing import Callable
 
 from jointbench.bench.api_args import check
 from jointbench.bench.api_log import LogLike, as_log, log_name
 from jointbench.bench.results.diagnose import DiagnosisResult
+from jointbench.bench.results.diagnose_runs import RunsDiagnosis
 from jointbench.identification.log import Log
 
 
-def diagnose(log: LogLike, forward: bool = True,
+def diagnose(log: LogLike | list[LogLike] | tuple[LogLike, ...], forward: bool = True,
              progress: Callable[[str], None] | None = None, *,
              model: str | os.PathLike | None = None, joint: str | None = None,
              config: dict[str, float] | None = None, validate: LogLike | None = None,
              disturbance_column: str | None = None, disturbance_gain: float = 1.0,
              disturbance_at: str = "link", out: str | os.PathLike | None = None,
-             warn: Callable[[str], None] | None = None) -> DiagnosisResult:
+             warn: Callable[[str], None] | None = None) -> DiagnosisResult | RunsDiagnosis:
     """What the simulation gets wrong on a log (`jointbench diagnose`).
 
     Against the log's own nominal model: the candidate effects, the named causes, the
@@ -30,8 +32,11 @@ def diagnose(log: LogLike, forward: bool = True,
 
     Parameters
     ----------
-    log : Log, str or PathLike
-        The log, or its file (docs/log-format.md).
+    log : Log, str or PathLike, or a list or tuple of them
+        The log, or its file (docs/log-format.md). A list: several runs of one axis, each
+        diagnosed and cross-validated on the next (bench.results.diagnose_runs); a cause is
+        named for the axis only where every run names it; the answer is a RunsDiagnosis
+        (only `forward`, `progress` and `warn` apply).
     forward : bool
         Run the closed-loop replays (forward view); False: `--no-forward`.
     progress : callable, optional
@@ -58,8 +63,10 @@ def diagnose(log: LogLike, forward: bool = True,
 
     Returns
     -------
-    DiagnosisResult
-        `named_cause`, `warnings`, `files`; `table()`, `to_json()`, `write()`.
+    DiagnosisResult or RunsDiagnosis
+        `named_cause`, `warnings`, `files`; `table()`, `to_json()`, `write()`. For a list
+        of logs a RunsDiagnosis: `results`, `supported`, `unsupported`; `table()`,
+        `to_json()`.
 
     Raises
     ------
@@ -76,6 +83,21 @@ def diagnose(log: LogLike, forward: bool = True,
     >>> d = jb.diagnose(jb.simulate(seed=1, effect="backlash=0.002"))   # doctest: +SKIP
     >>> d.named_cause                                                   # doctest: +SKIP
     """
+    if isinstance(log, (list, tuple)):
+        if len(log) < 2:
+            raise ValueError("diagnose over runs needs at least two logs")
+        if any(x is not None for x in (model, joint, config, validate, disturbance_column,
+                                       out)):
+            raise ValueError("several runs: each is cross-validated on the next; --model, "
+                             "--validate, --disturbance-column and --out apply to one log")
+        loaded = [as_log(x) for x in log]
+        names = [log_name(x, lg) for x, lg in zip(log, loaded)]
+        n = len(loaded)
+        results = tuple(replace(diagnose(lg, forward, progress, validate=loaded[(i + 1) % n],
+                                         warn=warn),
+                                source=names[i], validate_source=names[(i + 1) % n])
+                        for i, lg in enumerate(loaded))
+        return RunsDiagnosis(results, tuple(names))
     check("diagnose", locals())
     from jointbench.identification.log import LogError
     from jointbench.identification.saturation import clipping_warnings

@@ -10,6 +10,7 @@ from typing import Callable
 from jointbench.bench.api_args import check
 from jointbench.bench.api_log import LogLike, as_log, log_name
 from jointbench.bench.results.identify import Fit
+from jointbench.bench.results.runs import RunsFit
 from jointbench.identification.checks.fit import estimate_flags
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.identify import identify as identify_log
@@ -45,7 +46,7 @@ def _filter_settings(log: Log, wn: float | None, order: int, Nd: int | None, cha
     return settings, choice.first_mode
 
 
-def identify(log: LogLike, model: str = "auto", settings: FilterSettings | None = None, *,
+def identify(log: LogLike | list[LogLike] | tuple[LogLike, ...], model: str = "auto", settings: FilterSettings | None = None, *,
              wn: float | None = None, fc_hz: float | None = None, order: int = 4,
              Nd: int | None = None, skip: int = 0, zoh: bool = True,
              filter_torque: bool = True, stencil: int | None = None,
@@ -54,13 +55,16 @@ def identify(log: LogLike, model: str = "auto", settings: FilterSettings | None 
              friction_timeconst: float | None = None, validate: LogLike | None = None,
              progress: Callable[[str], None] | None = None,
              replica_progress: Callable[[int, int], None] | None = None,
-             warn: Callable[[str], None] | None = None) -> Fit:
+             warn: Callable[[str], None] | None = None) -> Fit | RunsFit:
     """Identify the axis parameters of a log (`jointbench identify`; paper eqs. 13, 18-20, 6).
 
     Parameters
     ----------
-    log : Log, str or PathLike
-        The log, or its file (docs/log-format.md).
+    log : Log, str or PathLike, or a list or tuple of them
+        The log, or its file (docs/log-format.md). A list: several runs of one axis, each
+        identified with the same options, then pooled (bench.results.runs: the run-to-run
+        spread beside each run's sigma, a pooled sigma that covers it); the answer is then
+        a RunsFit.
     model : str
         joint-motor (eq. 13), motor-only (eqs. 18-20), motor-only-printed (eq. 18 as
         printed), rigid (eq. 6 with q = qm) or auto (joint-motor when q is logged, else
@@ -107,9 +111,10 @@ def identify(log: LogLike, model: str = "auto", settings: FilterSettings | None 
 
     Returns
     -------
-    Fit
+    Fit or RunsFit
         `parameters` {name: Estimate(value, sigma, sigma_hac, unit)}, `warnings`, `notes`,
-        `flags`; `table()`, `to_json()`, `plot()`.
+        `flags`; `table()`, `to_json()`, `plot()`. For a list of logs a RunsFit: `fits`,
+        `pooled`, `notes`; `table()`, `to_json()`.
 
     Raises
     ------
@@ -129,6 +134,19 @@ def identify(log: LogLike, model: str = "auto", settings: FilterSettings | None 
     >>> fit = jb.identify(jb.simulate(seed=1, duration=20))   # doctest: +SKIP
     >>> fit.parameters["K"].sigma_hac                         # doctest: +SKIP
     """
+    if isinstance(log, (list, tuple)):
+        if not log:
+            raise ValueError("identify: no log given")
+        opts = dict(wn=wn, fc_hz=fc_hz, order=order, Nd=Nd, skip=skip, zoh=zoh,
+                    filter_torque=filter_torque, stencil=stencil, f1_hz=f1_hz, refine=refine,
+                    refine_max_nfev=refine_max_nfev, debias=debias,
+                    friction_timeconst=friction_timeconst, validate=validate,
+                    progress=progress, replica_progress=replica_progress, warn=warn)
+        fits = [identify(one, model, settings, **opts) for one in log]
+        names = [f.source for f in fits]
+        if len(set(names)) < len(names):
+            names = [f"{i + 1}:{nm}" for i, nm in enumerate(names)]
+        return RunsFit.of(fits, names)
     check("identify", locals())
     from jointbench.identification.physical import InversionError
     from jointbench.identification.saturation import clipping_warnings

@@ -211,9 +211,56 @@ def measure_first_mode(log: Log) -> FirstMode:
     (`_cross_checked`): when the two disagree, `sigma_hz` covers both."""
     mode = _measure(log, motor=log.q is None)
     if log.q is None:
-        return mode
-    return _cross_checked(mode, _measure(log, motor=True)) if mode.found else \
+        return _excitation_checked(log, mode)
+    mode = _cross_checked(mode, _measure(log, motor=True)) if mode.found else \
         _from_motor(log, mode)
+    return _excitation_checked(log, _with_link_mode(log, mode))
+
+
+def _with_link_mode(log: Log, mode: FirstMode) -> FirstMode:
+    """`mode`, or the first mode from the link-over-motor response q / q_m
+    (identification.link_mode) where that one decides: when the peak responses give none,
+    when the link and motor peaks disagree (`_cross_checked`: one is biased and nothing else
+    says which), when only the motor response has a peak (a motor side damped by a voltage
+    drive's back-EMF or a stiff loop flattens the locked peak and moves it to its damped
+    frequency, while q / q_m keeps the link mode sharp), or when
+    the excitation stops under f1 (the locked peak outside it, the link mode below it). The
+    note says which response decided and what the others gave."""
+    from jointbench.identification.link_mode import excitation_top_hz, link_mode_first_mode
+
+    disagree = "DISAGREES" in mode.note
+    beyond = mode.found and excitation_top_hz(log) < mode.f1_hz
+    if mode.found and mode.method.startswith("link q/tau_m") and not (disagree or beyond):
+        return mode
+    alt = link_mode_first_mode(log)
+    if alt is None:
+        return mode
+    f1, sigma, method, note = alt
+    motor_only = mode.found and not mode.method.startswith("link q/tau_m")
+    if mode.found and not (disagree or beyond or motor_only):
+        return mode
+    why = ("the excitation stops under the peaks' f1" if beyond else
+           "the link and motor peaks disagree" if disagree else
+           "only the motor response has a peak" if motor_only else
+           "the peak responses show no mode")
+    other = (f"{mode.method} gave {mode.f1_hz:.4g} +- {mode.sigma_hz:.2g} Hz" if mode.found
+             else f"{mode.method}: {mode.note}")
+    return FirstMode(f1, sigma, f"{method} (decided: {why})", True, f"{note}; {other}")
+
+
+def _excitation_checked(log: Log, mode: FirstMode) -> FirstMode:
+    """`mode` with a note when the excitation stops under EXCITATION_MARGIN times f1 (the
+    band of section 3.2 reaches about 1.4 f1: its top then holds little excitation)."""
+    from jointbench.identification.link_mode import EXCITATION_MARGIN, excitation_top_hz
+
+    if not mode.found:
+        return mode
+    top = excitation_top_hz(log)
+    if not top < EXCITATION_MARGIN * mode.f1_hz:
+        return mode
+    return replace(mode, note=f"{mode.note}; the excitation stops near f1: 99 % of its "
+                   f"derivative's power lies under {top:.3g} Hz, {top / mode.f1_hz:.2g} f1 "
+                   f"(under {EXCITATION_MARGIN:g} f1)")
 
 
 def _cross_checked(link: FirstMode, motor: FirstMode) -> FirstMode:

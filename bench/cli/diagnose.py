@@ -25,7 +25,10 @@ def library(args: argparse.Namespace) -> tuple[str, ...]:
 
 def add_arguments(g: argparse.ArgumentParser) -> None:
     """The options of `diagnose`."""
-    g.add_argument("file", help="log file (docs/log-format.md)")
+    g.add_argument("file", nargs="+",
+                   help="log file (docs/log-format.md); several: runs of one axis, each "
+                        "diagnosed and cross-validated on the next, a cause named only where "
+                        "every run names it")
     g.add_argument("--out", help="folder for figures, report.md, nominal.xml, extended.xml "
                                  "(with --model: corrected.xml, extended.xml, report.md)")
     g.add_argument("--model", metavar="ROBOT.xml",
@@ -80,7 +83,15 @@ def run(args: argparse.Namespace) -> int:
     from jointbench.bench.api import diagnose
 
     _check_options(args)
-    d = diagnose(args.file, forward=not args.no_forward, progress=_progress(args),
+    if len(args.file) > 1:
+        if args.model or args.validate or args.out:
+            raise UsageError("several files: each run is cross-validated on the next; "
+                             "--model, --validate and --out apply to one file")
+        runs = diagnose(list(args.file), forward=not args.no_forward,
+                        progress=_progress(args), warn=_warn)
+        print(json.dumps(runs.to_json(), allow_nan=False) if args.json else runs.table())
+        return 0
+    d = diagnose(args.file[0], forward=not args.no_forward, progress=_progress(args),
                  model=args.model, joint=args.joint, config=parse_config(args.config),
                  validate=args.validate, disturbance_column=args.disturbance_column,
                  disturbance_gain=args.disturbance_gain, disturbance_at=args.disturbance_at,

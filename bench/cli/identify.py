@@ -15,7 +15,9 @@ LIBRARY = ("jointbench.bench.api",)
 
 def add_arguments(i: argparse.ArgumentParser) -> None:
     """The options of `identify`."""
-    i.add_argument("file", help="log file (docs/log-format.md)")
+    i.add_argument("file", nargs="+",
+                   help="log file (docs/log-format.md); several: runs of one axis, each "
+                        "identified, then pooled (the run-to-run spread beside each run's sigma)")
     i.add_argument("--model", default="auto",
                    choices=("joint-motor", "motor-only", "motor-only-printed", "rigid", "auto"))
     i.add_argument("--wn", type=positive, help="Butterworth frequency in rad/s")
@@ -115,7 +117,8 @@ def run(args: argparse.Namespace) -> int:
 
     _check_options(args)
     _check_filter_options(args)
-    fit = identify(args.file, args.model, wn=args.wn, fc_hz=args.fc, order=args.order,
+    files = args.file[0] if len(args.file) == 1 else list(args.file)
+    fit = identify(files, args.model, wn=args.wn, fc_hz=args.fc, order=args.order,
                    Nd=args.decimate, skip=args.skip, zoh=not args.no_zoh,
                    filter_torque=not args.no_torque_filter, stencil=args.stencil,
                    f1_hz=args.f1, refine=args.refine, refine_max_nfev=args.refine_max_nfev,

@@ -23,14 +23,19 @@ META_OPTIONS = {"kp": "kp", "kv": "kv", "ki": "ki", "tau_max": "tau_max",
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """The options of `import`."""
-    p.add_argument("file", help="raw CSV file: a header row, then one row of numbers per "
-                                "sample (',' ';' tab or '|'; '#' lines skipped); or a ROS bag "
-                                "(.db3, .mcap, a rosbag2 folder, .bag)")
-    p.add_argument("--out", required=True, help="log file to write (never the input)")
+    p.add_argument("file", nargs="+",
+                   help="raw CSV file: a header row, then one row of numbers per sample (',' "
+                        "';' tab or '|'; '#' lines skipped), a MATLAB .mat file (its vectors "
+                        "are the columns), or a ROS bag (.db3, .mcap, a rosbag2 folder, .bag); "
+                        "several files: all converted, then written to the --out folder as "
+                        "STEM.csv")
+    p.add_argument("--out", required=True, help="log file to write (never the input); with "
+                                                "several files, a folder")
     p.add_argument("--map", metavar="COL=RAW,...",
-                   help="log column = raw column, e.g. t=time_ms,q_m=motor_counts,"
-                        "tau_m=current_A,q=link_deg,q_ref=ref_counts (default: the raw "
-                        "columns named t, q_m, q, tau_m, q_ref)")
+                   help="log column = raw column or an expression of raw columns (+ - * / "
+                        "and parentheses), e.g. t=time_ms,q_m=motor_counts,tau_m=current_A,"
+                        "q=link_deg,q_ref=ref_counts or q=theta-alpha,tau_m=-cur (default: the "
+                        "raw columns named t, q_m, q, tau_m, q_ref); unmapped columns are kept")
     p.add_argument("--units", metavar="COL=UNIT,...",
                    help="units of the raw columns: t in s|ms|us; q_m, q, q_ref in "
                         "rad|deg|rev|counts|m|mm|um; tau_m in Nm|N|A|V (default s, rad "
@@ -50,6 +55,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--torque-constant", type=positive, metavar="KT",
                    help="torque constant in N m/A (N/A prismatic; or per V) for --units "
                         "tau_m=A or V")
+    p.add_argument("--drive", metavar="Kt=..,R=..,Ke=..[,eta=..]",
+                   help="a voltage drive's constants (N m/A, Ohm, V s/rad, efficiency) for "
+                        "--units tau_m=V: tau_m = eta N Kt / R u; the back-EMF damping "
+                        "eta N^2 Kt Ke / R stays in FVm and is written as back_emf_damping")
     p.add_argument("--rate", type=positive, metavar="HZ",
                    help="the drive's fixed sample rate: t rebuilt as k / rate (for rounded "
                         "time stamps), checked within half a period of the logged time")
@@ -114,7 +123,9 @@ def options(args: argparse.Namespace) -> dict:
                 counts_per_turn=args.counts_per_turn,
                 link_counts_per_turn=args.link_counts_per_turn,
                 torque_constant=args.torque_constant, rate_hz=args.rate, meta=meta,
-                gains_side=args.gains_side, delimiter=args.delimiter)
+                gains_side=args.gains_side, delimiter=args.delimiter,
+                drive=_pairs(args.drive, "--drive", "KEY=VALUE (e.g. Kt=0.00768,R=2.6,Ke=0.00768)")
+                if args.drive else None)
 
 
 def spec_from_args(args: argparse.Namespace, header: tuple[str, ...]):
@@ -124,6 +135,8 @@ def spec_from_args(args: argparse.Namespace, header: tuple[str, ...]):
 
     kwargs = options(args)
     kwargs.pop("delimiter")
+    if kwargs.pop("drive", None) is not None:
+        raise UsageError("--drive applies to a table or a .mat file, not to a bag")
     if kwargs["columns"] is None:
         kwargs["columns"] = {c: c for c in LOG_COLUMNS if c in header}
     return ImportSpec(**kwargs)
@@ -135,14 +148,19 @@ def run(args: argparse.Namespace) -> int:
     from jointbench.bench.api import import_log
     from jointbench.identification.bag_import import is_bag
 
-    if is_bag(args.file):
+    if len(args.file) == 1 and is_bag(args.file[0]):
         from jointbench.bench.cli.import_bag import run_bag
+        args.file = args.file[0]
         return run_bag(args, spec_from_args(args, ()))
-    report = import_log(args.file, args.out, **options(args))
-    for text in report.warnings:
-        print(f"jointbench import: warning: {text}", file=sys.stderr)
+    files = args.file[0] if len(args.file) == 1 else list(args.file)
+    answer = import_log(files, args.out, **options(args))
+    reports = answer if isinstance(answer, list) else [answer]
+    for report in reports:
+        for text in report.warnings:
+            print(f"jointbench import: warning: {text}", file=sys.stderr)
     if args.json:
-        print(json.dumps(report.to_json()))
+        print(json.dumps(reports[0].to_json() if len(reports) == 1 else
+                         [r.to_json() for r in reports]))
     else:
-        print(report.table())
+        print("\n\n".join(r.table() for r in reports))
     return 0

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import mujoco
 
 from jointbench.bench.sim.axes import build_experiment_model
-from jointbench.bench.sim.controller import Gains
+from jointbench.bench.sim.controller import controller_from_log, describe
 from jointbench.bench.sim.nominal import compile_axis, for_log
 from jointbench.bench.sim.replay import ReplayResult, forward_errors, replay
 from jointbench.identification.identify import identify
@@ -70,7 +70,7 @@ def replay_log_file(path, model: str | None = None, joint: str | None = None,
     if log.q_ref is None:
         raise LogError("cannot replay: the log has no column 'q_ref' (the reference the "
                        "controller tracked)", log.path, column="q_ref")
-    gains = Gains.from_log(log)
+    gains = controller_from_log(log)
     notes: list[str] = []
     if model is None:
         ident = identify(log, identify_model)
@@ -94,11 +94,9 @@ def replay_log_file(path, model: str | None = None, joint: str | None = None,
 def format_report(rep: ReplayReport) -> str:
     """The forward comparison as text (what `jointbench simulate --replay` prints)."""
     log, e = rep.log, rep.errors
-    g = Gains.from_log(log)
     pu, fu = e["position_unit"], e["torque_unit"]
     lines = [f"replayed {log.path}: {len(log)} samples at {log.sample_rate_hz:g} Hz in closed "
-             f"loop (docs/controller.md: kp {g.kp:g}, kv {g.kv:g}, ki {g.ki:g}, tau_max "
-             f"{g.tau_max:g}, velocity feed-forward {'on' if g.velocity_feedforward else 'off'}) "
+             f"loop (docs/controller.md: {describe(controller_from_log(log))}) "
              f"on {rep.model}, axis {rep.axis}"]
     if rep.parameters:
         lines.append("model: " + ", ".join(f"{k} = {v:.6g}" for k, v in rep.parameters.items()))

@@ -6,9 +6,11 @@ objects and prints these.
 
 from jointbench.bench.results.campaign import CampaignReport
 from jointbench.bench.results.diagnose import DiagnosisResult
+from jointbench.bench.results.diagnose_runs import RunsDiagnosis
 from jointbench.bench.results.identify import Estimate, Fit
 from jointbench.bench.results.import_log import ImportReport
+from jointbench.bench.results.runs import RunsFit
 from jointbench.bench.results.survey import SurveyResult
 
 __all__ = ["Estimate", "Fit", "DiagnosisResult", "CampaignReport", "SurveyResult",
-           "ImportReport"]
+           "ImportReport", "RunsFit", "RunsDiagnosis"]

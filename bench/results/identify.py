@@ -24,6 +24,11 @@ if TYPE_CHECKING:
     import matplotlib.figure
 
 
+LOWER_BOUND = ("one run: its sigmas are this run's alone, a lower bound for the hardware (the "
+               "run-to-run spread of a real rig, remounting, temperature, wear, is not in them; "
+               "identify several runs, `jointbench identify A.csv B.csv ...`, to measure it)")
+
+
 @dataclass(frozen=True)
 class Estimate:
     """One identified physical parameter.
@@ -127,8 +132,14 @@ class Fit:
         """What the estimator chose and why (band, filter, model fallback)."""
         return tuple(self.result.notes)
 
-    def table(self) -> str:
+    def table(self, *, one_run: bool = True) -> str:
         """The text `jointbench identify` prints.
+
+        Parameters
+        ----------
+        one_run : bool
+            False: a run among several (bench.results.runs), whose table leaves the
+            single-run note to the pooled one.
 
         Returns
         -------
@@ -138,6 +149,13 @@ class Fit:
         """
         text = identify_text(self.source, self.log, self.result, self.truth, list(self.flags),
                              self.refined, self.debiased)
+        from jointbench.identification.voltage_drive import fvm_note
+        if "FVm" in self.result.physical:
+            note = fvm_note(float(self.result.physical["FVm"]), self.log.meta)
+            if note:
+                text += f"\nnote: {note}"
+        if one_run and self.truth is None:   # measured data: nothing but this run behind a sigma
+            text += f"\nnote: {LOWER_BOUND}"
         if self.validation is not None:
             text += "\n" + self.validation.text(units(self.log.prismatic)["offset"])
             text += "\n" + forward_text(self.forward, self.validate_source)

@@ -2,7 +2,8 @@
 
 Per control tick k (period T, docs/controller.md):
   1. the encoders sample the motor and link positions (quantised by `Sensors`);
-  2. the controller (`PIController`) computes tau_m[k] from the motor encoder and q_ref[k];
+  2. the controller (`make_controller`: the PI cascade or a position loop, docs/controller.md)
+     computes tau_m[k] from the encoders and q_ref[k];
   3. a disturbance, when given, adds to tau_m[k] (at the motor) or goes into qfrc_applied
      (at the link);
   4. the rotor receives tau_m[k] + torque noise (+ bench-loop effects of the rotor state),
@@ -22,7 +23,7 @@ import mujoco
 import numpy as np
 
 from jointbench.bench.effects import LoopEffects
-from jointbench.bench.sim.controller import Gains, PIController
+from jointbench.bench.sim.controller import Gains, PositionGains, make_controller
 from jointbench.bench.sim.sensors import Sensors
 from jointbench.models import Axis
 
@@ -95,7 +96,8 @@ def first_warning(data: mujoco.MjData) -> tuple[str, int] | None:
     return None
 
 
-def run_loop(model: mujoco.MjModel, data: mujoco.MjData, axis: Axis, gains: Gains,
+def run_loop(model: mujoco.MjModel, data: mujoco.MjData, axis: Axis,
+             gains: Gains | PositionGains,
              period: float, tau0: float, q_ref: Sequence[float], *, substeps: int = 1,
              sensors: Sensors | None = None, seed: int = 0, loop: LoopEffects | None = None,
              disturbance: Sequence[float] | None = None, disturbance_at: str = "link",
@@ -112,7 +114,7 @@ def run_loop(model: mujoco.MjModel, data: mujoco.MjData, axis: Axis, gains: Gain
     n = len(q_ref)
     quant_m, quant_l = sensors.motor_quantizer(), sensors.link_quantizer()
     noise = sensors.torque_noise(np.random.default_rng(seed), n).tolist()
-    ctrl = PIController(gains, period, tau0)
+    ctrl = make_controller(gains, period, tau0)
     q_m, q, tau = np.empty(n), np.empty(n), np.empty(n)
     q_m_true, q_true, tau_app = np.empty(n), np.empty(n), np.empty(n)
     qpos, qvel, ctrl_arr, qfrc = data.qpos, data.qvel, data.ctrl, data.qfrc_applied
@@ -138,7 +140,8 @@ def run_loop(model: mujoco.MjModel, data: mujoco.MjData, axis: Axis, gains: Gain
         r_k = refs[k]
         if abs(r_k - meas_m) > track_limit:
             checks.lost_track(k, r_k - meas_m)
-        u = ctrl.step(meas_m, r_k)
+        meas_l = quant_l(ql_k)
+        u = ctrl.step(meas_m, r_k, meas_l)
         if abs(u) >= torque_limit:
             checks.saturated(k, u)
         if dist is not None:
@@ -151,7 +154,7 @@ def run_loop(model: mujoco.MjModel, data: mujoco.MjData, axis: Axis, gains: Gain
             applied += loop.torque(qm_k, qvel[dm])
         if abs(applied) > ctrl_limit:
             clamped += 1
-        q_m[k], q[k], tau[k] = meas_m, quant_l(ql_k), u
+        q_m[k], q[k], tau[k] = meas_m, meas_l, u
         q_m_true[k], q_true[k], tau_app[k] = qm_k, ql_k, applied
         ctrl_arr[act] = applied
         step(model, data, substeps)

@@ -42,6 +42,7 @@ from jointbench.models import Axis, ModelStructureError, find_axes
 SOLREF_FRICTION = (0.002, 1.0)
 SOLIMP_FRICTION = (0.99, 0.999, 0.001)
 ROTOR_MASS = 1e-6           # the nearly massless body carrying an armature (README)
+MJ_MINVAL = 1e-15           # MuJoCo's mjMINVAL: a moving body's mass and inertia must exceed it
 ROTOR_INERTIA = 1e-9
 AXIS_DIR = (0.0, 1.0, 0.0)  # hinge axis y, as the prototype (gravity torque of eq. 7 in x-z)
 SLIDE_DIR = (1.0, 0.0, 0.0)  # slide axis x: horizontal, no gravity along a prismatic axis
@@ -178,6 +179,11 @@ def two_mass_axis(Jm: float, FVm: float, FSm: float, K: float, JL: float, FV: fl
     if M2 > 0:
         # m |c|^2 = M2 / m = JL / 2: half the inertia from the offset mass, half about the com
         m = 2.0 * M2 / JL
+        if not m > MJ_MINVAL:
+            raise ValueError(f"MX = {MX:.3g}, MY = {MY:.3g} kg m give the link a mass "
+                             f"2 (MX^2 + MY^2) / JL = {m:.3g} kg, which MuJoCo refuses (at "
+                             f"most {MJ_MINVAL:g}): a first moment this small is zero (not "
+                             "identifiable) or the gravity is off")
         _inertial(link, m, JL / 2, (-MX / m, 0.0, -MY / m))
     else:
         _inertial(link, 1.0, JL)

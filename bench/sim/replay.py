@@ -1,7 +1,8 @@
 """Closed-loop replay of a logged experiment on a MuJoCo axis (forward simulation).
 
 The log's reference q_ref is tracked again by the controller its metadata describes
-(docs/controller.md, `bench.controller.PIController` with `Gains.from_log`), on any model
+(docs/controller.md: the PI cascade or a P/PD/PI/PID position loop,
+`bench.sim.controller.controller_from_log`), on any model
 that follows the axis convention (a nominal axis from `bench.nominal`, a shipped or user
 MJCF through `bench.axes.build_experiment_model`). Per sample k (period T of the log):
   1. the motor position q_m[k] is measured as it is (no noise, no quantisation);
@@ -26,7 +27,7 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
-from jointbench.bench.sim.controller import Gains
+from jointbench.bench.sim.controller import controller_from_log
 from jointbench.bench.sim.friction import plant_meta
 from jointbench.bench.sim.loop import LoopChecks, first_warning, run_loop
 from jointbench.bench.sim.nominal import static_link_position
@@ -153,7 +154,7 @@ def replay(model: mujoco.MjModel, axis: Axis, log: Log, disturbance: np.ndarray 
     if log.q_ref is None:
         raise LogError("cannot replay: the log has no column 'q_ref' (the reference the "
                        "controller tracked)", log.path, column="q_ref")
-    gains = Gains.from_log(log)
+    gains = controller_from_log(log)
     _check_tau0(tau0, float(gains.tau_max))
     if substeps < 1:
         raise ValueError(f"substeps must be >= 1, got {substeps}")

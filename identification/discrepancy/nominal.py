@@ -69,12 +69,16 @@ def _d4(sig: Signals, xdd: np.ndarray) -> np.ndarray:
 
 
 def solve(W: np.ndarray, y: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, float]:
-    """Row-weighted least squares with column scaling: X and the weighted RSS."""
+    """Row-weighted least squares with column scaling: X and the weighted RSS. A column that
+    is zero (a term the data does not excite, such as gravity on a horizontal axis) is not
+    identifiable: its parameter is exactly 0, not the rounding of a minimum-norm solution."""
     Ww, yw = W * w[:, None], y * w
     scale = np.linalg.norm(Ww, axis=0)
-    scale[scale == 0] = 1.0
-    X, *_ = np.linalg.lstsq(Ww / scale, yw, rcond=None)
-    X = X / scale
+    live = scale > 0
+    X = np.zeros(W.shape[1])
+    if live.any():
+        Xl, *_ = np.linalg.lstsq(Ww[:, live] / scale[live], yw, rcond=None)
+        X[live] = Xl / scale[live]
     r = yw - Ww @ X
     return X, float(r @ r)
 

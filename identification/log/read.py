@@ -372,12 +372,13 @@ def read_log(path: str | os.PathLike, max_bytes: int | None = None) -> Log:
 
 def unit_warnings(log: Log) -> list[str]:
     """Warnings (not errors) about units: a metadata rate that differs from the rate of `t`
-    (`rate_warnings`), revolute positions that look like degrees, i.e. that span more than a
+    (`rate_warnings`), revolute measured positions (q_m, q; not q_ref, which a low-gain
+    position loop makes large by design) that look like degrees, i.e. that span more than a
     turn or lie more than two turns from zero (docs/log-format.md: radians)."""
     if log.prismatic:
         return rate_warnings(log)
     odd = []
-    for name in ("q_m", "q", "q_ref"):
+    for name in ("q_m", "q"):     # measured: a reference may span turns by design
         x = getattr(log, name)
         if x is None:
             continue

@@ -26,6 +26,7 @@ OPTIONAL_COLUMNS = ("q", "q_ref")
 # Metadata the analyses read as numbers: key -> must the value be positive?
 NUMERIC_META = {"sample_rate_hz": True, "gravity": False, "kp": False, "kv": False,
                 "ki": False, "tau_max": True, "gear_ratio": True, PLANT_STEPS_KEY: True,
+                "pid_kp": False, "pid_ki": False, "pid_kd": False,
                 PLANT_TIMECONST_KEY: False}
 BOOLEAN_META = ("velocity_feedforward",)
 # Metadata the replays read as numbers that cannot be negative (Sensors.from_log): a noise
@@ -37,7 +38,9 @@ NONNEGATIVE_META = ("torque_noise_std", "motor_encoder_resolution_rad",
 META_UNITS = {"sample_rate_hz": ("Hz",), "gravity": ("m/s^2", "m/s2", "m s^-2", "m/s²"),
               "kp": ("1/s", "s^-1"), "kv": ("N m s/rad", "N s/m"),
               "ki": ("N m/rad", "N/m"), "tau_max": ("N m", "N"), "gear_ratio": (),
-              PLANT_STEPS_KEY: (), PLANT_TIMECONST_KEY: ("s",)}
+              PLANT_STEPS_KEY: (), PLANT_TIMECONST_KEY: ("s",),
+              "pid_kp": ("N m/rad", "N/m"), "pid_ki": ("N m/(rad s)", "N m/rad/s", "N/(m s)"),
+              "pid_kd": ("N m s/rad", "N s/m")}
 # The metadata rate is used as it is when it agrees with `t` to this relative precision
 # (the precision of the written time stamps); otherwise the rate comes from `t`.
 RATE_AGREEMENT = 1e-6

@@ -10,10 +10,12 @@ figure of MuJoCo alone.
 
 from jointbench.testing.battery_runner import BATTERY_FAMILIES, INDEP_PLACES, IndepRunner
 from jointbench.testing.hidden_effects import Hidden, parse_hidden
-from jointbench.testing.simulator import (FAMILIES, AxisFamily, Reference, default_reference,
+from jointbench.testing.simulator import (FAMILIES, LAB_RIG, AxisFamily, LabRig, PositionLoop,
+                                          Reference, default_reference, simulate_lab_rig,
                                           default_substeps, energy, frictionless, open_loop,
                                           simulate)
 
 __all__ = ["BATTERY_FAMILIES", "FAMILIES", "INDEP_PLACES", "AxisFamily", "Hidden", "IndepRunner",
            "Reference", "default_reference", "default_substeps", "energy", "frictionless",
-           "open_loop", "parse_hidden", "simulate"]
+           "open_loop", "parse_hidden", "simulate", "LAB_RIG", "LabRig", "PositionLoop",
+           "simulate_lab_rig"]

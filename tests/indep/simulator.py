@@ -391,3 +391,207 @@ def _run(family: AxisFamily, reference: Reference, gains: Gains, seed: int,
         x = step(x, tau[k] + w)
     return {"t": t, "q_m": q_m, "q": q, "tau": tau, "q_ref": q_ref,
             "saturated": ctrl.saturated}
+
+
+# --- The lab rig: a voltage-driven rotary flexible joint under a proportional position loop --
+
+
+@dataclass(frozen=True)
+class LabRig:
+    """A lab rotary flexible joint: a DC servo behind a gearbox of ratio `N` (no backlash)
+    turns a hub; an arm rides on the hub on springs; the axis is horizontal (no gravity torque).
+
+    The drive is a voltage: the rotor torque, joint side, is
+
+        tau = eta N Kt (u - Ke N qm') / R = g_u u - B_emf qm',
+        g_u = eta N Kt / R [N m/V],   B_emf = eta N^2 Kt Ke / R [N m s/rad],
+
+    (eta = eta_gear eta_motor), so the back-EMF is a viscous damping on the motor side, heavy
+    beside the mechanical one: the log's tau_m is g_u u (the command times the catalogue
+    constant) and the back-EMF is part of FVm (`truth_FVm` = FVm_mech + B_emf,
+    `truth_FVm_back_emf` = B_emf). Encoders of `counts` per turn read the servo output angle
+    theta = qm (joint side) and the spring deflection alpha = qm - q; the log's q is
+    theta - alpha (both quantised), and the columns theta, alpha and u are kept as they are.
+    `family` holds the mechanics with FVm = FVm_mech + B_emf (the plant of eqs. 5-6)."""
+
+    Jm: float = 0.0020          # kg m^2, servo and gear, joint side
+    JL: float = 0.0035          # kg m^2, hub and arm
+    K: float = 1.6              # N m/rad, the springs
+    FVm_mech: float = 0.004     # N m s/rad, gear and bearings, joint side
+    FSm: float = 0.004          # N m, Coulomb friction of the servo, joint side
+    FV: float = 0.0015          # N m s/rad, light link damping
+    N: float = 70.0             # gear ratio
+    Kt: float = 7.68e-3         # N m/A, torque constant
+    Ke: float = 7.68e-3         # V s/rad, back-EMF constant
+    R: float = 2.6              # Ohm, armature resistance
+    eta_gear: float = 0.9
+    eta_motor: float = 0.69
+    u_max: float = 10.0         # V, the amplifier's limit
+    counts: float = 4096.0      # counts per turn of each encoder
+    voltage_noise_std: float = 0.02   # V, white noise on the applied voltage
+
+    @property
+    def volt_to_torque(self) -> float:
+        """g_u = eta N Kt / R [N m/V]."""
+        return self.eta_gear * self.eta_motor * self.N * self.Kt / self.R
+
+    @property
+    def back_emf_damping(self) -> float:
+        """B_emf = eta N^2 Kt Ke / R [N m s/rad], joint side."""
+        return self.volt_to_torque * self.N * self.Ke
+
+    @property
+    def family(self) -> AxisFamily:
+        g = self.volt_to_torque
+        return AxisFamily("lab_rig", "lab rotary flexible joint, voltage drive, P loop",
+                          Jm=self.Jm, JL=self.JL, K=self.K,
+                          FVm=self.FVm_mech + self.back_emf_damping, FSm=self.FSm,
+                          FV=self.FV, FS=0.0, tau_max=g * self.u_max,
+                          torque_noise_std=g * self.voltage_noise_std,
+                          motor_counts_per_turn=self.counts, link_counts_per_turn=self.counts,
+                          gear_ratio=self.N)
+
+    @property
+    def link_mode_hz(self) -> float:
+        """The link mode sqrt(K / JL) / 2 pi [Hz]: the resonance of q / q_m."""
+        return math.sqrt(self.K / self.JL) / TWO_PI
+
+
+@dataclass(frozen=True)
+class Multisine:
+    """A random-phase multisine: `components` frequencies spread logarithmically over
+    f_lo-f_hi [Hz], equal amplitudes scaled to an RMS of `rms` [rad or V], phases uniform from
+    the seed, faded in and out by raised cosines of `taper` [s]."""
+
+    duration: float
+    f_lo: float = 0.025
+    f_hi: float = 10.0
+    rms: float = 0.5
+    components: int = 80
+    taper: float = 1.0
+
+    def __call__(self, t: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        f = self.f_lo * (self.f_hi / self.f_lo) ** np.linspace(0.0, 1.0, self.components)
+        phase = rng.uniform(0.0, TWO_PI, self.components)
+        a = self.rms * math.sqrt(2.0 / self.components)
+        x = a * np.sin(TWO_PI * np.outer(t, f) + phase).sum(axis=1)
+        fade = np.clip(np.minimum(t, self.duration - t) / self.taper, 0.0, 1.0)
+        return x * 0.5 * (1.0 - np.cos(np.pi * fade))
+
+    def describe(self) -> str:
+        return (f"random-phase multisine {self.f_lo:g}-{self.f_hi:g} Hz, {self.components} "
+                f"log-spaced components, RMS {self.rms:g}, {self.duration:g} s, taper "
+                f"{self.taper:g} s")
+
+
+@dataclass(frozen=True)
+class PositionLoop:
+    """docs/controller.md section 3, written here again from its text: a `kind` P, PD, PI or
+    PID loop on `feedback` ("q_m" or "q") with kp [N m/rad], ki [N m/(rad s)], kd
+    [N m s/rad]; `feedforward`: the derivative acts on the error, else on the measurement."""
+
+    kind: str = "P"
+    kp: float = 0.0
+    ki: float = 0.0
+    kd: float = 0.0
+    feedback: str = "q_m"
+    feedforward: bool = False
+
+    def meta(self, tau_max: float) -> dict[str, str]:
+        out = {"controller": self.kind, "feedback": self.feedback, "pid_kp": _fmt(self.kp),
+               "tau_max": _fmt(tau_max),
+               "velocity_feedforward": "true" if self.feedforward else "false"}
+        if "I" in self.kind:
+            out["pid_ki"] = _fmt(self.ki)
+        if "D" in self.kind:
+            out["pid_kd"] = _fmt(self.kd)
+        return out
+
+    def law(self, T: float) -> Callable[[float, float, float], float]:
+        """tau(r, y) per tick; y[-1] = y[0], r[-1] = r[0], I[-1] = 0 (the rig starts at rest
+        with no torque)."""
+        state = {"prev": None, "I": 0.0}
+
+        def tau(r: float, y: float) -> float:
+            y_prev, r_prev = state["prev"] if state["prev"] is not None else (y, r)
+            state["prev"] = (y, r)
+            state["I"] += self.ki * T * (r - y)
+            d = ((r - r_prev) if self.feedforward else 0.0) - (y - y_prev)
+            return self.kp * (r - y) + state["I"] + self.kd * d / T
+
+        return tau
+
+
+LAB_RIG = LabRig()
+LAB_RIG_RATE = 500.0    # Hz
+LAB_RIG_KP = 1.0        # V/rad, the proportional position loop u = Kp (r - theta)
+
+
+def simulate_lab_rig(rig: LabRig = LAB_RIG, seed: int = 1, duration: float = 40.0,
+                     closed_loop: bool = True, *, kp_volt: float = LAB_RIG_KP,
+                     reference: Multisine | None = None, loop: PositionLoop | None = None,
+                     sample_rate_hz: float = LAB_RIG_RATE) -> Log:
+    """One run of the lab rig as a jointbench log (docs/log-format.md).
+
+    Closed loop: u[k] = clip(Kp (r[k] - theta[k]), +-u_max) with Kp = `kp_volt` [V/rad] on
+    the measured servo angle, r a random-phase multisine (default 0.025-10 Hz, RMS 0.5 rad);
+    the metadata describes it as docs/controller.md's P loop on q_m with pid_kp = g_u Kp
+    [N m/rad] and tau_max = g_u u_max. `loop`: another position loop (its torque
+    command sent as u = tau / g_u) in place of the lab's. Open loop: u is the multisine itself (RMS 1 V), and
+    the log has no q_ref nor controller. The voltage noise adds to the applied voltage, not to
+    the logged command. The plant is eqs. (5)-(6) with the back-EMF in FVm (`LabRig`),
+    integrated by RK4 as `simulate`. Same arguments, the same log bit for bit."""
+    family = rig.family
+    T = 1.0 / sample_rate_hz
+    g = rig.volt_to_torque
+    if reference is None:
+        reference = Multisine(duration, rms=0.5 if closed_loop else 1.0)
+    n = int(round(duration * sample_rate_hz)) + 1
+    t = np.arange(n) * T
+    rng = np.random.default_rng(seed)
+    r = reference(t, rng)
+    noise = rng.normal(0.0, rig.voltage_noise_std, n)
+    n_sub = default_substeps(family, sample_rate_hz)
+    step = make_stepper(family, 0.0, T, n_sub)
+    quant = _quantiser(rig.counts)
+    x: State = (0.0, 0.0, 0.0, 0.0)
+    if loop is None:
+        loop = PositionLoop("P", kp=g * kp_volt)
+    law = loop.law(T)
+    theta, alpha, u = np.empty(n), np.empty(n), np.empty(n)
+    saturated = 0
+    for k in range(n):
+        theta[k], alpha[k] = quant(x[0]), quant(x[0] - x[1])
+        y = theta[k] if loop.feedback == "q_m" else theta[k] - alpha[k]
+        v = law(r[k], y) / g if closed_loop else r[k]
+        if abs(v) > rig.u_max:
+            saturated += 1
+            v = math.copysign(rig.u_max, v)
+        u[k] = v
+        x = step(x, g * (v + noise[k]))
+    meta = {"sample_rate_hz": _fmt(sample_rate_hz), "gravity": "0",
+            "joint": "lab_rig",
+            "source": "jointbench tests/indep_sim.py: numpy lab rig (voltage drive), no MuJoCo",
+            "seed": str(seed), "substeps": str(n_sub), "integrator": "RK4 (fixed step, numpy)",
+            "coulomb_smoothing_rad_s": _fmt(family.v_s),
+            "excitation": reference.describe() + (" (reference r [rad])" if closed_loop
+                                                  else " (voltage u [V])"),
+            "saturated_samples": str(saturated),
+            "motor_encoder_resolution_rad": f"{TWO_PI / rig.counts if rig.counts else 0.0:.6g}",
+            "link_encoder_resolution_rad": f"{TWO_PI / rig.counts if rig.counts else 0.0:.6g}",
+            "torque_noise_std": f"{g * rig.voltage_noise_std:.6g}",
+            "drive": (f"voltage: tau_m = {g:.6g} N m/V x u; back-EMF damping "
+                      f"{rig.back_emf_damping:.6g} N m s/rad is part of FVm"),
+            "gear_ratio": _fmt(rig.N)}
+    if closed_loop:
+        meta.update(loop.meta(g * rig.u_max))
+    else:
+        meta["controller_note"] = "open loop: u is the excitation"
+    for key, value in family.truth().items():
+        meta[f"truth_{key}"] = _fmt(value)
+    meta["truth_MX"] = meta["truth_MY"] = "0"
+    meta["truth_FVm_back_emf"] = _fmt(rig.back_emf_damping)
+    meta["truth_link_mode_hz"] = _fmt(rig.link_mode_hz)
+    return Log(t=t, q_m=theta, tau_m=g * u, q=theta - alpha,
+               q_ref=r if closed_loop else None,
+               extra={"theta": theta, "alpha": alpha, "u": u}, meta=meta)

@@ -212,6 +212,9 @@ def test_degrees_warning():
     assert "reaches 90.1" in unit_warnings(offset)[0]
     linear = Log(t=t, q_m=np.degrees(rad), tau_m=t, meta={"axis": "prismatic"})
     assert unit_warnings(linear) == []
+    # a low-gain P loop's reference spans turns by design: the measured positions decide
+    big_ref = Log(t=t, q_m=rad, tau_m=t, q=rad, q_ref=40 * rad, path="p_loop.csv")
+    assert unit_warnings(big_ref) == []
 
 
 def test_atomic_write_interrupted_leaves_old_content_and_no_temporary(tmp_path, monkeypatch):

@@ -20,7 +20,8 @@ LAYERS = (("jointbench.identification", "jointbench.models"),
           ("jointbench.bench.analysis", "jointbench.bench.campaign", "jointbench.bench.present",
            "jointbench.bench.demo", "jointbench.bench.results", "jointbench.bench.api_log",
            "jointbench.bench.api_identify", "jointbench.bench.api_diagnose",
-           "jointbench.bench.api_campaign", "jointbench.bench.api", "jointbench.bench.api_args"),
+           "jointbench.bench.api_campaign", "jointbench.bench.api_import_many",
+           "jointbench.bench.api", "jointbench.bench.api_args"),
           ("jointbench.bench.cli",),
           ("jointbench.testing",))
 

@@ -27,6 +27,7 @@ from jointbench.bench.effects import loop_effects_from_model, write_effects
 from jointbench.bench.effects.base import positive_part as _pos
 from jointbench.bench.sim import nominal as nominal_axes
 from jointbench.bench.sim.friction import timeconst_for_log
+from jointbench.bench.sim.controller import has_controller
 from jointbench.bench.sim.replay import ReplayError, replay
 from jointbench.identification.discrepancy import SEGMENTS
 from jointbench.identification.discrepancy import nominal as nominal_rows, predict, with_parameters
@@ -136,10 +137,11 @@ def add_forward_view(d: Diagnosis, say: Callable[[str], None],
     """Replay the nominal (unless `nominal_view` is its replay already) and (when an effect
     is named) the extended axis."""
     log = d.log
-    if log.q_ref is None or log.meta_float("kv") is None:
-        return dataclasses.replace(d, forward_note=(
-            "not replayed: the log has no q_ref column or no controller gains (kp, kv, ki) "
-            "in its metadata (docs/controller.md)"))
+    if log.q_ref is None or not has_controller(log):
+        note = ("not replayed: the log has no q_ref column or its metadata does not describe "
+                "the controller (the PI cascade's kp, kv, ki or a position loop's `controller` "
+                "and pid_kp..., docs/controller.md)")
+        return dataclasses.replace(d, forward_note=_motor_driven_note(d, note))
     fn = nominal_view
     try:
         if fn is None:
@@ -160,6 +162,22 @@ def add_forward_view(d: Diagnosis, say: Callable[[str], None],
     if fe is not None:
         d = dataclasses.replace(d, forward_note=forward_scope(d).note)
     return d
+
+
+def _motor_driven_note(d: Diagnosis, note: str) -> str:
+    """`note`, and the motor-driven view (identification.motor_driven: the measured q_m
+    drives the nominal model, no controller needed) when the log has q and the nominal is a
+    two-mass model."""
+    from jointbench.identification.motor_driven import motor_driven_view
+
+    p = d.nominal_parameters
+    if d.log.q is None or "K" not in p:
+        return note
+    try:
+        view = motor_driven_view(d.log, p, d.settings.decimated_cutoff_hz)
+    except ValueError as err:
+        return f"{note}; the motor-driven view did not run: {err}"
+    return f"{note}; {view.text()}"
 
 
 # A torque periodic in the motor angle (torque_ripple, amplitude A, period p) replayed with a
@@ -253,17 +271,25 @@ def forward_scope(d: Diagnosis) -> ForwardScope:
     return ForwardScope(keep, True, f"the forward view judges {effect} where {how}")
 
 
-def write_models(d: Diagnosis, out: Path) -> list[Path]:
-    """nominal.xml and, when an effect is named, extended.xml (atomic writes)."""
+def write_models(d: Diagnosis, out: Path, failures: list[str] | None = None) -> list[Path]:
+    """nominal.xml and, when an effect is named, extended.xml (atomic writes), each only when
+    MuJoCo compiles it: a model it refuses (a link mass under mjMINVAL, a negative inertia) is
+    not written, and why goes into `failures` (the report says so instead of naming it)."""
     paths = []
-    try:
-        nominal_axes.write_xml(build_spec(d, extended=False), out / "nominal.xml")
-        paths.append(out / "nominal.xml")
-        if d.named is not None:
-            nominal_axes.write_xml(build_spec(d, extended=True), out / "extended.xml")
-            paths.append(out / "extended.xml")
-    except ValueError:
-        pass
+    for name, extended in (("nominal.xml", False), ("extended.xml", True)):
+        if extended and d.named is None:
+            continue
+        try:
+            nominal_axes.write_xml(build_spec(d, extended=extended), out / name)
+            paths.append(out / name)
+        except (ValueError, TypeError) as err:    # MuJoCo's compile errors are ValueError
+            if failures is not None:
+                failures.append(f"{name} not written: {err}".replace("\n", " "))
+            if not extended:
+                if failures is not None and d.named is not None:
+                    failures.append("extended.xml not written: the nominal axis it extends "
+                                    "cannot be built")
+                break
     return paths
 
 

@@ -25,7 +25,11 @@ from jointbench.identification.log import atomic_write_text
 from jointbench.identification.output_values import finite_json
 
 
-def report_markdown(d: Diagnosis, figures: dict[str, str]) -> str:
+def report_markdown(d: Diagnosis, figures: dict[str, str],
+                    models: tuple[str, ...] | None = None,
+                    model_notes: tuple[str, ...] = ()) -> str:
+    """report.md. `models`: the MJCF files written beside it (None: as if all were); the
+    report names only those, and says why another was not written (`model_notes`)."""
     inv = d.inverse
     nom = inv.nominal
     L = [f"# Diagnosis of `{d.log.path or 'log'}`", ""]
@@ -75,8 +79,10 @@ def report_markdown(d: Diagnosis, figures: dict[str, str]) -> str:
         info = EFFECTS[c.effect]
         L += [f"{info.what}; {info.parameter} = {c.parameters[info.parameter]:.5g} {info.unit}.",
               "", "## 4. Extended model", "",
-              "`extended.xml` is the nominal axis with the effect added "
-              "(`jointbench simulate --model extended.xml` runs it).", ""]
+              ("`extended.xml` is the nominal axis with the effect added "
+               "(`jointbench simulate --model extended.xml` runs it)."
+               if models is None or "extended.xml" in models else
+               "No `extended.xml` is written (MuJoCo cannot build it, below)."), ""]
         L += [f"- {k} = {v:.6g}" for k, v in
               axis_keys(d.extended_parameters, d.log.prismatic).items()]
         before, after = d.inverse_before_after
@@ -98,6 +104,8 @@ def report_markdown(d: Diagnosis, figures: dict[str, str]) -> str:
     else:
         L += ["No effect is significant: the nominal model explains this log. No extended "
               "model is written."]
+    if model_notes:
+        L += ["", "## Models not written", ""] + [f"- {n}" for n in model_notes]
     return "\n".join(L) + "\n"
 
 
@@ -109,8 +117,10 @@ def _causes_lines(d: Diagnosis) -> list[str]:
          "before it):", ""]
     for c in d.causes:
         pars = ", ".join(f"{k} = {v:.4g}" for k, v in c.parameters.items())
+        # the test that passed: its own band's, or the second band's that confirmed it
+        test = f"t {c.t_stat:.3g}" + (f"; {c.second_note}" if c.second is not None else "")
         L.append(f"- {c.effect}: {pars}; held out it explains {c.heldout_pct:.3g} % "
-                 f"(t {c.t_stat:.3g}); {BLOCK_NAMES[c.block].split(':')[0]} "
+                 f"({test}); {BLOCK_NAMES[c.block].split(':')[0]} "
                  f"{c.before_pct:.3g} % -> {c.after_pct:.3g} % ({c.gain:.2f}x)")
     return L + [""]
 
@@ -151,8 +161,11 @@ def write(d: Diagnosis, out: Path, say: Callable[[str], None],
             if p is not None:
                 figures[key] = Path(p).name
         files = [str(out / f) for f in figures.values()]
-        files += [str(out / Path(p).name) for p in write_models(d, folder)]
-        atomic_write_text(folder / "report.md", report_markdown(d, figures))
+        failures: list[str] = []
+        models = tuple(Path(p).name for p in write_models(d, folder, failures))
+        files += [str(out / m) for m in models]
+        atomic_write_text(folder / "report.md",
+                          report_markdown(d, figures, models, tuple(failures)))
         files.append(str(out / "report.md"))
         for name, text in (extra or {}).items():
             atomic_write_text(folder / name, text)
@@ -167,6 +180,16 @@ def dumps(d: Diagnosis) -> str:
     return json.dumps(finite_json(d.to_json()), indent=2, allow_nan=False)
 
 
+def _controller(log) -> str:
+    """The controller the replay ran (docs/controller.md), in words."""
+    from jointbench.bench.sim.controller import controller_from_log, describe
+
+    try:
+        return describe(controller_from_log(log))
+    except ValueError:
+        return "controller"
+
+
 def summary_text(d: Diagnosis) -> str:
     """What `jointbench diagnose` prints: the ranking, the named cause and the gain."""
     inv = d.inverse
@@ -179,7 +202,8 @@ def summary_text(d: Diagnosis) -> str:
     if d.forward_nominal is not None:
         f = d.forward_nominal
         L.append(f"forward view, nominal: torque {f.tau_rel_pct:.2f} % RMS, q_m {f.q_m_rms:.3g} "
-                 "RMS" + (f", q {f.q_rms:.3g} RMS" if f.q_rms is not None else ""))
+                 "RMS" + (f", q {f.q_rms:.3g} RMS" if f.q_rms is not None else "")
+                 + f" (closed-loop replay under the log's {_controller(d.log)})")
     if d.forward_note:
         L.append(f"forward view: {d.forward_note}")
     L += ["", f"{'effect':20s} {'signif.':>7s} {'held-out %':>10s} {'t':>7s} "

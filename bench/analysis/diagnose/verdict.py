@@ -4,8 +4,10 @@ answer is then "inconclusive", with the reason.
 - **A nominal that cannot be this axis.** Jm, K, JL (or the rigid J) not positive: the fit
   describes no physical axis, so no effect measured against it means anything
   (identification.checks.plausibility.mislabel_reason names the likely mislabelling: q and q_m swapped, the
-  torque's sign). Positions that look like degrees (identification.log.unit_warnings):
-  every parameter but the Coulomb frictions is then 180 / pi times off. The nominal's first
+  torque's sign). Positions that look like degrees (identification.log.unit_warnings) are a
+  warning, never a veto by themselves: a model in degrees is the model in radians rescaled
+  (every parameter but the Coulomb frictions 180 / pi times off), and a low-gain position
+  loop moves its axis over turns by design. The nominal's first
   mode sqrt(K (1/Jm + 1/JL)) / 2 pi is not checked against the one measured on the log: with
   heavy spring damping the measurement can be far off, and a right nominal overruled.
 - **An extended model that is worse.** The named effect must improve the inverse view's
@@ -37,7 +39,6 @@ from jointbench.bench.analysis.diagnose.types import Diagnosis
 from jointbench.identification.discrepancy.heldout import ALPHA, segment_sums, segment_t
 from jointbench.identification.checks.plausibility import mislabel_reason
 
-DEGREES = "look like degrees"   # identification.log.unit_warnings' words for that warning
 USABLE_MIN = 0.5   # "none" needs at least half of the experiment's rows (a majority of it)
 
 
@@ -59,9 +60,6 @@ def nominal_reason(d: Diagnosis, extended: dict[str, float] | None = None) -> st
     why = _unphysical(p)
     if why and extended and not _unphysical({**p, **extended}):
         why = ""
-    if not why and any(DEGREES in w for w in d.warnings):
-        why = ("the positions look like degrees (warning): every parameter but the Coulomb "
-               "frictions scales with the angle unit, 57 times off in degrees")
     if not why:
         return ""
     return f"the nominal model is not a physical model of this axis: {why}; no effect is named"
