@@ -25,13 +25,12 @@ from jointbench.identification.filtering import (Drive, FilterSettings, as_accel
                                                  coulomb_integrals,
                                                  decimate_parallel, derivatives, kink_corrected,
                                                  lowpass, stencil_view, zoh_align)
-from jointbench.identification.jitter import LogNoise, stage_column
+from jointbench.identification.jitter import LogNoise
 from jointbench.identification.log import Log, LogError
-from jointbench.identification.log_schema import PLANT_INTEGRATOR_KEY, PLANT_STEPS_KEY
 from jointbench.identification.parameters import JOINT_MOTOR, MOTOR_ONLY, MOTOR_ONLY_CORRECTED, RIGID
 
-MOTOR_RESOLUTION_KEY = "motor_encoder_resolution_rad"
 MODELS = ("joint-motor", "motor-only", "rigid")
+MOTOR_RESOLUTION_KEY = "motor_encoder_resolution_rad"   # a sensor's, any log may carry it
 
 
 @dataclass(frozen=True)
@@ -65,16 +64,14 @@ def _sign(x: np.ndarray, s: FilterSettings, rate: float = 0.0,
     kink has them (`kink_corrected`, with the held drive `held` = tau / J when given) and
     placed between samples with that kink (`crossing_share`); with `drive`, the friction's
     state with its stick phases (`coulomb_integrals`) in place of sign(x). `inside` False:
-    the reversals placed linearly between samples (`_friction_models`). `noise`: a
-    once-a-sample RK4 plant's log, whose motor state is MuJoCo's per-stage friction over the
-    log's unlogged noise (`jitter.stage_column`), in place of everything above."""
-    if noise is not None and rate > 0:
-        return stage_column(x, noise, s, rate)
+    the reversals placed linearly between samples. `noise`: the state (with `drive`) is
+    its expectation over the log's unlogged noise (`jitter.LogNoise`)."""
+    nodes = noise.nodes(x, s) if noise is not None and drive is not None and rate > 0 else None
     if rate > 0:
         x = kink_corrected(x, rate, s, held=held, drive=drive, inside=inside)
     if s.stencil == 5:
-        return stencil_view(coulomb_integrals(x, s.ts, rate if inside else 0.0, drive)[1],
-                            s.ts, 5)
+        return stencil_view(coulomb_integrals(x, s.ts, rate if inside else 0.0, drive,
+                                              nodes if inside else None)[1], s.ts, 5)
     out = np.sign(x)
     out[~np.isfinite(x)] = np.nan
     if drive is not None and rate > 0 and inside:
@@ -83,7 +80,7 @@ def _sign(x: np.ndarray, s: FilterSettings, rate: float = 0.0,
         # biases Jm. The view loses two more
         # samples than sign(x) at each end: those take the nearest state (a sign there would
         # be a step the decimation spreads over the first rows), so the passes keep their rows
-        state = stencil_view(coulomb_integrals(x, s.ts, rate, drive)[1], s.ts, 3)
+        state = stencil_view(coulomb_integrals(x, s.ts, rate, drive, nodes)[1], s.ts, 3)
         ok, at = np.isfinite(state), np.arange(len(state))
         if ok.any():
             out = np.where(np.isfinite(out), np.interp(at, at[ok], state[ok]), np.nan)
@@ -102,13 +99,13 @@ def _torque(log: Log, s: FilterSettings, filtered: bool = True) -> np.ndarray:
 
 
 def joint_motor(log: Log, s: FilterSettings,
-                friction: tuple[float, float] | Mapping[str, float] = (0.0, 0.0)
-                ) -> Regressor:
+                friction: tuple[float, float] | Mapping[str, float] = (0.0, 0.0),
+                noise: bool = True) -> Regressor:
     """Eq. (13): y = (tau_m, 0), rows of eq. (10); gravity g cos q, g sin q from the log's g.
     `friction` places the Coulomb reversals of the sign columns (`_sign`): the rates
     (FSm / Jm, FS / JL), or the parameters of an earlier estimate (names of eq. 13), which
-    add the held torque's kinks and the stick phases (`_friction_models`); zero keeps the
-    filtered velocity's."""
+    add the held torque's kinks and the stick phases (`_friction_models`), with `noise` their
+    expectation over the log's noise; zero keeps the filtered velocity's."""
     if log.q is None:
         raise LogError("the joint-motor model needs the link position column 'q'", log.path,
                        column="q")
@@ -119,7 +116,7 @@ def joint_motor(log: Log, s: FilterSettings,
     n = len(log.t)
     zero = np.zeros(n)
     defl = qm[0] - q[0]
-    motor, link = _friction_models(log, friction, defl)
+    motor, link = _friction_models(log, friction, defl, noise)
     seen = _as_seen(s)
     W1 = np.column_stack([qm[2], seen(qm[1], 1), _sign(qm[1], s, *motor), seen(defl, 0), zero,
                           zero, zero, zero, zero])
@@ -141,40 +138,32 @@ def _as_seen(s: FilterSettings):
 
 
 def _friction_models(log: Log, friction: tuple[float, float] | Mapping[str, float],
-                     defl: np.ndarray) -> tuple[tuple, tuple]:
-    """`_sign`'s arguments after the velocity for the motor and the link columns.
-
-    A plant integrated continuously (a real axis, or a simulator with several steps a
-    sample): from rates (FSm / Jm, FS / JL), the reversals placed inside the sample
-    interval with the friction's kink; from parameters p, the motor column also gets the held
-    torque tau / Jm and its drive between samples, (tau[k] - K defl) / Jm at the interval's
-    start and end with the viscous rate FVm / Jm, for its stick phases (`friction_state`),
-    since the closed loop holds the motor at its reversals. The link, driven by the spring
-    alone, keeps its reversals slip-through. A log whose metadata says the simulator took
-    one RK4 step a sample (`substeps: 1`) cannot switch its friction inside a sample: from
-    rates, the reversals placed linearly between samples; from parameters, the motor's
-    state is MuJoCo's per-stage soft friction of the log's `friction_timeconst_s` over the
-    noise (`jitter.stage_column`), once the previous pass has a positive K: where the motor
-    sticks that state balances the drive, the logged torque included, and on a log whose
-    motion is the noise's alone (where the first pass's K is negative) such a column would
-    explain the torque by itself. Zero where a friction or inertia is missing or not
-    positive."""
+                     defl: np.ndarray, noise: bool = False) -> tuple[tuple, tuple]:
+    """`_sign`'s arguments after the velocity for the motor and the link columns, the same
+    for every log (the plant's friction switches inside the sample interval, as a real axis'
+    does): from rates (FSm / Jm, FS / JL), the reversals placed inside the sample interval
+    with the friction's kink; from parameters p, the motor column also gets the held torque
+    tau / Jm and its drive between samples, (tau[k] - K defl) / Jm at the interval's start and
+    end with the viscous rate FVm / Jm, for its stick phases (`friction_state`), since the
+    closed loop holds the motor at its reversals. The link, driven by the spring alone, keeps
+    its reversals slip-through. `noise`: the motor's state is then its expectation over the
+    log's unlogged noise (`jitter.LogNoise`: the raw motor positions, the encoder's
+    resolution the metadata gives, the held torque, the deflection and p), which any closed
+    loop's current noise makes a smoothed sign near the reversals. Zero where a friction or
+    inertia is missing or not positive."""
     rates = friction if not isinstance(friction, Mapping) else tuple(
         friction[f] / friction[j] if friction.get(j, 0) > 0 and friction.get(f, 0) > 0
         else 0.0 for f, j in (("FSm", "Jm"), ("FS", "JL")))
     p = friction if isinstance(friction, Mapping) else {}
     K, Jm = p.get("K", 0.0), p.get("Jm", 0.0)
-    tau = np.asarray(log.tau_m, dtype=float)
-    if log.meta.get(PLANT_STEPS_KEY, "").strip() == "1":
-        if "RK4" in log.meta.get(PLANT_INTEGRATOR_KEY, "") and rates[0] > 0 and K > 0:
-            noise = LogNoise(np.asarray(log.q_m, dtype=float), _resolution(log), tau, defl, p,
-                             log.plant_timeconst() or 0.0)
-            return (rates[0], None, None, False, noise), (rates[1], None, None, False)
-        return (rates[0], None, None, False), (rates[1], None, None, False)
     if not (rates[0] > 0 and K > 0):
         return (rates[0],), (rates[1],)
+    tau = np.asarray(log.tau_m, dtype=float)
     nxt = np.r_[defl[1:], defl[-1:]]
     drive = ((tau - K * defl) / Jm, (tau - K * nxt) / Jm, max(p.get("FVm", 0.0), 0.0) / Jm)
+    if noise:
+        state = LogNoise(np.asarray(log.q_m, dtype=float), _resolution(log), tau, defl, p)
+        return (rates[0], tau / Jm, drive, True, state), (rates[1],)
     return (rates[0], tau / Jm, drive), (rates[1],)
 
 
