@@ -22,14 +22,12 @@ from collections.abc import Iterable
 #   placed where the friction's kink has them (`identify._place_reversals`);
 # - stick_phases: with reversals, the motor's Coulomb state in its stick phases
 #   (`friction_state`);
-# - noise_state: with stick_phases, that state's expectation over the log's unlogged torque
-#   noise (`jitter.LogNoise`), a smoothed sign near the reversals;
 # - wide_band: a joint-motor fit in the wide band too, the more precise kept (`band_choice`);
 # - motor_only_columns: the columns eq. (18) as printed drops, and gravity (`regressors`);
 # - link_reconstruction: the motor-only parameters from the link reconstructed out of q_m
 #   (`link_fit`).
-CORRECTIONS = ("zoh", "stencil5", "instruments", "reversals", "stick_phases", "noise_state",
-               "wide_band", "motor_only_columns", "link_reconstruction")
+CORRECTIONS = ("zoh", "stencil5", "instruments", "reversals", "stick_phases", "wide_band",
+               "motor_only_columns", "link_reconstruction")
 
 
 def check_corrections(corrections: Iterable[str]) -> frozenset[str]:

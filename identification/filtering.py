@@ -9,7 +9,7 @@ from functools import lru_cache
 import numpy as np
 from scipy import signal
 
-from jointbench.identification.friction_state import Noise, friction_integrals
+from jointbench.identification.friction_state import friction_integrals
 
 # (drive at each interval's start, at its end [rad/s^2], viscous rate FV / J [1/s])
 Drive = tuple[np.ndarray, np.ndarray, float]
@@ -228,16 +228,14 @@ def sign_double_integral(v: np.ndarray, ts: float, rate: float = 0.0) -> np.ndar
 
 
 def coulomb_integrals(v: np.ndarray, ts: float, rate: float = 0.0,
-                      drive: Drive | None = None, noise: Noise | None = None
-                      ) -> tuple[np.ndarray, np.ndarray]:
+                      drive: Drive | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The first and second integrals of the Coulomb friction's state at the samples:
     `sign_integrals` (reversals between samples, with the kink of `rate`), or with `drive`
     (drive at the start and end of each interval [rad/s^2], viscous rate [1/s]) and
-    rate > 0 the stick-slip state of `friction_state.friction_integrals`, its expectation
-    over the log's noise with `noise`."""
+    rate > 0 the stick-slip state of `friction_state.friction_integrals`."""
     if drive is None or not rate > 0:
         return sign_integrals(v, ts, rate)
-    return friction_integrals(v, drive[0], drive[1], drive[2], rate, ts, noise)
+    return friction_integrals(v, drive[0], drive[1], drive[2], rate, ts)
 
 
 def kink_corrected(v: np.ndarray, rate: float, s: FilterSettings, iterations: int = 3,

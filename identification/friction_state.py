@@ -26,9 +26,6 @@ from __future__ import annotations
 
 import numpy as np
 
-# nodes of the noise's expectation: start-velocity misses [rad/s], drives [rad/s^2], weights
-Noise = tuple[np.ndarray, np.ndarray, np.ndarray]
-
 SUBSTEPS = 32       # sub-steps a sample interval: a reversal placed to 1/32 of a sample
 MATCH_PASSES = 2    # passes shifting the drive onto the next sample's velocity
 
@@ -87,20 +84,11 @@ def _slip_stick(u: np.ndarray, d0: np.ndarray, d1: np.ndarray, visc: float, rate
 
 
 def friction_integrals(v: np.ndarray, drive0: np.ndarray, drive1: np.ndarray, visc: float,
-                       rate: float, ts: float, noise: Noise | None = None
-                       ) -> tuple[np.ndarray, np.ndarray]:
+                       rate: float, ts: float) -> tuple[np.ndarray, np.ndarray]:
     """Samples of the first and second integrals of the friction state s(t) in [-1, 1]
     (module docstring), for velocity samples v [rad/s], the drive [rad/s^2] at the start
     (drive0[k]) and end (drive1[k]) of interval k, the viscous rate visc = FV / J [1/s] and
-    rate = FS / J [rad/s^2] > 0. The second is NaN where v is.
-
-    `noise` (dv, da, w): the state's expectation over the log's unlogged noise, nodes of the
-    start velocity's miss dv [rad/s] and of a drive da [rad/s^2] held over the interval with
-    weights w (`jitter.LogNoise.nodes`): the friction any axis feels near a reversal under its
-    current loop's noise is that average, a smoothed sign. Each interval is integrated from
-    the node's start with the drive the matching passes found, and an interval that moves one
-    way whatever the node (|u| beyond the largest change the drive can make within it) keeps
-    sign(u) without integrating."""
+    rate = FS / J [rad/s^2] > 0. The second is NaN where v is."""
     v = np.asarray(v, dtype=float)
     u0, u1 = np.nan_to_num(v[:-1]), np.nan_to_num(v[1:])
     d0 = np.nan_to_num(np.asarray(drive0, dtype=float)[:-1])
@@ -120,30 +108,7 @@ def friction_integrals(v: np.ndarray, drive0: np.ndarray, drive1: np.ndarray, vi
         moving = (np.sign(end) == np.sign(u1)) & (end != 0)
         shift = shift + np.where(moving, (u1 - end) / ts, 0.0)
         I1, I2, end = _interval(u0, d0 + shift, d1 + shift, visc, rate, ts)
-    if noise is not None:
-        I1, I2 = _expected(I1, I2, u0, d0 + shift, d1 + shift, visc, rate, ts, noise)
     S1 = np.concatenate([[0.0], np.cumsum(I1)])
     S2 = np.concatenate([[0.0], np.cumsum(S1[:-1] * ts + I2)])
     S2[~np.isfinite(v)] = np.nan
     return S1, S2
-
-
-def _expected(I1: np.ndarray, I2: np.ndarray, u0: np.ndarray, d0: np.ndarray, d1: np.ndarray,
-              visc: float, rate: float, ts: float, noise: Noise
-              ) -> tuple[np.ndarray, np.ndarray]:
-    """`friction_integrals`' expectation over the noise nodes, on the intervals some node can
-    bring to rest; the others keep I1, I2 (sign(u) throughout, for every node)."""
-    dv, da, w = (np.asarray(x, dtype=float) for x in noise)
-    reach = np.abs(dv).max() + ts * (np.maximum(np.abs(d0), np.abs(d1)) + np.abs(da).max()
-                                     + rate + visc * (np.abs(u0) + np.abs(dv).max()))
-    near = np.flatnonzero(np.abs(u0) <= reach)
-    if not len(near):
-        return I1, I2
-    E1, E2 = np.zeros(len(near)), np.zeros(len(near))
-    for dvi, dai, wi in zip(dv, da, w):
-        J1, J2, _ = _interval(u0[near] + dvi, d0[near] + dai, d1[near] + dai, visc, rate, ts)
-        E1 += wi * J1
-        E2 += wi * J2
-    I1, I2 = I1.copy(), I2.copy()
-    I1[near], I2[near] = E1, E2
-    return I1, I2

@@ -14,7 +14,8 @@ from jointbench.identification.checks import check_excitation, check_signals
 from jointbench.identification.corrections import CORRECTIONS, check_corrections
 from jointbench.identification.estimate import LSResult, NotIdentifiable, block_weighted, least_squares
 from jointbench.identification.band_checks import band_warnings
-from jointbench.identification.band_choice import MODE_DISAGREEMENT, BandChoice, choose_band
+from jointbench.identification.band_choice import (MODE_DISAGREEMENT, BandChoice, choose_band,
+                                                   wide_settings)
 from jointbench.identification.defaults import choose_filter, is_paper_prototype, stencil_for
 from jointbench.identification.first_mode import (FirstMode, given_first_mode,
                                                   measure_first_mode)
@@ -170,9 +171,14 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
     f1 = mode.f1_hz if mode is not None and mode.found else None
     result = _identify(log, model, settings, notes, f1, wanted)
     if chooser and result.model == "joint-motor" and f1 is not None and "wide_band" in wanted:
-        result, band = choose_band(
-            log, result, lambda s: _identify(log, model, paper_chain(s, wanted), [], f1, wanted),
-            _joint_motor_estimate, f1)
+        wide = wide_settings(log, settings)
+        other = None
+        if wide[0] is not None:
+            try:
+                other = _identify(log, model, paper_chain(wide[0], wanted), [], f1, wanted)
+            except (ValueError, ArithmeticError, np.linalg.LinAlgError) as err:
+                other = err
+        result, band = choose_band(result, other, wide, _joint_motor_estimate, f1)
         settings = result.settings
         why = stencil_for(settings)[1] if band.used == "wide" else why
         warnings += [band.warning] if band.warning else []
@@ -263,7 +269,8 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
     check_signals(log, model, settings)
     ran = list(chain_corrections(settings))
     if model == "joint-motor":
-        reg = exclude_clipped(regressors.joint_motor(log, settings), log)
+        chain = regressors.JointMotorChain(log, settings)
+        reg = exclude_clipped(chain.regressor(), log)
         if "instruments" in wanted:
             Z = _instruments(log, reg, f1_hz, notes)
         else:
@@ -272,9 +279,8 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
         ran += ["instruments"] if Z is not None else []
         ls = block_weighted(reg.W, reg.y, reg.names, reg.block, time=reg.index, instruments=Z)
         if "reversals" in wanted:
-            reg, ls, placed = _place_reversals(log, settings, reg, ls, Z, notes,
-                                               "stick_phases" in wanted,
-                                               "noise_state" in wanted)
+            reg, ls, placed = _place_reversals(log, chain, reg, ls, Z, notes,
+                                               "stick_phases" in wanted)
             ran += placed
     elif model == "motor-only" and "motor_only_columns" not in wanted:
         reg = exclude_clipped(regressors.motor_only(log, settings, corrected=False), log)
@@ -349,19 +355,18 @@ def reversal_rates(p: dict[str, float]) -> tuple[float, float]:
                  for f, j in (("FSm", "Jm"), ("FS", "JL")))
 
 
-def _place_reversals(log: Log, settings: FilterSettings, reg: regressors.Regressor,
+def _place_reversals(log: Log, chain: regressors.JointMotorChain, reg: regressors.Regressor,
                      ls: LSResult, Z: np.ndarray | None, notes: list[str],
-                     stick: bool = True, noise: bool = True
+                     stick: bool = True
                      ) -> tuple[regressors.Regressor, LSResult, tuple[str, ...]]:
     """Eq. (13) solved again with the Coulomb columns built from the previous pass's
-    parameters, REVERSAL_PASSES times (`regressors.joint_motor` with them): the velocity's
-    zero crossings put back where the friction's kink and the held torque's steps have them
+    parameters, REVERSAL_PASSES times (the log's `regressors.JointMotorChain` with them): the
+    velocity's zero crossings put back where the friction's kink and the held torque's steps have them
     (`filtering.kink_corrected`), placed inside the sample interval with the kink
     (`filtering.crossing_share`), and the motor's stick phases, where the friction holds the
     drive instead of +-FSm (`friction_state`). The filtered velocity's own crossings come late
     by an amount that grows with FS / J, and Jm with them. `stick` False: the reversals
-    alone (the rates), no stick phases; `noise` (with `stick`): the stick-slip state's
-    expectation over the log's noise. Also returns the corrections that ran (names of
+    alone (the rates), no stick phases. Also returns the corrections that ran (names of
     CORRECTIONS)."""
     rates = (0.0, 0.0)
     stuck = False
@@ -371,8 +376,7 @@ def _place_reversals(log: Log, settings: FilterSettings, reg: regressors.Regress
         if not any(rates):
             return reg, ls, ()
         stuck = stick and rates[0] > 0 and p.get("K", 0.0) > 0   # `_friction_models`' rule
-        again = exclude_clipped(regressors.joint_motor(log, settings, p if stick else rates,
-                                                       noise=noise), log)
+        again = exclude_clipped(chain.regressor(p if stick else rates), log)
         if not np.array_equal(again.index, reg.index):   # NaN rows moved: keep the first pass
             return reg, ls, ()
         reg = again
@@ -382,8 +386,7 @@ def _place_reversals(log: Log, settings: FilterSettings, reg: regressors.Regress
     notes.append(f"Coulomb reversals placed by the identified FSm / Jm = {rates[0]:.4g} and "
                  f"FS / JL = {rates[1]:.4g} (the filtered velocity's zero crossings come late "
                  f"by the friction's kink; {REVERSAL_PASSES} passes)")
-    return reg, ls, ("reversals",) + (("stick_phases",) + (("noise_state",) if noise else ())
-                                      if stuck else ())
+    return reg, ls, ("reversals", "stick_phases") if stuck else ("reversals",)
 
 
 def _instruments(log: Log, reg: regressors.Regressor, f1_hz: float | None,

@@ -17,8 +17,9 @@ Everything comes from the log, no width tuned:
   and how that miss correlates with the interval's own noise (the zero-phase chain sees part
   of it ahead), from the chain's filter and stencil alone;
 - `noise_nodes`: Gauss-Hermite nodes of the pair (start-velocity miss, interval noise).
-These hold for any plant: the motor's stick-slip state (`friction_state`) is averaged over
-the nodes (`LogNoise`, used by the regressors on every log).
+These hold for any plant. The regressors do not use them: averaging the motor's stick-slip
+state (`friction_state`) over the nodes moved arm6's Jm by under 0.01 % and biased the
+independent simulator's stiff axis (docs/design-notes.md, "Simulator-free estimator").
 
 Pure numpy.
 """
@@ -134,24 +135,3 @@ def noise_nodes(sweep: float, s: FilterSettings) -> NoiseNodes | None:
     w = np.outer(_GH_W, _GH_W)
     dv = g * sweep * (rho * x1 + np.sqrt(max(0.0, 1.0 - rho * rho)) * x2)
     return NoiseNodes(dv.ravel(), (x1 * sweep / s.ts).ravel(), w.ravel())
-
-
-@dataclass(frozen=True)
-class LogNoise:
-    """What the noise's nodes need of a log: the raw motor positions [rad], the encoder's
-    resolution [rad] (0: unknown), the logged (held) torque [N m], the chain's deflection
-    qm - q [rad] and the previous pass's parameters (eq. 13 names: Jm, FVm, FSm, K)."""
-
-    positions: np.ndarray
-    resolution: float
-    tau: np.ndarray
-    defl: np.ndarray
-    params: Mapping[str, float]
-
-    def nodes(self, v: np.ndarray, s: FilterSettings
-              ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-        """`noise_nodes` of this log for the chain's velocity v, as (dv, da, w) arrays for
-        `friction_state.friction_integrals`; None without a measurable noise."""
-        nodes = noise_nodes(torque_noise_sweep(v, self.positions, self.tau, self.defl,
-                                               self.params, s.ts, self.resolution), s)
-        return None if nodes is None else (nodes.dv, nodes.da, nodes.w)

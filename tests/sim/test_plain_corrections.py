@@ -55,7 +55,7 @@ def test_one_correction_alone(prototype_log, name):
 
 
 def test_stick_phases_need_the_reversals(prototype_log):
-    r = identify(prototype_log, "joint-motor", corrections=("stick_phases", "noise_state"))
+    r = identify(prototype_log, "joint-motor", corrections=("stick_phases",))
     assert r.corrections == ()
 
 
