@@ -39,12 +39,21 @@ def _interval(u: np.ndarray, d0: np.ndarray, d1: np.ndarray, visc: float, rate: 
     operations as `_slip_stick`'s, so the same numbers), and `_slip_stick` runs on the rest."""
     h = ts / SUBSTEPS
     sg = np.sign(u)
-    free = u
+    free = u.copy()
     one_way = sg != 0
-    for j in range(SUBSTEPS):
-        d = d0 + (d1 - d0) * (j + 0.5) / SUBSTEPS
-        free = free + h * (d - visc * free - rate * sg)
-        one_way &= np.sign(free) == sg
+    slope, friction = d1 - d0, rate * sg
+    d, acc, same = np.empty_like(u), np.empty_like(u), np.empty(len(u), dtype=bool)
+    for j in range(SUBSTEPS):   # in place, the operations of `_slip_stick`'s free step
+        np.multiply(slope, j + 0.5, out=d)
+        np.divide(d, SUBSTEPS, out=d)
+        np.add(d0, d, out=d)
+        np.multiply(free, visc, out=acc)
+        np.subtract(d, acc, out=acc)
+        np.subtract(acc, friction, out=acc)
+        np.multiply(acc, h, out=acc)
+        np.add(free, acc, out=free)
+        np.equal(np.sign(free, out=acc), sg, out=same)
+        one_way &= same
     p1 = p2 = 0.0
     for _ in range(SUBSTEPS):     # the integrals of sign = +1 (of -1: their negatives)
         p2 += p1 * h + 1.0 * h * h / 2

@@ -83,3 +83,13 @@ def test_cli_plain_json_and_bad_options(prototype_log, tmp_path, capsys):
     assert "--corrections bogus" in capsys.readouterr().err
     assert main(["identify", str(path), "--plain", "--corrections", "zoh"]) == 2
     assert main(["identify", str(path), "--plain", "--stencil", "5"]) == 2
+
+
+def test_plain_designs_the_band_by_eq_28_away_from_the_papers_rate():
+    # at another rate the filter comes from eqs. (26)-(29): f1 = 3.9 Hz, nd = 2, m = 4 gives the
+    # paper's design wn = 181.04 rad/s (ERRATA.md; section 4 rounds it to 176 at 350.87 Hz)
+    from jointbench.bench.sim.experiment import run_experiment
+
+    log = run_experiment("prototype", duration=20.0, seed=2, sample_rate_hz=500.0).log
+    r = identify(log, "joint-motor", corrections=(), f1_hz=3.9)
+    assert r.settings.wn == pytest.approx(181.04, abs=0.01) and r.corrections == ()
