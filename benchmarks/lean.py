@@ -19,7 +19,7 @@ import numpy as np
 from scipy import signal
 
 from jointbench.bench.sim.experiment import run_experiment
-from jointbench.identification.defaults import PAPER_WN
+from jointbench.identification.filter_choice import PAPER_WN
 from jointbench.identification.identify import identify
 
 REPEATS = 5

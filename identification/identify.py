@@ -10,13 +10,13 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from jointbench.identification import link_fit, regressors
-from jointbench.identification.checks import check_excitation, check_signals
+from jointbench.identification.checks.fit import check_excitation, check_signals
 from jointbench.identification.corrections import CORRECTIONS, check_corrections
 from jointbench.identification.estimate import LSResult, NotIdentifiable, block_weighted, least_squares
-from jointbench.identification.band_checks import band_warnings
+from jointbench.identification.checks.band import band_warnings
 from jointbench.identification.band_choice import (MODE_DISAGREEMENT, BandChoice, choose_band,
                                                    wide_settings)
-from jointbench.identification.defaults import choose_filter, is_paper_prototype, stencil_for
+from jointbench.identification.filter_choice import choose_filter, is_paper_prototype, stencil_for
 from jointbench.identification.first_mode import (FirstMode, given_first_mode,
                                                   measure_first_mode)
 from jointbench.identification.filtering import FilterSettings

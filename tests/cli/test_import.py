@@ -13,7 +13,7 @@ import pytest
 from jointbench.bench.cli import main
 from jointbench.identification.identify import identify
 from jointbench.identification.log import read_log, write_log
-from jointbench.identification.log_import import ImportSpec, convert, parse_raw
+from jointbench.identification.log.raw import ImportSpec, convert, parse_raw
 
 N, KT, CPR = 100.0, 0.5, 2**17  # prototype gear ratio, torque constant [N m/A], counts per turn
 T0_MS = 12.5

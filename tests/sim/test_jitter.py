@@ -1,4 +1,4 @@
-"""The log's own noise as the Coulomb state sees it (identification/jitter.py), against
+"""The log's own noise as the Coulomb state sees it (identification/coulomb_noise.py), against
 synthetic plants whose noise is known."""
 
 from __future__ import annotations
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from jointbench.identification.filtering import FilterSettings, derivatives, lowpass
-from jointbench.identification.jitter import chain_jitter, noise_nodes, torque_noise_sweep
+from jointbench.identification.coulomb_noise import chain_jitter, noise_nodes, torque_noise_sweep
 
 TS = 1 / 350.87
 

@@ -11,7 +11,7 @@ import pytest
 
 from jointbench.bench.cli import main
 from jointbench.identification.corrections import CORRECTIONS
-from jointbench.identification.defaults import PAPER_ND, PAPER_WN
+from jointbench.identification.filter_choice import PAPER_ND, PAPER_WN
 from jointbench.identification.identify import identify
 from jointbench.identification.log import write_log
 

@@ -22,7 +22,7 @@ import pytest
 from indep_sim import FAMILIES, simulate
 from jointbench.identification.band_choice import (MODE_DISAGREEMENT, choose_band, mode_gap,
                                                    wide_settings)
-from jointbench.identification.defaults import PAPER_RATE, default_settings
+from jointbench.identification.filter_choice import PAPER_RATE, default_settings
 from jointbench.identification.identify import identify
 from jointbench.identification.log import Log
 from jointbench.testing import FAMILIES, simulate
