@@ -13,7 +13,7 @@ from jointbench.identification import link_fit, regressors
 from jointbench.identification.checks.fit import check_excitation, check_signals
 from jointbench.identification.corrections import CORRECTIONS, check_corrections
 from jointbench.identification.estimate import LSResult, NotIdentifiable, block_weighted, least_squares
-from jointbench.identification.checks.band import band_warnings
+from jointbench.identification.checks.band import band_warnings, check_f1
 from jointbench.identification.band_choice import (MODE_DISAGREEMENT, BandChoice, choose_band,
                                                    wide_settings)
 from jointbench.identification.filter_choice import choose_filter, is_paper_prototype, stencil_for
@@ -149,6 +149,8 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
     """
     if model not in MODEL_CHOICES:
         raise ValueError(f"unknown model {model!r} (choices: {', '.join(MODEL_CHOICES)})")
+    if f1_hz is not None:
+        check_f1(log, f1_hz)
     wanted = check_corrections(corrections)
     warnings: list[str] = []
     notes: list[str] = []

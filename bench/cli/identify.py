@@ -114,11 +114,21 @@ def _corrections(args: argparse.Namespace) -> tuple[str, ...] | None:
     return tuple(n.strip() for n in args.corrections.split(",") if n.strip() != "none")
 
 
-def _debias_progress(done: int, total: int) -> None:
-    """The replica counter on stderr (rewritten in place on a terminal)."""
-    if sys.stderr.isatty() or done == total:
-        print(f"\ridentify: bias correction, replica {done}/{total}",
-              end="" if done < total else "\n", file=sys.stderr, flush=True)
+def _debias_progress():
+    """The replica bar on stderr (a terminal only), made at the first replica's report and
+    closed at the last."""
+    from jointbench.bench.cli.progress import bar
+
+    state: dict = {}
+
+    def at(done: int, total: int) -> None:
+        if "bar" not in state:
+            state["bar"] = bar("identify: bias correction", total, "replica")
+        b = state["bar"]
+        b.update(max(0, done - b.n))
+        if done >= total:
+            b.close()
+    return at
 
 
 def _refine_progress(msg: str) -> None:

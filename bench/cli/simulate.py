@@ -145,12 +145,13 @@ def run(args: argparse.Namespace) -> int:
     else:
         rate = SAMPLE_RATE_HZ if args.rate is None else float(args.rate)
     check_memory(args.duration * rate, f"--duration {args.duration:g} s at {rate:g} Hz")
-    result = run_experiment(args.model, args.joint, duration=args.duration, seed=args.seed,
-                            amplitude=args.amplitude, config=parse_config(args.config),
-                            lock=args.lock, effect=effect,
-                            sensors=Sensors.ideal() if args.ideal_sensors else None,
-                            substeps=args.substeps or DEFAULT_SUBSTEPS, progress=progress,
-                            sample_rate_hz=rate)
+    with bar("simulate", 100, "%", quiet=args.quiet) as b:
+        result = run_experiment(args.model, args.joint, duration=args.duration, seed=args.seed,
+                                amplitude=args.amplitude, config=parse_config(args.config),
+                                lock=args.lock, effect=effect,
+                                sensors=Sensors.ideal() if args.ideal_sensors else None,
+                                substeps=args.substeps or DEFAULT_SUBSTEPS,
+                                progress=fraction(b), sample_rate_hz=rate)
     write_log(result.log, out)
     warnings = saturation_warnings(result)
     for text in warnings:

@@ -19,7 +19,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pytest
 
-from indep_sim import FAMILIES, simulate
+from jointbench.testing import FAMILIES, simulate
 from jointbench.identification.band_choice import (MODE_DISAGREEMENT, choose_band, mode_gap,
                                                    wide_settings)
 from jointbench.identification.filter_choice import PAPER_RATE, default_settings

@@ -16,6 +16,7 @@ from jointbench.identification.identify import identify
 from jointbench.bench.sim.experiment import run_experiment
 from jointbench.bench.sim.sensors import Sensors
 from jointbench.identification.link_sim import link_response, simulate_link
+from jointbench.testing import FAMILIES, frictionless, simulate
 
 TS = 1 / 350.87
 
