@@ -39,8 +39,8 @@ class OutputError(ValueError):
     """An output target that cannot or must not be written (exit status 2)."""
 
 
-def _kind(mode: int) -> str | None:
-    """What a non-regular file is, None for a regular one."""
+def file_kind(mode: int) -> str | None:
+    """What a non-regular file is (by its `st_mode`), None for a regular one."""
     for test, name in ((stat.S_ISDIR, "a directory"), (stat.S_ISCHR, "a character device"),
                        (stat.S_ISBLK, "a block device"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
                        (stat.S_ISSOCK, "a socket"), (stat.S_ISLNK, "a symbolic link")):
@@ -114,7 +114,7 @@ def check_target(path: Path, flag: str = "--out", manifest: dict[str, str] | Non
         return
     except OSError as err:
         raise OutputError(f"{flag} {path}: cannot inspect it: {err.strerror}") from None
-    kind = _kind(info.st_mode)
+    kind = file_kind(info.st_mode)
     if kind is not None:
         raise OutputError(f"{flag} {path}: is {kind}, not a regular file: refusing to "
                           "replace it")
@@ -191,7 +191,7 @@ class OutputFolder:
         self.names = tuple(names)
         p = self.path
         if os.path.lexists(p):
-            kind = _kind(os.lstat(p).st_mode)
+            kind = file_kind(os.lstat(p).st_mode)
             if kind != "a directory" and not p.is_dir():
                 raise OutputError(f"{flag} {p}: exists and is not a folder"
                                   + (f" ({kind})" if kind else ""))

@@ -12,6 +12,7 @@ from pathlib import Path
 
 from jointbench.bench.campaign.gates import GateResult
 from jointbench.bench.campaign.settings import CampaignError
+from jointbench.bench.output_files import file_kind
 from jointbench.identification.log import atomic_write_text
 
 SUITES = "jointbench campaign"   # the root's name: how an existing report is recognised
@@ -35,7 +36,7 @@ def check_junit_path(path: Path) -> None:
                 head = handle.read(4096).decode("utf-8", "replace")
         except OSError as err:
             raise CampaignError(f"--junit {path}: cannot read it: {err.strerror}") from None
-    kind = None if info is None else _kind(info.st_mode)
+    kind = None if info is None else file_kind(info.st_mode)
     problem = (f"folder {folder} does not exist" if not folder.is_dir()
                else f"is {kind}, not a regular file: refusing to replace it" if kind
                else "is read-only" if info is not None and (
@@ -56,16 +57,6 @@ def _unwritable(folder: Path) -> str | None:
         return f"folder {folder} is not writable ({err.strerror})"
     os.close(fd)
     os.unlink(probe)
-    return None
-
-
-def _kind(mode: int) -> str | None:
-    """What a file that is not a regular one is (None for a regular file)."""
-    for test, name in ((stat.S_ISDIR, "a directory"), (stat.S_ISCHR, "a character device"),
-                       (stat.S_ISBLK, "a block device"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
-                       (stat.S_ISSOCK, "a socket"), (stat.S_ISLNK, "a symbolic link")):
-        if test(mode):
-            return name
     return None
 
 

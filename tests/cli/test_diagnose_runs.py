@@ -7,12 +7,13 @@ import json
 import sys
 from types import SimpleNamespace
 
-from jointbench.testing.simulator import simulate_lab_rig
+import pytest
 
-import jointbench as jb  # noqa: E402
-from jointbench.bench.cli import main  # noqa: E402
-from jointbench.bench.results.diagnose_runs import RunsDiagnosis  # noqa: E402
-from jointbench.identification.log import write_log  # noqa: E402
+import jointbench as jb
+from jointbench.bench.cli import main
+from jointbench.bench.results.diagnose_runs import RunsDiagnosis
+from jointbench.identification.log import write_log
+from jointbench.testing.simulator import simulate_lab_rig
 
 
 def _fake(*effects):
@@ -27,6 +28,7 @@ def test_a_cause_is_supported_only_where_every_run_names_it():
     assert runs.unsupported == {"offset": ("a",), "torque_lag": ("c",)}
 
 
+@pytest.mark.slow
 def test_two_lab_rig_runs_cross_validated(tmp_path, capsys):
     paths = []
     for seed in (51, 52):

@@ -13,11 +13,11 @@ import pytest
 
 from jointbench.testing.simulator import LAB_RIG, simulate_lab_rig
 
-import jointbench as jb  # noqa: E402
-from jointbench.bench.cli import main  # noqa: E402
-from jointbench.bench.results.identify import LOWER_BOUND  # noqa: E402
-from jointbench.bench.results.runs import RunsFit  # noqa: E402
-from jointbench.identification.log import write_log  # noqa: E402
+import jointbench as jb
+from jointbench.bench.cli import main
+from jointbench.bench.results.identify import LOWER_BOUND
+from jointbench.bench.results.runs import RunsFit
+from jointbench.identification.log import write_log
 
 
 def _measured(log):
@@ -33,6 +33,7 @@ def runs():
     return [_measured(x) for x in (a, b, c)]
 
 
+@pytest.mark.slow
 def test_api_pools_runs_and_names_the_one_apart(runs):
     res = jb.identify(runs)
     assert isinstance(res, RunsFit) and len(res.fits) == 3
@@ -54,6 +55,7 @@ def test_one_measured_run_says_its_sigma_is_a_lower_bound(runs):
     assert LOWER_BOUND in jb.identify(runs[0]).table()
 
 
+@pytest.mark.slow
 def test_cli_takes_several_files(runs, tmp_path, capsys):
     paths = []
     for i, log in enumerate(runs[:2]):

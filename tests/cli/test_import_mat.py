@@ -13,9 +13,9 @@ from scipy import io as sio
 
 from jointbench.testing.simulator import LAB_RIG, simulate_lab_rig
 
-import jointbench as jb  # noqa: E402
-from jointbench.bench.cli import main  # noqa: E402
-from jointbench.identification.log import LogError, read_log  # noqa: E402
+import jointbench as jb
+from jointbench.bench.cli import main
+from jointbench.identification.log import LogError, read_log
 
 G = LAB_RIG.volt_to_torque
 

@@ -11,9 +11,9 @@ import pytest
 
 from jointbench.testing.simulator import simulate_lab_rig
 
-from jointbench.bench.analysis.diagnose.report import write  # noqa: E402
-from jointbench.bench.analysis.diagnose.run import diagnose  # noqa: E402
-from jointbench.bench.sim import nominal as nominal_axes  # noqa: E402
+from jointbench.bench.analysis.diagnose.report import write
+from jointbench.bench.analysis.diagnose.run import diagnose
+from jointbench.bench.sim import nominal as nominal_axes
 
 
 @pytest.fixture(scope="module")

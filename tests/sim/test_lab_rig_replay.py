@@ -12,9 +12,9 @@ import pytest
 
 from jointbench.testing.simulator import LAB_RIG, PositionLoop, simulate_lab_rig
 
-from jointbench.bench.sim import nominal as nominal_axes  # noqa: E402
-from jointbench.bench.sim.controller import control_law, controller_from_log  # noqa: E402
-from jointbench.bench.sim.replay import forward_errors, replay  # noqa: E402
+from jointbench.bench.sim import nominal as nominal_axes
+from jointbench.bench.sim.controller import control_law, controller_from_log
+from jointbench.bench.sim.replay import forward_errors, replay
 
 DURATION = 12.0
 G = LAB_RIG.volt_to_torque

@@ -13,8 +13,8 @@ import pytest
 
 from jointbench.testing.simulator import LAB_RIG, simulate_lab_rig
 
-import jointbench as jb  # noqa: E402
-from jointbench.identification.first_mode import measure_first_mode  # noqa: E402
+import jointbench as jb
+from jointbench.identification.first_mode import measure_first_mode
 
 SEED = 32
 CASES = [(40.0, True), (80.0, True), (20.0, False)]   # (duration [s], closed loop)
