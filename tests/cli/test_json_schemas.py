@@ -215,3 +215,20 @@ def test_survey_json_and_text_are_the_api_s(tmp_path, capsys):
     keep = [line for line in table.splitlines() if not line.startswith("wall time")]
     assert [line for line in text.splitlines() if not line.startswith("wall time")] == keep
 
+
+
+def test_several_runs_json_is_the_api_s(logs, capsys):
+    """`identify A B --json` equals `jb.identify([A, B]).to_json()`; the answer validates
+    against identify_runs.schema.json and each run's answer against identify.schema.json; the
+    pooled K lies between the two runs' K (an inverse-variance mean can lie nowhere else)."""
+    a, b = logs
+    status, out = _cli(capsys, "identify", a, b, "--json")
+    assert status == 0
+    cli = json.loads(out)
+    api = _roundtrip(jb.identify([a, b]).to_json())
+    assert cli == api
+    _valid(cli, "identify_runs")
+    for run in cli["runs"]:
+        _valid(run, "identify")
+    ks = [run["physical"]["K"] for run in cli["runs"]]
+    assert min(ks) <= cli["pooled"]["K"]["value"] <= max(ks)
