@@ -6,6 +6,7 @@ call, and errors that name the file and the variable with nothing written."""
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
