@@ -147,6 +147,7 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
         why = f"given: {settings.stencil} points"
     f1 = mode.f1_hz if mode is not None and mode.found else None
     result = _identify(log, model, settings, notes, f1)
+    warnings += result.warnings
     if chooser and result.model == "joint-motor" and f1 is not None:   # a mode found
         result, band = choose_band(log, result, lambda s: _identify(log, model, s, [], f1),
                                    _joint_motor_estimate, f1)
@@ -255,6 +256,7 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
     sigma: dict[str, float] = {}
     t3: dict[str, float] = {}
     eqs18_20: dict[str, float] = {}
+    warnings: list[str] = []
     if model.startswith("motor-only"):
         X = {n: ls.value(n) for n in ls.names if n not in ls.unidentifiable}
         try:
@@ -276,7 +278,7 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
         eqs18_20 = dict(physical)
         if model == "motor-only":
             physical, sigma, sigma_corr = _link_reconstructed(log, settings, physical, f1_hz,
-                                                              notes)
+                                                              notes, warnings)
     else:
         for n in ls.names:
             if n not in ls.unidentifiable:
@@ -295,7 +297,7 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
                           settings=settings, y=reg.y, y_pred=y_pred, t=log.t[reg.index],
                           block=reg.block, notes=tuple(notes), table3=t3,
                           prismatic=log.prismatic, physical_sigma_corrected=sigma_corr,
-                          physical_eqs18_20=eqs18_20)
+                          physical_eqs18_20=eqs18_20, warnings=tuple(warnings))
 
 
 def reversal_rates(p: dict[str, float]) -> tuple[float, float]:
@@ -358,7 +360,7 @@ def _instruments(log: Log, reg: regressors.Regressor, f1_hz: float | None,
 
 
 def _link_reconstructed(log: Log, settings: FilterSettings, start: dict[str, float],
-                        f1_hz: float | None, notes: list[str]
+                        f1_hz: float | None, notes: list[str], warnings: list[str]
                         ) -> tuple[dict[str, float], dict[str, float], dict[str, float]]:
     """The physical parameters of the motor-only model from the link reconstructed out of q_m
     (identification/link_fit.py), started from the eqs. (18)-(20) inversion `start` (or, when
@@ -378,6 +380,7 @@ def _link_reconstructed(log: Log, settings: FilterSettings, start: dict[str, flo
     except ValueError as err:
         raise InversionError(str(err)) from err
     notes.extend(result.notes)
+    warnings.extend(result.warnings)
     return result.physical, result.sigma, result.sigma_corrected
 
 

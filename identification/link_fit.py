@@ -65,6 +65,7 @@ class LinkFit:
     y_pred: np.ndarray
     index: np.ndarray
     notes: tuple[str, ...]
+    warnings: tuple[str, ...] = ()
 
 
 def link_stepper(log: Log) -> tuple[Callable[..., tuple[np.ndarray, np.ndarray]], str]:
@@ -238,6 +239,46 @@ def _final(rows: _Rows, log: Log, p: dict[str, float], Z) -> tuple:
     return p, ls, y, J, idx
 
 
+def _unphysical(ls: LSResult) -> list[str]:
+    """The physical parameters of the linearised result that no axis can have: Jm, K,
+    JL = K / a not positive; FVm, FV = b JL negative by more than GRAVITY_Z corrected sigma
+    (a frictionless axis puts them at zero within their noise)."""
+    x = {n: ls.value(n) for n in NAMES}
+
+    def below(n: str) -> bool:
+        sd = ls.std_corrected(n)
+        sd = sd if np.isfinite(sd) and sd > 0 else ls.std(n)
+        return not x[n] > -GRAVITY_Z * (sd if np.isfinite(sd) else 0.0)
+
+    bad = {"Jm": not x["Jm"] > 0, "K": not x["K"] > 0, "JL": not x["a"] > 0,
+           "FVm": below("FVm"), "FV": below("b")}
+    return [n for n, b in bad.items() if b]
+
+
+def _final_checked(rows: _Rows, log: Log, p: dict[str, float], Z) -> tuple[tuple, str]:
+    """`_final` with the instruments `Z`; when those give an unphysical estimate (a
+    negative inertia or viscous friction) from the physical least-squares point `p`, `_final`
+    without them, and a warning naming the cause ('' otherwise). The instruments are the
+    columns rebuilt from the reference's predicted motion; the link Coulomb column (the
+    reconstructed link's friction switching) is the weakest of them, and on a link whose
+    friction FS is zero it is hardly correlated with its instrument at all: without torque
+    noise to average over the switching, one instrumental pass can then leave the physical
+    region, while least squares is unbiased there (no noise to be correlated with)."""
+    out = _final(rows, log, p, Z)
+    if Z is None or not _unphysical(out[1]) or not all(p[n] > 0 for n in ("Jm", "K", "a")):
+        return out, ""
+    ls = out[1]
+    got = ", ".join(_unphysical(ls))
+    warning = (f"motor-only: the instrumental-variable passes of the link reconstruction "
+               f"gave an unphysical {got} (Jm = {ls.value('Jm'):.4g}, K = "
+               f"{ls.value('K'):.4g}, FVm = {ls.value('FVm'):.4g}): the instrument of the link "
+               f"Coulomb friction column is weak (the link's friction switching is not in the "
+               f"reference's predicted motion: a link without Coulomb friction, FS = "
+               f"{p['Kc'] / p['a']:.3g} by least squares), so the least-squares link "
+               f"reconstruction is kept; it is unbiased only without closed-loop torque noise")
+    return _final(rows, log, p, None), warning
+
+
 def fit(log: Log, s: FilterSettings, start: dict[str, float], f1_hz: float | None = None
         ) -> LinkFit:
     """The motor-only estimate from a starting point `start` (physical names: K, JL, Jm, FV,
@@ -256,7 +297,7 @@ def fit(log: Log, s: FilterSettings, start: dict[str, float], f1_hz: float | Non
     rows = _Rows(log, s)
     p = _converge(rows, log, p, ROUNDS)
     Z, why = _instruments(log, s, f1_hz)
-    p, ls, y, J, idx = _final(rows, log, p, Z)
+    (p, ls, y, J, idx), warning = _final_checked(rows, log, p, Z)
     notes = [f"motor-only: link reconstructed from q_m through eq. (5) (stick-slip link "
              f"friction), variable projection from the eqs. (18)-(20) estimate, {ROUNDS} "
              f"rounds; {why}; {rows.stepper_note}"]
@@ -268,7 +309,7 @@ def fit(log: Log, s: FilterSettings, start: dict[str, float], f1_hz: float | Non
         left_out = _physical(ls, g)
         rows.gravity = False
         p = _converge(rows, log, {**p, "Kgx": 0.0, "Kgy": 0.0}, ROUNDS_AGAIN)
-        p, ls, y, J, idx = _final(rows, log, p, Z)
+        (p, ls, y, J, idx), warning = _final_checked(rows, log, p, Z)
         notes.append(f"the link's gravity (MX, MY) is within {GRAVITY_Z:g} sigma of zero: left "
                      "out of the model (a horizontal axis, or one at rest near its balance) "
                      "and reported as 0 with the standard deviation it had")
@@ -279,7 +320,8 @@ def fit(log: Log, s: FilterSettings, start: dict[str, float], f1_hz: float | Non
                 physical[k], sigma[k] = 0.0, left_out[1][k]
                 if k in left_out[2]:
                     sigma_c[k] = left_out[2][k]
-    return LinkFit(physical, sigma, sigma_c, ls, y, _model(J, p), idx, tuple(notes))
+    return LinkFit(physical, sigma, sigma_c, ls, y, _model(J, p), idx, tuple(notes),
+                   (warning,) if warning else ())
 
 
 START_POINTS = 12     # antiresonances tried by `start_from_band`
