@@ -27,7 +27,7 @@ from jointbench.bench.effects import loop_effects_from_model, write_effects
 from jointbench.bench.effects.base import positive_part as _pos
 from jointbench.bench.sim import nominal as nominal_axes
 from jointbench.bench.sim.friction import timeconst_for_log
-from jointbench.bench.sim.controller import has_controller
+from jointbench.bench.sim.controller import controller_from_log, has_controller
 from jointbench.bench.sim.replay import ReplayError, replay
 from jointbench.identification.discrepancy import SEGMENTS
 from jointbench.identification.discrepancy import nominal as nominal_rows, predict, with_parameters
@@ -138,10 +138,7 @@ def add_forward_view(d: Diagnosis, say: Callable[[str], None],
     is named) the extended axis."""
     log = d.log
     if log.q_ref is None or not has_controller(log):
-        note = ("not replayed: the log has no q_ref column or its metadata does not describe "
-                "the controller (the PI cascade's kp, kv, ki or a position loop's `controller` "
-                "and pid_kp..., docs/controller.md)")
-        return dataclasses.replace(d, forward_note=_motor_driven_note(d, note))
+        return dataclasses.replace(d, forward_note=_motor_driven_note(d, _no_replay_note(log)))
     fn = nominal_view
     try:
         if fn is None:
@@ -162,6 +159,22 @@ def add_forward_view(d: Diagnosis, say: Callable[[str], None],
     if fe is not None:
         d = dataclasses.replace(d, forward_note=forward_scope(d).note)
     return d
+
+
+def _no_replay_note(log: Log) -> str:
+    """Why the closed-loop replay cannot run: no q_ref, a controller the metadata names but
+    does not describe completely (controller_from_log's reason, e.g. the missing tau_max),
+    or no controller at all."""
+    if log.q_ref is None:
+        return "not replayed: the log has no q_ref column (the closed loop's reference)"
+    if "controller" in log.meta:
+        try:
+            controller_from_log(log)
+        except ValueError as err:     # LogError included
+            return f"not replayed: {getattr(err, 'message', None) or err}"
+    return ("not replayed: the log's metadata does not describe the controller (the PI "
+            "cascade's kp, kv, ki or a position loop's `controller` and pid_kp..., "
+            "docs/controller.md)")
 
 
 def _motor_driven_note(d: Diagnosis, note: str) -> str:
