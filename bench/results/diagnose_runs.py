@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from jointbench.bench.results.diagnose import DiagnosisResult
+from jointbench.identification.output_values import finite_json
 
 
 @dataclass(frozen=True)
@@ -48,6 +49,26 @@ class RunsDiagnosis:
         return {c: tuple(nm for nm, causes in zip(self.names, per_run) if c in causes)
                 for c in sorted(named) if c not in self.supported}
 
+    def evidence(self) -> dict[str, list[dict]]:
+        """Per cause any run names, each run's own test of it: {"run", "named", "t",
+        "heldout_pct", "p_heldout", "parameters"}; where the run names it, its named cause's
+        (its own round's held-out test), else its first-round candidate's (absent: a cause
+        the run could not test, all values None)."""
+        docs = [r.to_json() for r in self.results]
+        out: dict[str, list[dict]] = {}
+        for c in sorted({e for causes in self._causes() for e in causes}):
+            rows = []
+            for nm, doc in zip(self.names, docs):
+                named = [x for x in doc.get("causes", []) if x.get("effect") == c]
+                cand = [x for x in doc.get("candidates", []) if x.get("effect") == c]
+                src = named[0] if named else cand[0] if cand else {}
+                rows.append({"run": nm, "named": bool(named), "t": src.get("t"),
+                             "heldout_pct": src.get("heldout_pct"),
+                             "p_heldout": src.get("p_heldout"),
+                             "parameters": src.get("parameters", {})})
+            out[c] = rows
+        return out
+
     def table(self) -> str:
         """The text `jointbench diagnose A.csv B.csv ...` prints.
 
@@ -61,6 +82,11 @@ class RunsDiagnosis:
                  "named on every run (supported): " + (", ".join(self.supported) or "none")]
         for c, runs in self.unsupported.items():
             lines.append(f"not supported: {c}, named on {', '.join(runs)} only")
+        for c, rows in self.evidence().items():
+            lines.append(f"{c}, each run's own test: " + "; ".join(
+                f"{r['run']}: {'named' if r['named'] else 'not named'}"
+                + (f", t = {r['t']:.3g}" if r["t"] is not None else ", not tested")
+                for r in rows))
         return "\n\n".join(parts) + "\n\n" + "\n".join(lines)
 
     def to_json(self) -> dict:
@@ -70,8 +96,11 @@ class RunsDiagnosis:
         -------
         dict
             {"runs": [{"name", each run's diagnose JSON}], "supported": [...],
-            "unsupported": {cause: [runs]}}.
+            "unsupported": {cause: [runs]}, "evidence": {cause: [per run: "run", "named",
+            "t", "heldout_pct", "p_heldout", "parameters"]}} (docs/schemas/diagnose_runs.schema.json).
         """
-        return {"runs": [{"name": nm, **r.to_json()} for nm, r in zip(self.names, self.results)],
-                "supported": list(self.supported),
-                "unsupported": {c: list(r) for c, r in self.unsupported.items()}}
+        return finite_json(
+            {"runs": [{"name": nm, **r.to_json()} for nm, r in zip(self.names, self.results)],
+             "supported": list(self.supported),
+             "unsupported": {c: list(r) for c, r in self.unsupported.items()},
+             "evidence": self.evidence()})
