@@ -50,10 +50,16 @@ class RunsDiagnosis:
                 for c in sorted(named) if c not in self.supported}
 
     def evidence(self) -> dict[str, list[dict]]:
-        """Per cause any run names, each run's own test of it: {"run", "named", "t",
-        "heldout_pct", "p_heldout", "parameters"}; where the run names it, its named cause's
-        (its own round's held-out test), else its first-round candidate's (absent: a cause
-        the run could not test, all values None)."""
+        """Each run's own test of every cause any run names.
+
+        Returns
+        -------
+        dict of str to list of dict
+            cause -> per run {"run", "named", "t", "heldout_pct", "p_heldout",
+            "parameters"}: where the run names the cause, its named cause's held-out test
+            (its own round), else its first-round candidate's; None where the run could not
+            test it.
+        """
         docs = [r.to_json() for r in self.results]
         out: dict[str, list[dict]] = {}
         for c in sorted({e for causes in self._causes() for e in causes}):
