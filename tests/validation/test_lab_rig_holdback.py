@@ -82,9 +82,13 @@ def runs(lab):
 
 @pytest.fixture(scope="module")
 def diagnoses(lab, tmp_path_factory):
-    """Each run diagnosed with the forward view; the 20 s closed-loop run written out."""
+    """Each run diagnosed with the forward view and cross-validated on the next (the last on
+    the first), as `diagnose A B C D` does; the 20 s closed-loop run written out."""
+    paths = lab[0]
     out = tmp_path_factory.mktemp("diag") / "closed20"
-    return [jb.diagnose(p, out=out if Path(p).stem == "closed20" else None) for p in lab[0]]
+    return [jb.diagnose(p, validate=paths[(i + 1) % len(paths)],
+                        out=out if Path(p).stem == "closed20" else None)
+            for i, p in enumerate(paths)]
 
 
 def _no_units_warning(texts) -> None:
@@ -142,8 +146,16 @@ def test_diagnose_names_the_same_causes_on_every_run(lab, diagnoses):
         for cause in doc["causes"]:       # each named cause passes its own held-out test
             assert cands[cause["effect"]]["significant"]
             assert cause["t"] > 0 and cause["p_heldout"] < cands[cause["effect"]]["alpha"]
-    both = RunsDiagnosis(tuple(diagnoses), tuple(lab[0]))
-    assert both.supported == ("spring_damping",) and both.unsupported == {}
+    every = RunsDiagnosis(tuple(diagnoses), tuple(lab[0]))
+    assert every.supported == ("spring_damping",) and every.unsupported == {}
+    # each run's extended model predicts the run it did not fit better than its nominal
+    assert every.confirms() == (True,) * len(RUNS)
+    doc = every.to_json()
+    assert [r["named"] for r in doc["evidence"]["spring_damping"]] == [True] * len(RUNS)
+    jsonschema = pytest.importorskip("jsonschema")
+    schema = Path(__file__).resolve().parents[2] / "docs" / "schemas" / "diagnose_runs.schema.json"
+    jsonschema.Draft202012Validator(json.loads(schema.read_text())).validate(
+        json.loads(json.dumps(doc, allow_nan=False)))
 
 
 def test_the_p_loop_replays_and_the_models_are_written(lab, diagnoses):

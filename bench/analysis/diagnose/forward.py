@@ -313,7 +313,9 @@ def cross_validate(d: Diagnosis, other: Log, disturbance: np.ndarray | None = No
     and the forward view (closed-loop replay with `disturbance` applied to the link or
     carriage, or at the motor input: EMPS's pulses are volts at the drive input, already in
     the logged force, so they go in as gtau x pulses at the motor). `settings`: the other
-    log's own band (diagnosis_settings(other); d's band when None)."""
+    log's own band (diagnosis_settings(other); d's band when None). A log that cannot be
+    replayed (no q_ref, no controller described) gets the inverse view and `forward_note`,
+    why not the forward one."""
     rows = with_parameters(nominal_rows(other, settings or d.settings), d.inverse.nominal.X)
     out: dict = {"inverse": {}, "forward": {}}
     models = {"nominal": None, "extended": d.causes[-1] if d.causes else None}
@@ -324,6 +326,11 @@ def cross_validate(d: Diagnosis, other: Log, disturbance: np.ndarray | None = No
         out["inverse"][label] = {("motor", "link")[int(b)]: rows.relative_error_pct(res, int(b))
                                  for b in np.unique(rows.block)}
     dv = dataclasses.replace(d, log=other)
+    if other.q_ref is None or not has_controller(other):
+        # an open-loop run (or a loop nobody described) has no closed loop to replay: the
+        # inverse view alone cross-validates on it
+        out["forward_note"] = _no_replay_note(other)
+        return out
     for label, ext in (("nominal", False), ("extended", True)):
         if ext and d.named is None:
             continue
