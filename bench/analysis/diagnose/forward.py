@@ -138,7 +138,7 @@ def add_forward_view(d: Diagnosis, say: Callable[[str], None],
     is named) the extended axis."""
     log = d.log
     if log.q_ref is None or not has_controller(log):
-        return dataclasses.replace(d, forward_note=_motor_driven_note(d, _no_replay_note(log)))
+        return dataclasses.replace(d, forward_note=_motor_driven_note(d, no_replay_note(log)))
     fn = nominal_view
     try:
         if fn is None:
@@ -161,7 +161,7 @@ def add_forward_view(d: Diagnosis, say: Callable[[str], None],
     return d
 
 
-def _no_replay_note(log: Log) -> str:
+def no_replay_note(log: Log) -> str:
     """Why the closed-loop replay cannot run: no q_ref, a controller the metadata names but
     does not describe completely (controller_from_log's reason, e.g. the missing tau_max),
     or no controller at all."""
@@ -329,7 +329,7 @@ def cross_validate(d: Diagnosis, other: Log, disturbance: np.ndarray | None = No
     if other.q_ref is None or not has_controller(other):
         # an open-loop run (or a loop nobody described) has no closed loop to replay: the
         # inverse view alone cross-validates on it
-        out["forward_note"] = _no_replay_note(other)
+        out["forward_note"] = no_replay_note(other)
         return out
     for label, ext in (("nominal", False), ("extended", True)):
         if ext and d.named is None:
