@@ -223,25 +223,30 @@ def _with_link_mode(log: Log, mode: FirstMode) -> FirstMode:
     when the link and motor peaks disagree (`_cross_checked`: one is biased and nothing else
     says which), when only the motor response has a peak (a motor side damped by a voltage
     drive's back-EMF or a stiff loop flattens the locked peak and moves it to its damped
-    frequency, while q / q_m keeps the link mode sharp), or when
+    frequency, while q / q_m keeps the link mode sharp), when the link peak alone lies more
+    than CONSISTENCY_Z sigmas of their difference from q / q_m's f1 (the peak of a closed
+    loop's q / q_ref is that loop's; q / q_m, eq. (5) alone, holds no controller), or when
     the excitation stops under f1 (the locked peak outside it, the link mode below it). The
     note says which response decided and what the others gave."""
     from jointbench.identification.link_mode import excitation_top_hz, link_mode_first_mode
 
     disagree = "DISAGREES" in mode.note
     beyond = mode.found and excitation_top_hz(log) < mode.f1_hz
-    if mode.found and mode.method.startswith("link q/tau_m") and not (disagree or beyond):
-        return mode
     alt = link_mode_first_mode(log)
     if alt is None:
         return mode
     f1, sigma, method, note = alt
     motor_only = mode.found and not mode.method.startswith("link q/tau_m")
-    if mode.found and not (disagree or beyond or motor_only):
+    # a lone link peak that q / q_m contradicts: under a loop on q_m the link's closed-loop
+    # peak is the loop's, not the axis's, while q / q_m holds the axis alone
+    contradicted = (mode.found and not (disagree or beyond or motor_only)
+                    and abs(mode.f1_hz - f1) > CONSISTENCY_Z * math.hypot(mode.sigma_hz, sigma))
+    if mode.found and not (disagree or beyond or motor_only or contradicted):
         return mode
     why = ("the excitation stops under the peaks' f1" if beyond else
            "the link and motor peaks disagree" if disagree else
            "only the motor response has a peak" if motor_only else
+           "the link peak contradicts the link over motor response" if contradicted else
            "the peak responses show no mode")
     other = (f"{mode.method} gave {mode.f1_hz:.4g} +- {mode.sigma_hz:.2g} Hz" if mode.found
              else f"{mode.method}: {mode.note}")

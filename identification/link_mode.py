@@ -151,6 +151,19 @@ def _estimate(log: Log, sl: slice, nperseg: int, noverlap: int | None, top_hz: f
             JL / Jm)
 
 
+def link_mode(log: Log) -> tuple[float, float] | None:
+    """(wa^2, b) = (K / JL, FV / JL) [rad^2/s^2, 1/s] of q / q_m over the whole record
+    (`link_over_motor`, through q_ref when logged, else tau_m): what the two encoders alone
+    say of the link, whatever the drive and the controller. None without q or a link mode in
+    the excited band."""
+    if log.q is None:
+        return None
+    fs = log.sample_rate_hz
+    x = log.q_ref if log.q_ref is not None else log.tau_m
+    f, H, w = _ratio(x, log.q_m, log.q, fs, _nperseg(len(log), fs))
+    return link_over_motor(f, H, w, 1.1 * excitation_top_hz(log))
+
+
 def excitation_top_hz(log: Log) -> float:
     """The top of the excited band [Hz]: the highest frequency under which 99 % of the power
     of the excitation's (q_ref's, else tau_m's) time derivative lies (the derivative weighs

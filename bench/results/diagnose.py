@@ -24,6 +24,9 @@ def _cross_validation_text(source: str, validate_source: str, xval: dict) -> str
     lines = [f"\ncross-validation on {validate_source} (models identified and extended on "
              f"{source}, unchanged):"]
     for view, rows in xval.items():
+        if isinstance(rows, str):      # a note: why a view did not run
+            lines.append(f"  {view.replace('_', ' ')}: {rows}")
+            continue
         for label, vals in rows.items():
             lines.append(f"  {view:8s} {label:9s} " + ", ".join(
                 f"{k} {v:.4g}" for k, v in vals.items()))

@@ -104,18 +104,24 @@ def scores(nom: Nominal, folds: np.ndarray, y: np.ndarray, W: np.ndarray) -> Sco
     """Fit `y = W X` on all rows and on each fold's complement (the nominal's weights), by
     the normal equations of the column-scaled design (the Gram matrix, less the fold's for a
     fold fit): the designs are well conditioned once scaled (condition numbers 5 to 40 on
-    the bench axes), and one small solve per fit is what makes the folds affordable."""
+    the bench axes), and one small solve per fit is what makes the folds affordable. A
+    column that is zero (a term the data does not excite, such as gravity on a horizontal
+    axis) is not identifiable: its parameter is exactly 0, as in the nominal's `solve`, not
+    the rounding of a minimum-norm solution."""
     A, b, scale = _scaled(nom, y, W)
+    dead = ~np.any(A != 0, axis=0)
     k = int(folds.max()) + 1
     parts = [np.flatnonzero(folds == f) for f in range(k)]
     # per fold: its Gram matrix, A^T b and b^T b; a fit on the others subtracts them
     grams = [(A[i].T @ A[i], A[i].T @ b[i], float(b[i] @ b[i])) for i in parts]
     G, c, bb = (sum(g[j] for g in grams) for j in range(3))
     x = np.linalg.lstsq(G, c, rcond=None)[0]
+    x[dead] = 0.0
     full = _rss(G, c, bb, x)
     train, xs = np.empty(k), np.empty((k, len(x)))
     for f, (Gf, cf, bf) in enumerate(grams):
         xs[f] = np.linalg.lstsq(G - Gf, c - cf, rcond=None)[0]
+        xs[f][dead] = 0.0
         train[f] = _rss(G - Gf, c - cf, bb - bf, xs[f])
     # each row by its fold's fit, elementwise (no BLAS thread wake-up), all folds at once
     errors = b - (A * xs[folds]).sum(axis=1)

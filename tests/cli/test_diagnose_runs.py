@@ -16,9 +16,30 @@ from jointbench.identification.log import write_log
 from jointbench.testing.simulator import simulate_lab_rig
 
 
-def _fake(*effects):
+def _fake(*effects, xval=None):
     causes = tuple(SimpleNamespace(effect=e) for e in effects)
-    return SimpleNamespace(diagnosis=SimpleNamespace(causes=causes))
+    doc = {"causes": [{"effect": e, "t": 5.0, "heldout_pct": 50.0, "p_heldout": 1e-6,
+                       "parameters": {}} for e in effects], "candidates": []}
+    return SimpleNamespace(diagnosis=SimpleNamespace(causes=causes), cross_validation=xval,
+                           table=lambda: "", to_json=lambda: doc)
+
+
+def _xval(nominal, extended):
+    return {"inverse": {"nominal": {"motor": nominal, "link": nominal},
+                        "extended": {"motor": extended, "link": extended}}, "forward": {}}
+
+
+def test_a_cause_is_supported_only_where_the_other_run_confirms_it():
+    """Named on both runs, but one run's extended model predicts the other run worse than
+    its nominal: the runs do not support it."""
+    good = RunsDiagnosis((_fake("backlash", xval=_xval(3.0, 1.0)),
+                          _fake("backlash", xval=_xval(3.0, 1.5))), ("a", "b"))
+    assert good.supported == ("backlash",) and good.confirms() == (True, True)
+    bad = RunsDiagnosis((_fake("backlash", xval=_xval(3.0, 1.0)),
+                         _fake("backlash", xval=_xval(3.0, 3.2))), ("a", "b"))
+    assert bad.confirms() == (True, False)
+    assert bad.supported == () and bad.unsupported == {"backlash": ("a", "b")}
+    assert "NOT better" in bad.table()
 
 
 def test_a_cause_is_supported_only_where_every_run_names_it():

@@ -232,3 +232,49 @@ def test_several_runs_json_is_the_api_s(logs, capsys):
         _valid(run, "identify")
     ks = [run["physical"]["K"] for run in cli["runs"]]
     assert min(ks) <= cli["pooled"]["K"]["value"] <= max(ks)
+
+
+def test_several_files_import_json_is_the_api_s(logs, tmp_path, capsys):
+    """`import A B --out DIR --json` prints a list of the import objects, the API's
+    `[r.to_json() for r in import_log([a, b], DIR)]`, but for the folder; the list validates
+    against import_many.schema.json and each object against import.schema.json."""
+    raws = []
+    for i, log in enumerate(logs):
+        lines = [ln for ln in Path(log).read_text().splitlines() if not ln.startswith("#")]
+        raws.append(tmp_path / f"raw{i}.csv")
+        raws[-1].write_text("\n".join(lines[:2000]) + "\n")
+    status, out = _cli(capsys, "import", *map(str, raws), "--out", str(tmp_path / "cli"),
+                       "--json")
+    assert status == 0
+    cli = json.loads(out)
+    api = [_roundtrip(r.to_json()) for r in jb.import_log(raws, tmp_path / "api")]
+    assert [d["out"] for d in cli] == [str(tmp_path / "cli" / f"raw{i}.csv") for i in (0, 1)]
+    assert [{**d, "out": None} for d in cli] == [{**d, "out": None} for d in api]
+    _valid(cli, "import_many")
+    _valid(api, "import_many")
+    for doc in cli:
+        _valid(doc, "import")
+
+
+@pytest.mark.slow
+def test_several_runs_diagnose_json_is_the_api_s(logs, capsys):
+    """`diagnose A B --json` equals `jb.diagnose([A, B]).to_json()`; it validates against
+    diagnose_runs.schema.json and each run's object against diagnose.schema.json; each run is
+    cross-validated on the other, and the evidence holds every run's own test of each cause
+    any run names."""
+    a, b = logs
+    status, out = _cli(capsys, "diagnose", a, b, "--no-forward", "--json")
+    assert status == 0
+    cli = json.loads(out)
+    api = _roundtrip(jb.diagnose([a, b], forward=False).to_json())
+    assert cli == api
+    _valid(cli, "diagnose_runs")
+    for run, other in zip(cli["runs"], (b, a)):
+        _valid(run, "diagnose")
+        assert run["cross_validation"]["file"] == other
+    named = {c for run in cli["runs"] for c in run["named_causes"]}
+    assert set(cli["evidence"]) == named
+    for cause, rows in cli["evidence"].items():
+        assert [r["run"] for r in rows] == [a, b]
+        assert [r["named"] for r in rows] == [cause in run["named_causes"]
+                                              for run in cli["runs"]]

@@ -486,9 +486,13 @@ class Multisine:
 
 @dataclass(frozen=True)
 class PositionLoop:
-    """docs/controller.md section 3, written here again from its text: a `kind` P, PD, PI or
-    PID loop on `feedback` ("q_m" or "q") with kp [N m/rad], ki [N m/(rad s)], kd
-    [N m s/rad]; `feedforward`: the derivative acts on the error, else on the measurement."""
+    """docs/controller.md, written here again from its text. `kind` P, PD, PI or PID
+    (section 3): a loop on `feedback` ("q_m" or "q") with kp [N m/rad], ki [N m/(rad s)],
+    kd [N m s/rad]; `feedforward`: the derivative acts on the error, else on the measurement.
+    "PI cascade" (section 2): position gain kp [1/s], PI velocity loop kv [N m s/rad],
+    ki [N m/rad] on the motor angle, `feedforward` the reference's velocity. "TF" (section
+    3.3): u = C(z) e, `num` and `den` the coefficients of z^0, z^-1, ...; the state keeps the
+    unclipped output."""
 
     kind: str = "P"
     kp: float = 0.0
@@ -496,8 +500,19 @@ class PositionLoop:
     kd: float = 0.0
     feedback: str = "q_m"
     feedforward: bool = False
+    kv: float = 0.0
+    num: tuple[float, ...] = ()
+    den: tuple[float, ...] = ()
 
     def meta(self, tau_max: float) -> dict[str, str]:
+        if self.kind == "PI cascade":
+            return {"controller": self.kind, "kp": _fmt(self.kp), "kv": _fmt(self.kv),
+                    "ki": _fmt(self.ki), "tau_max": _fmt(tau_max),
+                    "velocity_feedforward": "true" if self.feedforward else "false"}
+        if self.kind == "TF":
+            return {"controller": "TF", "feedback": self.feedback, "tau_max": _fmt(tau_max),
+                    "tf_num": " ".join(_fmt(b) for b in self.num),
+                    "tf_den": " ".join(_fmt(a) for a in self.den)}
         out = {"controller": self.kind, "feedback": self.feedback, "pid_kp": _fmt(self.kp),
                "tau_max": _fmt(tau_max),
                "velocity_feedforward": "true" if self.feedforward else "false"}
@@ -507,19 +522,43 @@ class PositionLoop:
             out["pid_kd"] = _fmt(self.kd)
         return out
 
-    def law(self, T: float) -> Callable[[float, float, float], float]:
-        """tau(r, y) per tick; y[-1] = y[0], r[-1] = r[0], I[-1] = 0 (the rig starts at rest
-        with no torque)."""
-        state = {"prev": None, "I": 0.0}
+    def law(self, T: float) -> Callable[[float, float], float]:
+        """tau(r, y) per tick; y[-1] = y[0], r[-1] = r[0], I[-1] = 0, the TF's past errors
+        e[0] and past outputs 0 (the rig starts at rest with no torque)."""
+        state: dict = {"prev": None, "I": 0.0, "e": None, "u": None}
+        ff = 1.0 if self.feedforward else 0.0
 
-        def tau(r: float, y: float) -> float:
+        def previous(r: float, y: float) -> tuple[float, float]:
             y_prev, r_prev = state["prev"] if state["prev"] is not None else (y, r)
             state["prev"] = (y, r)
+            return y_prev, r_prev
+
+        def position(r: float, y: float) -> float:
+            y_prev, r_prev = previous(r, y)
             state["I"] += self.ki * T * (r - y)
-            d = ((r - r_prev) if self.feedforward else 0.0) - (y - y_prev)
+            d = ff * (r - r_prev) - (y - y_prev)
             return self.kp * (r - y) + state["I"] + self.kd * d / T
 
-        return tau
+        def cascade(r: float, y: float) -> float:
+            y_prev, r_prev = previous(r, y)
+            e_v = self.kp * (r - y) + ff * (r - r_prev) / T - (y - y_prev) / T
+            state["I"] += self.ki * T * e_v
+            return self.kv * e_v + state["I"]
+
+        def transfer(r: float, y: float) -> float:
+            e = r - y
+            if state["e"] is None:
+                state["e"] = [e] * (len(self.num) - 1)
+                state["u"] = [0.0] * (len(self.den) - 1)
+            es, us = [e] + state["e"], state["u"]
+            u = (sum(b * x for b, x in zip(self.num, es))
+                 - sum(a * x for a, x in zip(self.den[1:], us))) / self.den[0]
+            state["e"] = es[:len(self.num) - 1]
+            state["u"] = ([u] + us)[:len(self.den) - 1]
+            return u
+
+        return cascade if self.kind == "PI cascade" else transfer if self.kind == "TF" \
+            else position
 
 
 LAB_RIG = LabRig()
@@ -530,7 +569,7 @@ LAB_RIG_KP = 1.0        # V/rad, the proportional position loop u = Kp (r - thet
 def simulate_lab_rig(rig: LabRig = LAB_RIG, seed: int = 1, duration: float = 40.0,
                      closed_loop: bool = True, *, kp_volt: float = LAB_RIG_KP,
                      reference: Multisine | None = None, loop: PositionLoop | None = None,
-                     sample_rate_hz: float = LAB_RIG_RATE) -> Log:
+                     sample_rate_hz: float = LAB_RIG_RATE, effects=None) -> Log:
     """One run of the lab rig as a jointbench log (docs/log-format.md).
 
     Closed loop: u[k] = clip(Kp (r[k] - theta[k]), +-u_max) with Kp = `kp_volt` [V/rad] on
@@ -540,8 +579,12 @@ def simulate_lab_rig(rig: LabRig = LAB_RIG, seed: int = 1, duration: float = 40.
     command sent as u = tau / g_u) in place of the lab's. Open loop: u is the multisine itself (RMS 1 V), and
     the log has no q_ref nor controller. The voltage noise adds to the applied voltage, not to
     the logged command. The plant is eqs. (5)-(6) with the back-EMF in FVm (`LabRig`),
-    integrated by RK4 as `simulate`. Same arguments, the same log bit for bit."""
+    integrated by RK4 as `simulate`. `effects`: hidden effects as in `simulate` (e.g.
+    "spring_damping=0.0025", the springs' own damping D (qm' - q') beside the link's FV);
+    their truth is in the metadata. Same arguments, the same log bit for bit."""
     family = rig.family
+    hidden = as_hidden(effects)
+    extra = plant(hidden, family.K, family.gear_ratio, False)
     T = 1.0 / sample_rate_hz
     g = rig.volt_to_torque
     if reference is None:
@@ -551,8 +594,8 @@ def simulate_lab_rig(rig: LabRig = LAB_RIG, seed: int = 1, duration: float = 40.
     rng = np.random.default_rng(seed)
     r = reference(t, rng)
     noise = rng.normal(0.0, rig.voltage_noise_std, n)
-    n_sub = default_substeps(family, sample_rate_hz)
-    step = make_stepper(family, 0.0, T, n_sub)
+    n_sub = default_substeps(family, sample_rate_hz, extra)
+    step = make_stepper(family, 0.0, T, n_sub, extra)
     quant = _quantiser(rig.counts)
     x: State = (0.0, 0.0, 0.0, 0.0)
     if loop is None:
@@ -562,7 +605,8 @@ def simulate_lab_rig(rig: LabRig = LAB_RIG, seed: int = 1, duration: float = 40.
     saturated = 0
     for k in range(n):
         theta[k], alpha[k] = quant(x[0]), quant(x[0] - x[1])
-        y = theta[k] if loop.feedback == "q_m" else theta[k] - alpha[k]
+        y = theta[k] if loop.feedback == "q_m" or loop.kind == "PI cascade" else \
+            theta[k] - alpha[k]
         v = law(r[k], y) / g if closed_loop else r[k]
         if abs(v) > rig.u_max:
             saturated += 1
@@ -592,6 +636,8 @@ def simulate_lab_rig(rig: LabRig = LAB_RIG, seed: int = 1, duration: float = 40.
     meta["truth_MX"] = meta["truth_MY"] = "0"
     meta["truth_FVm_back_emf"] = _fmt(rig.back_emf_damping)
     meta["truth_link_mode_hz"] = _fmt(rig.link_mode_hz)
+    if hidden:
+        meta.update(truth_meta(hidden))
     return Log(t=t, q_m=theta, tau_m=g * u, q=theta - alpha,
                q_ref=r if closed_loop else None,
                extra={"theta": theta, "alpha": alpha, "u": u}, meta=meta)

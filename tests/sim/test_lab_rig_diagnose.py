@@ -68,3 +68,19 @@ def test_without_a_controller_the_motor_driven_view_runs():
     bad = motor_driven_view(log, {**truth, "K": 1.1 * truth["K"]}, 8.0)
     assert bad.q_rms > 3 * good.q_rms and bad.tau_rel_pct > 3 * good.tau_rel_pct
     assert good.q_rel_pct < 2.0
+
+
+def test_the_forward_note_says_why_the_loop_is_not_replayed():
+    """No q_ref (an open-loop run), a P loop without its torque limit, no controller: each
+    note names what is missing."""
+    from dataclasses import replace as rep
+
+    from jointbench.bench.analysis.diagnose.forward import no_replay_note
+
+    log = simulate_lab_rig(seed=9, duration=2.0)
+    assert "no q_ref column" in no_replay_note(rep(log, q_ref=None))
+    no_limit = rep(log, meta={k: v for k, v in log.meta.items() if k != "tau_max"})
+    assert "P loop lacks tau_max" in no_replay_note(no_limit)
+    bare = rep(log, meta={k: v for k, v in log.meta.items() if k != "controller"
+                          and not k.startswith("pid_")})
+    assert "does not describe the controller" in no_replay_note(bare)

@@ -17,7 +17,7 @@ import jointbench as jb
 from jointbench.identification.first_mode import measure_first_mode
 
 SEED = 32
-CASES = [(40.0, True), (80.0, True), (20.0, False)]   # (duration [s], closed loop)
+CASES = [(20.0, True), (40.0, True), (80.0, True), (20.0, False)]   # (duration [s], closed loop)
 
 
 @pytest.mark.parametrize("duration,closed", CASES)

@@ -27,7 +27,7 @@ from jointbench.bench.effects import loop_effects_from_model, write_effects
 from jointbench.bench.effects.base import positive_part as _pos
 from jointbench.bench.sim import nominal as nominal_axes
 from jointbench.bench.sim.friction import timeconst_for_log
-from jointbench.bench.sim.controller import has_controller
+from jointbench.bench.sim.controller import controller_from_log, has_controller
 from jointbench.bench.sim.replay import ReplayError, replay
 from jointbench.identification.discrepancy import SEGMENTS
 from jointbench.identification.discrepancy import nominal as nominal_rows, predict, with_parameters
@@ -138,10 +138,7 @@ def add_forward_view(d: Diagnosis, say: Callable[[str], None],
     is named) the extended axis."""
     log = d.log
     if log.q_ref is None or not has_controller(log):
-        note = ("not replayed: the log has no q_ref column or its metadata does not describe "
-                "the controller (the PI cascade's kp, kv, ki or a position loop's `controller` "
-                "and pid_kp..., docs/controller.md)")
-        return dataclasses.replace(d, forward_note=_motor_driven_note(d, note))
+        return dataclasses.replace(d, forward_note=_motor_driven_note(d, no_replay_note(log)))
     fn = nominal_view
     try:
         if fn is None:
@@ -162,6 +159,22 @@ def add_forward_view(d: Diagnosis, say: Callable[[str], None],
     if fe is not None:
         d = dataclasses.replace(d, forward_note=forward_scope(d).note)
     return d
+
+
+def no_replay_note(log: Log) -> str:
+    """Why the closed-loop replay cannot run: no q_ref, a controller the metadata names but
+    does not describe completely (controller_from_log's reason, e.g. the missing tau_max),
+    or no controller at all."""
+    if log.q_ref is None:
+        return "not replayed: the log has no q_ref column (the closed loop's reference)"
+    if "controller" in log.meta:
+        try:
+            controller_from_log(log)
+        except ValueError as err:     # LogError included
+            return f"not replayed: {getattr(err, 'message', None) or err}"
+    return ("not replayed: the log's metadata does not describe the controller (the PI "
+            "cascade's kp, kv, ki or a position loop's `controller` and pid_kp..., "
+            "docs/controller.md)")
 
 
 def _motor_driven_note(d: Diagnosis, note: str) -> str:
@@ -300,7 +313,9 @@ def cross_validate(d: Diagnosis, other: Log, disturbance: np.ndarray | None = No
     and the forward view (closed-loop replay with `disturbance` applied to the link or
     carriage, or at the motor input: EMPS's pulses are volts at the drive input, already in
     the logged force, so they go in as gtau x pulses at the motor). `settings`: the other
-    log's own band (diagnosis_settings(other); d's band when None)."""
+    log's own band (diagnosis_settings(other); d's band when None). A log that cannot be
+    replayed (no q_ref, no controller described) gets the inverse view and `forward_note`,
+    why not the forward one."""
     rows = with_parameters(nominal_rows(other, settings or d.settings), d.inverse.nominal.X)
     out: dict = {"inverse": {}, "forward": {}}
     models = {"nominal": None, "extended": d.causes[-1] if d.causes else None}
@@ -311,6 +326,11 @@ def cross_validate(d: Diagnosis, other: Log, disturbance: np.ndarray | None = No
         out["inverse"][label] = {("motor", "link")[int(b)]: rows.relative_error_pct(res, int(b))
                                  for b in np.unique(rows.block)}
     dv = dataclasses.replace(d, log=other)
+    if other.q_ref is None or not has_controller(other):
+        # an open-loop run (or a loop nobody described) has no closed loop to replay: the
+        # inverse view alone cross-validates on it
+        out["forward_note"] = no_replay_note(other)
+        return out
     for label, ext in (("nominal", False), ("extended", True)):
         if ext and d.named is None:
             continue
