@@ -51,6 +51,45 @@ class SecondView:
 
 
 @dataclass(frozen=True)
+class Test:
+    """One held-out test of a claim "this effect is in the log" (identification.discrepancy.
+    heldout): the band or comparison it ran in (`view`), the share of the held-out residual
+    the effect removes, the segment t that it removes more than MATERIAL, its one-sided p
+    and the level it must pass (its round's Holm level over the views its hypothesis is
+    split over). A named cause carries the test that passed; `passes` is that claim."""
+
+    view: str
+    heldout_pct: float
+    t: float
+    p: float
+    level: float
+    explained_pct: float = float("nan")   # in sample (the chooser's band only)
+
+    @property
+    def passes(self) -> bool:
+        return bool(self.heldout_pct > 0 and self.p < self.level)
+
+    @property
+    def bar(self) -> float:
+        """The t its level asks for (heldout.t_bar)."""
+        return t_bar(self.level) if self.level > 0 else float("inf")
+
+    def describe(self) -> str:
+        """"t = .. (p = ..) against the bar t > .. (level ..), held out .. %" with its view."""
+        return (f"{self.view}: held out it explains {self.heldout_pct:.3g} %, t = "
+                f"{self.t:.3g} (p = {self.p:.2g}) against the bar t > {self.bar:.3g} "
+                f"(level {self.level:.2g})")
+
+    def to_json(self) -> dict:
+        return {"view": self.view, "heldout_pct": self.heldout_pct, "t": self.t,
+                "p_heldout": self.p, "alpha": self.level, "t_bar": self.bar,
+                "explained_pct": self.explained_pct, "passes": self.passes}
+
+
+CHOOSER = "chooser's band"
+
+
+@dataclass(frozen=True)
 class Candidate:
     """One effect evaluated against a reference model (the nominal, then `base`)."""
 
@@ -84,6 +123,7 @@ class Candidate:
     fold_values: tuple[float, ...] = ()
     second: SecondView | None = None   # a second band's test (lag_band), when one was run
     views: int = 1   # the tests its hypothesis is split over (lag_band: 2), each at alpha / views
+    round: int = 0   # the round of the inverse view it was tested in (1 against the nominal)
 
     @property
     def level(self) -> float:
@@ -99,6 +139,22 @@ class Candidate:
     def significant(self) -> bool:
         return (self.testable and not self.unphysical and self.heldout_pct > 0
                 and (self.p_heldout < self.level or self.confirmed))
+
+    @property
+    def own_test(self) -> Test:
+        """Its test in the chooser's band, at its level."""
+        return Test(CHOOSER, self.heldout_pct, self.t_stat, self.p_heldout, self.level,
+                    self.explained_pct)
+
+    @property
+    def test(self) -> Test:
+        """The test its claim rests on: the chooser's band's when that passes, else the
+        second band's when it confirms the effect (lag_band), else the failing chooser's."""
+        own = self.own_test
+        if own.passes or not self.confirmed:
+            return own
+        v = self.second
+        return Test(v.band, v.heldout_pct, v.t_stat, v.p_heldout, self.level)
 
     @property
     def why_not(self) -> str:

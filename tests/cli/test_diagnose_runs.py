@@ -16,8 +16,9 @@ from jointbench.identification.log import write_log
 from jointbench.testing.simulator import simulate_lab_rig
 
 
-def _fake(*effects):
-    causes = tuple(SimpleNamespace(effect=e) for e in effects)
+def _fake(*effects, failing=()):
+    causes = tuple(SimpleNamespace(effect=e, test=SimpleNamespace(passes=e not in failing))
+                   for e in effects)
     return SimpleNamespace(diagnosis=SimpleNamespace(causes=causes))
 
 
@@ -26,6 +27,13 @@ def test_a_cause_is_supported_only_where_every_run_names_it():
                           _fake("torque_lag", "backlash")), ("a", "b", "c"))
     assert runs.supported == ("backlash",)
     assert runs.unsupported == {"offset": ("a",), "torque_lag": ("c",)}
+
+
+def test_a_cause_whose_test_fails_on_a_run_is_not_supported():
+    runs = RunsDiagnosis((_fake("backlash", "offset"), _fake("backlash", "offset",
+                                                            failing=("offset",))), ("a", "b"))
+    assert runs.supported == ("backlash",)
+    assert runs.unsupported == {"offset": ("a",)}
 
 
 @pytest.mark.slow
