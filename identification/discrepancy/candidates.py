@@ -51,7 +51,7 @@ class SecondView:
 
 
 @dataclass(frozen=True)
-class Test:
+class HeldOutTest:
     """One held-out test of a claim "this effect is in the log" (identification.discrepancy.
     heldout): the band or comparison it ran in (`view`), the share of the held-out residual
     the effect removes, the segment t that it removes more than MATERIAL, its one-sided p
@@ -141,20 +141,20 @@ class Candidate:
                 and (self.p_heldout < self.level or self.confirmed))
 
     @property
-    def own_test(self) -> Test:
+    def own_test(self) -> HeldOutTest:
         """Its test in the chooser's band, at its level."""
-        return Test(CHOOSER, self.heldout_pct, self.t_stat, self.p_heldout, self.level,
+        return HeldOutTest(CHOOSER, self.heldout_pct, self.t_stat, self.p_heldout, self.level,
                     self.explained_pct)
 
     @property
-    def test(self) -> Test:
+    def test(self) -> HeldOutTest:
         """The test its claim rests on: the chooser's band's when that passes, else the
         second band's when it confirms the effect (lag_band), else the failing chooser's."""
         own = self.own_test
         if own.passes or not self.confirmed:
             return own
         v = self.second
-        return Test(v.band, v.heldout_pct, v.t_stat, v.p_heldout, self.level)
+        return HeldOutTest(v.band, v.heldout_pct, v.t_stat, v.p_heldout, self.level)
 
     @property
     def why_not(self) -> str:

@@ -51,7 +51,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from jointbench.identification.discrepancy.candidates import (Candidate, Test, candidate,
+from jointbench.identification.discrepancy.candidates import (Candidate, HeldOutTest, candidate,
                                                               reference)
 from jointbench.identification.discrepancy.heldout import (ALPHA, MATERIAL, segment_log_ratios,
                                                            segment_t, t_bar)
@@ -88,7 +88,7 @@ class NotNamed:
     effect: str
     kind: str
     why: str
-    test: Test | None = None
+    test: HeldOutTest | None = None
     round: int = 0
 
     def to_json(self) -> dict:
@@ -117,6 +117,11 @@ class Alternative:
                 f"{self.named_pct:.3g} %, {self.other} {self.other_pct:.3g} % of the residual, "
                 f"and the segment test cannot separate them (t = {self.t:.3g} and "
                 f"{self.t_back:.3g}, the bar t > {t_bar(DECIDE):.3g}); {self.named} is named")
+
+    def stated_in(self, notes: tuple[str, ...]) -> bool:
+        """A parsimony note (_apart, "A or B: ...") already says it."""
+        pair = {self.named, self.other}
+        return any(set(n.split(":", 1)[0].split(" or ")) == pair for n in notes)
 
     def to_json(self) -> dict:
         return {"named": self.named, "other": self.other, "named_heldout_pct": self.named_pct,
@@ -568,7 +573,7 @@ def _pruned(nom: Nominal, causes: tuple[Candidate, ...],
                             f"supports (what it adds has t = {t:.3g}, p = {p:.2g}, the bar "
                             f"p < {c.alpha:.2g})" + (f", unphysical ({again.unphysical})"
                                                      if again.unphysical else ""),
-                            Test("on top of all the others, no margin", again.heldout_pct, t,
+                            HeldOutTest("on top of all the others, no margin", again.heldout_pct, t,
                                  p, c.alpha), c.round))
         causes, lost = _chain(nom, others, band)
         out += lost

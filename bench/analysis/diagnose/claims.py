@@ -2,8 +2,8 @@
 several runs, or --model), that no named cause has a failing test.
 
 - **One log** (`diagnose LOG --json`): every name of `named_causes` has its entry in
-  `causes` with a `test` (identification.discrepancy.candidates.Test) whose held-out share is
-  positive and whose p-value is under its level, the level of the round the cause entered;
+  `causes` with a `test` (identification.discrepancy.candidates.HeldOutTest) whose held-out
+  share is positive and whose p-value is under its level, the level of the round it entered;
   a cause of a later round explains more than the floor (`floor_pct`) in that test; the
   entry's `t`, `p_heldout`, `heldout_pct` and `alpha` are that test's; `named_cause` is the
   first of them.
@@ -49,15 +49,17 @@ def claim_fails(test: dict | None, floor_pct: float = 0.0) -> str:
                                                           "alpha"))
     if not (alpha > 0 and math.isfinite(p)):
         return f"no level or p-value (alpha {alpha}, p {p})"
-    if not share > floor_pct:
-        return f"held out it explains {share:.3g} %, not above {floor_pct:g} %"
+    if not share > 0:
+        return f"held out it explains {share:.3g} % of the residual"
     if not p < alpha:
-        return f"p = {p:.3g} is not under its level {alpha:.3g}"
+        return f"p = {p:.3g} is not under its level {alpha:.3g} (t = {t:.3g})"
     bar = t_bar(alpha)
     if not t > bar - _T_ROUNDING * max(1.0, abs(bar)):
         return f"t = {t:.3g} is under its bar t > {bar:.3g}"
     if test.get("passes") is False:
         return "its test says it does not pass"
+    if not share > floor_pct:
+        return f"held out it explains {share:.3g} %, not above the floor of {floor_pct:g} %"
     return ""
 
 

@@ -74,7 +74,9 @@ class Diagnosis:
         every "one of A or B" (inverse._alternatives)."""
         if self.overruled:
             return ()
-        return self.inverse.notes + tuple(a.describe() for a in self.inverse.alternatives)
+        notes = self.inverse.notes
+        return notes + tuple(a.describe() for a in self.inverse.alternatives
+                             if not a.stated_in(notes))
 
     @property
     def not_named(self) -> tuple[NotNamed, ...]:
