@@ -123,3 +123,39 @@ def test_one_of_a_or_b_is_not_said_twice():
                                    "explains 79.2 %, asymmetric_friction 79.2 %")
     assert a.stated_in(("offset or asymmetric_friction: this log cannot tell them apart",))
     assert not a.stated_in(("backlash or hardening: this log cannot tell them apart",))
+
+
+def _named(effect, round_, before=()):
+    return Candidate(effect=effect, testable=True, heldout_pct=40.0, t_stat=9.0,
+                     p_heldout=1e-10, alpha=1e-3 / (9 - round_), round=round_,
+                     base=tuple((b, {}) for b in before))
+
+
+@pytest.mark.parametrize("weak,kept", [
+    ((), ("offset", "backlash", "torque_ripple")),
+    (("backlash",), ("offset", "torque_ripple")),
+    (("backlash", "torque_ripple"), ("offset", "torque_ripple")),   # the weaker goes first
+])
+def test_more_than_two_causes_each_pass_against_all_the_others(monkeypatch, weak, kept):
+    """The leave-one-out test (inverse._leave_one_out): a cause that does not pass against
+    the model holding all the others is dropped, the weakest first, the others fitted again
+    and tested again; with two left the rounds' own tests stand."""
+    from jointbench.identification.discrepancy import inverse
+
+    strength = {"backlash": 2.0, "torque_ripple": 3.0}
+
+    def against(nom, c, others, band):
+        alone = len(others) < 2   # in the refitted chain, or with two left
+        fails = c.effect in weak and not alone
+        t = strength.get(c.effect, 9.0) if fails else 9.0
+        return Candidate(effect=c.effect, testable=True, heldout_pct=20.0, t_stat=t,
+                         p_heldout=0.3 if fails else 1e-10, alpha=c.alpha, round=c.round,
+                         base=tuple(others))
+
+    monkeypatch.setattr(inverse, "_against", against)
+    causes = (_named("offset", 1), _named("backlash", 2, ("offset",)),
+              _named("torque_ripple", 3, ("offset", "backlash")))
+    out, dropped = inverse._leave_one_out(None, causes, None)
+    assert tuple(c.effect for c in out) == kept
+    assert [d.effect for d in dropped] == [e for e in ("backlash",) if weak]
+    assert all(d.kind == "left_out" and "all the others" in d.why for d in dropped)
