@@ -245,6 +245,8 @@ def summary_text(d: Diagnosis) -> str:
           f"{c.test.describe()}" for c in d.causes]
     L += [f"ambiguity: {a}" for a in d.ambiguities]
     L += _not_named_lines(d, "considered, not named:", "  ")
+    if d.inverse.stopped and d.inverse.causes:
+        L.append(f"rounds stopped: {d.inverse.stopped}")
     if d.reason:
         L.append(f"why: {d.reason}")
     if d.named is not None:
