@@ -38,6 +38,7 @@ class SecondView:
     agree: bool
     detail: str            # the two values and their spreads, for the report
     unphysical: str = ""
+    acts_pct: float = float("nan")   # its held-out share over the equations it acts in
 
     def confirms(self, alpha: float) -> bool:
         return (not self.unphysical and self.agree and self.heldout_pct > 0
@@ -64,6 +65,13 @@ class HeldOutTest:
     p: float
     level: float
     explained_pct: float = float("nan")   # in sample (the chooser's band only)
+    acts_pct: float = float("nan")   # the held-out share over the equations it acts in
+
+    @property
+    def own_share(self) -> float:
+        """The held-out share over the equations it acts in (the rows its segment test
+        reads), or over every row when not known: what the floor of later rounds asks."""
+        return self.acts_pct if self.acts_pct == self.acts_pct else self.heldout_pct
 
     @property
     def passes(self) -> bool:
@@ -76,14 +84,17 @@ class HeldOutTest:
 
     def describe(self) -> str:
         """"t = .. (p = ..) against the bar t > .. (level ..), held out .. %" with its view."""
-        return (f"{self.view}: held out it explains {self.heldout_pct:.3g} %, t = "
+        own = (f" ({self.acts_pct:.3g} % of the equations it acts in)"
+               if self.acts_pct == self.acts_pct else "")
+        return (f"{self.view}: held out it explains {self.heldout_pct:.3g} %{own}, t = "
                 f"{self.t:.3g} (p = {self.p:.2g}) against the bar t > {self.bar:.3g} "
                 f"(level {self.level:.2g})")
 
     def to_json(self) -> dict:
         return {"view": self.view, "heldout_pct": self.heldout_pct, "t": self.t,
                 "p_heldout": self.p, "alpha": self.level, "t_bar": self.bar,
-                "explained_pct": self.explained_pct, "passes": self.passes}
+                "explained_pct": self.explained_pct, "acts_pct": self.acts_pct,
+                "passes": self.passes}
 
 
 CHOOSER = "chooser's band"
@@ -101,6 +112,7 @@ class Candidate:
     rss: float = float("nan")
     explained_pct: float = 0.0       # in sample: share of the reference weighted RSS it removes
     heldout_pct: float = 0.0         # out of sample: share of the held-out RSS it removes
+    acts_pct: float = float("nan")   # the same over the equations it acts in (acts)
     t_stat: float = 0.0              # t: held-out share above MATERIAL (heldout)
     p_heldout: float = 1.0           # its one-sided p-value
     alpha: float = 0.0               # its hypothesis' level in the round (Holm)
@@ -144,7 +156,7 @@ class Candidate:
     def own_test(self) -> HeldOutTest:
         """Its test in the chooser's band, at its level."""
         return HeldOutTest(CHOOSER, self.heldout_pct, self.t_stat, self.p_heldout, self.level,
-                    self.explained_pct)
+                           self.explained_pct, self.acts_pct)
 
     @property
     def test(self) -> HeldOutTest:
@@ -154,7 +166,8 @@ class Candidate:
         if own.passes or not self.confirmed:
             return own
         v = self.second
-        return HeldOutTest(v.band, v.heldout_pct, v.t_stat, v.p_heldout, self.level)
+        return HeldOutTest(v.band, v.heldout_pct, v.t_stat, v.p_heldout, self.level,
+                           acts_pct=v.acts_pct)
 
     @property
     def why_not(self) -> str:
@@ -268,7 +281,8 @@ def _evaluate(nom: Nominal, ref: Reference, e: Effect, fixed: dict,
                      k=k, rss=rss, unphysical=why,
                      residual=res_after, heldout_errors=errors,
                      explained_pct=100 * (rss0 - rss) / rss0,
-                     heldout_pct=ev.explained_pct, t_stat=ev.t, p_heldout=ev.p,
+                     heldout_pct=ev.explained_pct, acts_pct=ev.acts_pct, t_stat=ev.t,
+                     p_heldout=ev.p,
                      alpha=ref.alpha, delta_bic=float(bic0 - bic1), p_value=p, size_pct=size,
                      before_pct=_own_error_pct(nom, res_before, block, W0, ref.scores.X),
                      after_pct=_own_error_pct(nom, res_after, block, W, X), block=block,

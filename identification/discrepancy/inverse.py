@@ -25,9 +25,10 @@ candidate that is itself significant; a cause refitted after another is dropped 
 is tested again and named only if it passes again.
 
 **Stopping rule.** The rounds stop when the next cause does not pass at its round's level,
-or when, in a later round, it explains less than FLOOR of the held-out residual in the view
-its test passed (heldout.MATERIAL: the segment test asks a typical segment for more than
-that share, and the share over the whole log is the floor a cause must also reach: below
+or when, in a later round, it explains less than FLOOR of the held-out residual of the
+equations it acts in, in the view its test passed (heldout.MATERIAL: the segment test asks a
+typical segment of those rows for more than that share, and the share over the whole log is
+the floor a cause must also reach: below
 it the cause takes up what the mismatches of the log's own numerics remove, a dead band at
 the encoder's resolution, a simulator's small damping, the first cause's residual misfit,
 0.1 to 3 % of the held-out residual on the bench's logs, heldout's docstring).
@@ -362,10 +363,10 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
             stopped = (f"round {k}: no effect passes its test" if top.testable else
                        f"round {k}: no effect is testable")
             break
-        if causes and not top.test.heldout_pct > 100 * FLOOR:
+        if causes and not top.test.own_share > 100 * FLOOR:
             stopped = (f"round {k}: {top.effect} passes its test but explains "
-                       f"{top.test.heldout_pct:.3g} % of the held-out residual, under the "
-                       f"floor of {100 * FLOOR:g} %")
+                       f"{top.test.own_share:.3g} % of the held-out residual of the "
+                       f"equations it acts in, under the floor of {100 * FLOOR:g} %")
             dropped.append(NotNamed(top.effect, "floor", stopped, top.test, k))
             break
         causes += (top,)
@@ -408,14 +409,14 @@ def _against(nom: Nominal, c: Candidate, others: tuple[tuple[str, dict], ...],
 
 def _passes(c: Candidate) -> bool:
     """Significant and, for a cause of a later round, above the floor in its test."""
-    return c.significant and (c.round <= 1 or c.test.heldout_pct > 100 * FLOOR)
+    return c.significant and (c.round <= 1 or c.test.own_share > 100 * FLOOR)
 
 
 def _why_fails(c: Candidate) -> str:
     if not c.significant:
         return c.why_not
-    return (f"it explains {c.test.heldout_pct:.3g} % of the held-out residual, under the "
-            f"floor of {100 * FLOOR:g} %")
+    return (f"it explains {c.test.own_share:.3g} % of the held-out residual of the "
+            f"equations it acts in, under the floor of {100 * FLOOR:g} %")
 
 
 def _chain(nom: Nominal, causes: tuple[Candidate, ...],
@@ -573,8 +574,9 @@ def _pruned(nom: Nominal, causes: tuple[Candidate, ...],
                             f"supports (what it adds has t = {t:.3g}, p = {p:.2g}, the bar "
                             f"p < {c.alpha:.2g})" + (f", unphysical ({again.unphysical})"
                                                      if again.unphysical else ""),
-                            HeldOutTest("on top of all the others, no margin", again.heldout_pct, t,
-                                 p, c.alpha), c.round))
+                            HeldOutTest("on top of all the others, no margin",
+                                        again.heldout_pct, t, p, c.alpha,
+                                        acts_pct=again.acts_pct), c.round))
         causes, lost = _chain(nom, others, band)
         out += lost
         kept = {o.effect for o in causes}

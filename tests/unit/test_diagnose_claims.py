@@ -109,12 +109,17 @@ def test_a_lag_confirmed_in_the_wide_band_is_named_on_that_band_s_test():
     assert not c.significant and c.test.view == CHOOSER and not c.test.passes
 
 
-@pytest.mark.parametrize("share,round_,named", [(6.0, 2, True), (4.0, 2, False),
-                                                (4.0, 1, True)])
-def test_the_floor_holds_for_later_rounds(share, round_, named):
-    c = Candidate(effect="torque_ripple", testable=True, heldout_pct=share, t_stat=6.0,
-                  p_heldout=1e-8, alpha=LEVEL, round=round_)
+@pytest.mark.parametrize("share,acts,round_,named", [
+    (6.0, float("nan"), 2, True), (4.0, float("nan"), 2, False), (4.0, float("nan"), 1, True),
+    (4.0, 8.0, 2, True),     # a link-side cause: 8 % of the link equation's residual
+    (6.0, 4.0, 2, False)])
+def test_the_floor_holds_for_later_rounds_over_the_equations_it_acts_in(share, acts, round_,
+                                                                         named):
+    c = Candidate(effect="hardening", testable=True, heldout_pct=share, acts_pct=acts,
+                  t_stat=6.0, p_heldout=1e-8, alpha=LEVEL, round=round_)
     assert _passes(c) is named
+    doc = _doc(FIRST, _cause("hardening", round_, c.test.to_json()))
+    assert (failing_claims(doc) == []) is (named or round_ == 1)
 
 
 def test_one_of_a_or_b_is_not_said_twice():

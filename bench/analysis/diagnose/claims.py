@@ -4,7 +4,8 @@ several runs, or --model), that no named cause has a failing test.
 - **One log** (`diagnose LOG --json`): every name of `named_causes` has its entry in
   `causes` with a `test` (identification.discrepancy.candidates.HeldOutTest) whose held-out
   share is positive and whose p-value is under its level, the level of the round it entered;
-  a cause of a later round explains more than the floor (`floor_pct`) in that test; the
+  a cause of a later round explains more than the floor (`floor_pct`) in that test (its
+  `acts_pct`, the share over the equations it acts in; `heldout_pct` without it); the
   entry's `t`, `p_heldout`, `heldout_pct` and `alpha` are that test's; `named_cause` is the
   first of them.
 - **Several runs** (`diagnose A B --json`): each run as one log, and each cause `supported`
@@ -58,8 +59,11 @@ def claim_fails(test: dict | None, floor_pct: float = 0.0) -> str:
         return f"t = {t:.3g} is under its bar t > {bar:.3g}"
     if test.get("passes") is False:
         return "its test says it does not pass"
-    if not share > floor_pct:
-        return f"held out it explains {share:.3g} %, not above the floor of {floor_pct:g} %"
+    own = _number(test.get("acts_pct"))
+    own = own if math.isfinite(own) else share
+    if not own > floor_pct:
+        return (f"held out it explains {own:.3g} % of its equations' residual, not above the "
+                f"floor of {floor_pct:g} %")
     return ""
 
 
