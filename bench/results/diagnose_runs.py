@@ -1,8 +1,6 @@
 """`diagnose` over several runs of one axis (`jointbench diagnose A.csv B.csv ...`,
 `jointbench.diagnose([a, b])`): each run diagnosed and its models cross-validated on the next
-run (one it did not fit); a cause is named for the axis only where every run names it,
-each with its own test passing at the level of the round it entered there (the answer lists
-those tests run by run).
+run (one it did not fit); a cause is named for the axis only where every run names it.
 
 A cause one run names and another does not is a property of that run (its excitation, a
 transient) or too weak for the other's noise: the runs do not support it, and the answer
@@ -33,26 +31,8 @@ class RunsDiagnosis:
     names: tuple[str, ...]
 
     def _causes(self) -> list[tuple[str, ...]]:
-        """Each run's named causes whose own test passes (Candidate.test)."""
-        return [tuple(c.effect for c in getattr(r.diagnosis, "causes", ()) if c.test.passes)
+        return [tuple(c.effect for c in getattr(r.diagnosis, "causes", ()))
                 for r in self.results]
-
-    def tests(self) -> dict[str, list[dict]]:
-        """Each supported cause's test on every run: the evidence the axis' name rests on.
-
-        Returns
-        -------
-        dict of str to list of dict
-            cause -> [{"run", "round", the test's "view", "heldout_pct", "t", "p_heldout",
-            "alpha", "t_bar", "explained_pct", "passes"}], one per run.
-        """
-        out: dict[str, list[dict]] = {}
-        for cause in self.supported:
-            for nm, r in zip(self.names, self.results):
-                c = next(c for c in r.diagnosis.causes if c.effect == cause)
-                out.setdefault(cause, []).append({"run": nm, "round": c.round,
-                                                  **c.test.to_json()})
-        return out
 
     @property
     def supported(self) -> tuple[str, ...]:
@@ -79,10 +59,6 @@ class RunsDiagnosis:
         parts = [f"== run {nm} ==\n{r.table()}" for nm, r in zip(self.names, self.results)]
         lines = [f"== {len(self.results)} runs of one axis ==",
                  "named on every run (supported): " + (", ".join(self.supported) or "none")]
-        for cause, tests in self.tests().items():
-            lines.append(f"  {cause}: " + "; ".join(
-                f"{t['run']} t = {t['t']:.3g} (p = {t['p_heldout']:.2g} < {t['alpha']:.2g}, "
-                f"held out {t['heldout_pct']:.3g} %)" for t in tests))
         for c, runs in self.unsupported.items():
             lines.append(f"not supported: {c}, named on {', '.join(runs)} only")
         return "\n\n".join(parts) + "\n\n" + "\n".join(lines)
@@ -94,9 +70,8 @@ class RunsDiagnosis:
         -------
         dict
             {"runs": [{"name", each run's diagnose JSON}], "supported": [...],
-            "supported_tests": {cause: [each run's test]}, "unsupported": {cause: [runs]}}.
+            "unsupported": {cause: [runs]}}.
         """
         return {"runs": [{"name": nm, **r.to_json()} for nm, r in zip(self.names, self.results)],
                 "supported": list(self.supported),
-                "supported_tests": self.tests(),
                 "unsupported": {c: list(r) for c, r in self.unsupported.items()}}
