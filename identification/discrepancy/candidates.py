@@ -38,6 +38,7 @@ class SecondView:
     agree: bool
     detail: str            # the two values and their spreads, for the report
     unphysical: str = ""
+    acts_pct: float = float("nan")   # its held-out share over the equations it acts in
 
     def confirms(self, alpha: float) -> bool:
         return (not self.unphysical and self.agree and self.heldout_pct > 0
@@ -48,6 +49,55 @@ class SecondView:
         return {"band": self.band, "heldout_pct": self.heldout_pct, "t": self.t_stat,
                 "p_heldout": self.p_heldout, "value": self.value, "agree": self.agree,
                 "unphysical": self.unphysical, "confirms": self.confirms(alpha)}
+
+
+@dataclass(frozen=True)
+class HeldOutTest:
+    """One held-out test of a claim "this effect is in the log" (identification.discrepancy.
+    heldout): the band or comparison it ran in (`view`), the share of the held-out residual
+    the effect removes, the segment t that it removes more than MATERIAL, its one-sided p
+    and the level it must pass (its round's Holm level over the views its hypothesis is
+    split over). A named cause carries the test that passed; `passes` is that claim."""
+
+    view: str
+    heldout_pct: float
+    t: float
+    p: float
+    level: float
+    explained_pct: float = float("nan")   # in sample (the chooser's band only)
+    acts_pct: float = float("nan")   # the held-out share over the equations it acts in
+
+    @property
+    def own_share(self) -> float:
+        """The held-out share over the equations it acts in (the rows its segment test
+        reads), or over every row when not known: what the floor of later rounds asks."""
+        return self.acts_pct if self.acts_pct == self.acts_pct else self.heldout_pct
+
+    @property
+    def passes(self) -> bool:
+        return bool(self.heldout_pct > 0 and self.p < self.level)
+
+    @property
+    def bar(self) -> float:
+        """The t its level asks for (heldout.t_bar)."""
+        return t_bar(self.level) if self.level > 0 else float("inf")
+
+    def describe(self) -> str:
+        """"t = .. (p = ..) against the bar t > .. (level ..), held out .. %" with its view."""
+        own = (f" ({self.acts_pct:.3g} % of the equations it acts in)"
+               if self.acts_pct == self.acts_pct else "")
+        return (f"{self.view}: held out it explains {self.heldout_pct:.3g} %{own}, t = "
+                f"{self.t:.3g} (p = {self.p:.2g}) against the bar t > {self.bar:.3g} "
+                f"(level {self.level:.2g})")
+
+    def to_json(self) -> dict:
+        return {"view": self.view, "heldout_pct": self.heldout_pct, "t": self.t,
+                "p_heldout": self.p, "alpha": self.level, "t_bar": self.bar,
+                "explained_pct": self.explained_pct, "acts_pct": self.acts_pct,
+                "passes": self.passes}
+
+
+CHOOSER = "chooser's band"
 
 
 @dataclass(frozen=True)
@@ -62,6 +112,7 @@ class Candidate:
     rss: float = float("nan")
     explained_pct: float = 0.0       # in sample: share of the reference weighted RSS it removes
     heldout_pct: float = 0.0         # out of sample: share of the held-out RSS it removes
+    acts_pct: float = float("nan")   # the same over the equations it acts in (acts)
     t_stat: float = 0.0              # t: held-out share above MATERIAL (heldout)
     p_heldout: float = 1.0           # its one-sided p-value
     alpha: float = 0.0               # its hypothesis' level in the round (Holm)
@@ -84,6 +135,7 @@ class Candidate:
     fold_values: tuple[float, ...] = ()
     second: SecondView | None = None   # a second band's test (lag_band), when one was run
     views: int = 1   # the tests its hypothesis is split over (lag_band: 2), each at alpha / views
+    round: int = 0   # the round of the inverse view it was tested in (1 against the nominal)
 
     @property
     def level(self) -> float:
@@ -99,6 +151,23 @@ class Candidate:
     def significant(self) -> bool:
         return (self.testable and not self.unphysical and self.heldout_pct > 0
                 and (self.p_heldout < self.level or self.confirmed))
+
+    @property
+    def own_test(self) -> HeldOutTest:
+        """Its test in the chooser's band, at its level."""
+        return HeldOutTest(CHOOSER, self.heldout_pct, self.t_stat, self.p_heldout, self.level,
+                           self.explained_pct, self.acts_pct)
+
+    @property
+    def test(self) -> HeldOutTest:
+        """The test its claim rests on: the chooser's band's when that passes, else the
+        second band's when it confirms the effect (lag_band), else the failing chooser's."""
+        own = self.own_test
+        if own.passes or not self.confirmed:
+            return own
+        v = self.second
+        return HeldOutTest(v.band, v.heldout_pct, v.t_stat, v.p_heldout, self.level,
+                           acts_pct=v.acts_pct)
 
     @property
     def why_not(self) -> str:
@@ -212,7 +281,8 @@ def _evaluate(nom: Nominal, ref: Reference, e: Effect, fixed: dict,
                      k=k, rss=rss, unphysical=why,
                      residual=res_after, heldout_errors=errors,
                      explained_pct=100 * (rss0 - rss) / rss0,
-                     heldout_pct=ev.explained_pct, t_stat=ev.t, p_heldout=ev.p,
+                     heldout_pct=ev.explained_pct, acts_pct=ev.acts_pct, t_stat=ev.t,
+                     p_heldout=ev.p,
                      alpha=ref.alpha, delta_bic=float(bic0 - bic1), p_value=p, size_pct=size,
                      before_pct=_own_error_pct(nom, res_before, block, W0, ref.scores.X),
                      after_pct=_own_error_pct(nom, res_after, block, W, X), block=block,

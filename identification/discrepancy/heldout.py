@@ -178,6 +178,7 @@ class Evidence:
     explained_pct: float     # 100 (1 - sum e1^2 / sum e0^2): share of the held-out RSS removed
     t: float                 # t of the segments' log-ratios (MSSD spread), MATERIAL margin
     p: float                 # its one-sided p-value, dof(SEGMENTS) degrees of freedom
+    acts_pct: float = float("nan")   # the share over the rows of the equations it acts in
 
 
 def evidence(e0: np.ndarray, e1: np.ndarray, n_times: int,
@@ -186,10 +187,17 @@ def evidence(e0: np.ndarray, e1: np.ndarray, n_times: int,
     docstring); rows are stacked by block, `n_times` instants each. The share is over every
     row; the test over the rows of `blocks` (the equations the effect acts in; () all)."""
     a0, a1 = (e ** 2 for e in (e0, e1))
-    total0 = float(a0.sum())
-    share = 100 * (1 - float(a1.sum()) / total0) if total0 > 0 else 0.0
+    share = _share(a0, a1)
+    rows = list(blocks) if blocks else slice(None)
+    acts = _share(a0.reshape(-1, n_times)[rows], a1.reshape(-1, n_times)[rows])
     t, p = segment_t(segment_log_ratios(e0, e1, n_times, blocks) + np.log(1 - MATERIAL))
-    return Evidence(explained_pct=share, t=t, p=p)
+    return Evidence(explained_pct=share, t=t, p=p, acts_pct=acts)
+
+
+def _share(a0: np.ndarray, a1: np.ndarray) -> float:
+    """100 (1 - sum a1 / sum a0), 0 when a0 sums to 0."""
+    total0 = float(a0.sum())
+    return 100 * (1 - float(a1.sum()) / total0) if total0 > 0 else 0.0
 
 
 def segment_log_ratios(e0: np.ndarray, e1: np.ndarray, n_times: int,

@@ -16,17 +16,44 @@ residual, unless a simpler significant
 one explains it as well: the richer is then named only if what it adds to the simpler is
 significant (_simplest_first), and the answer says when the log cannot tell them apart;
 between an effect and the one it reduces to (an asymmetric friction and an offset) the choice,
-once one of them is significant, is a two-way decision at its own level (_which). The rounds
-stop when none is significant.
+once one of them is significant, is a two-way decision at its own level (_which).
+
+**Naming is a claim with its test.** A cause is named only with a test that passes at the
+level of the round it entered (Candidate.test: the chooser's band's, or the second band's
+that confirmed a lag), and every path that names keeps that: the parsimony choices name a
+candidate that is itself significant; a cause refitted after another is dropped (_chain)
+is tested again and named only if it passes again.
+
+**Stopping rule.** The rounds stop when the next cause does not pass at its round's level,
+or when, in a later round, it explains less than FLOOR of the held-out residual of the
+equations it acts in, in the view its test passed (heldout.MATERIAL: the segment test asks a
+typical segment of those rows for more than that share, and the share over the whole log is
+the floor a cause must also reach: below
+it the cause takes up what the mismatches of the log's own numerics remove, a dead band at
+the encoder's resolution, a simulator's small damping, the first cause's residual misfit,
+0.1 to 3 % of the held-out residual on the bench's logs, heldout's docstring).
+
+**More than two causes** (_leave_one_out): each must pass on its own, against the model
+holding all the others (their values from the joint fit), at the level of the round it
+entered; the weakest that fails is dropped, the others fitted again in order (_chain), and
+again until all pass. The dropped are listed with their test.
+
+**One of A or B** (_alternatives): a significant candidate of a round that is not named,
+whose held-out errors the segment test without margin cannot separate from the named
+cause's in either direction at DECIDE, explains the same thing: the answer says "one of A
+or B", with the share each explains, rather than choosing silently.
+
+Every effect tested and not named is listed apart with why (NotNamed).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from jointbench.identification.discrepancy.candidates import Candidate, candidate, reference
+from jointbench.identification.discrepancy.candidates import (Candidate, HeldOutTest, candidate,
+                                                              reference)
 from jointbench.identification.discrepancy.heldout import (ALPHA, MATERIAL, segment_log_ratios,
                                                            segment_t, t_bar)
 from jointbench.identification.discrepancy.lag_band import LagBand, second_view
@@ -49,6 +76,60 @@ WHY_IN_NOMINAL = ("the nominal model holds it: eq. (13)'s link Coulomb friction 
                   "without link friction can name it)")
 
 
+# A later round's cause must explain more than this share of the held-out residual in the view
+# its test passed (module docstring: the stopping rule).
+FLOOR = MATERIAL
+
+
+@dataclass(frozen=True)
+class NotNamed:
+    """An effect tested and not named: why (`kind` one of "failed", "unphysical", "floor",
+    "collinear", "alternative", "left_out", "untestable"), in words, and its last test."""
+
+    effect: str
+    kind: str
+    why: str
+    test: HeldOutTest | None = None
+    round: int = 0
+
+    def to_json(self) -> dict:
+        out = {"effect": self.effect, "kind": self.kind, "why": self.why, "round": self.round}
+        if self.test is not None:
+            out["test"] = self.test.to_json()
+        return out
+
+
+@dataclass(frozen=True)
+class Alternative:
+    """One of A or B: the named cause `named` and a candidate `other` of the same round whose
+    held-out errors the segment test cannot separate from its (t of each better than the
+    other, at DECIDE): their shares of the held-out residual."""
+
+    named: str
+    other: str
+    named_pct: float
+    other_pct: float
+    t: float        # the named's held-out errors smaller than the other's
+    t_back: float   # the converse
+    round: int = 1
+
+    def describe(self) -> str:
+        return (f"one of {self.named} or {self.other}: held out {self.named} explains "
+                f"{self.named_pct:.3g} %, {self.other} {self.other_pct:.3g} % of the residual, "
+                f"and the segment test cannot separate them (t = {self.t:.3g} and "
+                f"{self.t_back:.3g}, the bar t > {t_bar(DECIDE):.3g}); {self.named} is named")
+
+    def stated_in(self, notes: tuple[str, ...]) -> bool:
+        """A parsimony note (_apart, "A or B: ...") already says it."""
+        pair = {self.named, self.other}
+        return any(set(n.split(":", 1)[0].split(" or ")) == pair for n in notes)
+
+    def to_json(self) -> dict:
+        return {"named": self.named, "other": self.other, "named_heldout_pct": self.named_pct,
+                "other_heldout_pct": self.other_pct, "t": self.t, "t_back": self.t_back,
+                "alpha": DECIDE, "round": self.round, "text": self.describe()}
+
+
 @dataclass(frozen=True)
 class InverseDiagnosis:
     nominal: Nominal
@@ -56,6 +137,10 @@ class InverseDiagnosis:
     causes: tuple[Candidate, ...] = ()  # every named cause in order, each against the ones
     #                                     before it (causes[0] is candidates[0])
     notes: tuple[str, ...] = ()         # ambiguities of the named causes (_simplest_first)
+    rounds: tuple[tuple[Candidate, ...], ...] = ()   # every round's candidates, ranked
+    not_named: tuple[NotNamed, ...] = ()   # every effect tested and not named, with why
+    alternatives: tuple[Alternative, ...] = ()   # one of A or B (_alternatives)
+    stopped: str = ""                   # why the rounds stopped
 
     @property
     def named(self) -> Candidate | None:
@@ -96,14 +181,15 @@ def _model(causes: tuple[Candidate, ...]) -> tuple[tuple[str, dict], ...]:
 
 
 def _round(nom: Nominal, names: list[str], causes: tuple[Candidate, ...],
-           band: LagBand) -> tuple[list[Candidate], str]:
+           band: LagBand, k: int = 1) -> tuple[list[Candidate], str]:
     """One round: the candidates ranked, the one to name first at the top, and a note when
     the log cannot tell a richer candidate from it ("" otherwise: _simplest_first); the lag
     tested in the wide band too (lag_band)."""
     m = len(names)
     model = _model(causes)
     ref = reference(nom, model, m=m)
-    cands = [second_view(band, candidate(nom, name, ref), model) for name in names]
+    cands = [replace(second_view(band, candidate(nom, name, ref), model), round=k)
+             for name in names]
     return _simplest_first(_rank(cands), nom, m)
 
 
@@ -254,7 +340,8 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
                      link_friction: bool = True) -> InverseDiagnosis:
     """Evaluate every effect of docs/effects.md against the nominal model of `log` (with the
     link Coulomb friction FS unless `link_friction` is False) and rank them; name the best
-    significant one, then test the others on top of it, and so on."""
+    significant one, then test the others on top of it, and so on (module docstring: the
+    stopping rule, the leave-one-out test of more than two causes, one of A or B)."""
     nom = nominal(log, settings, link_friction)
     first: list[Candidate] = []
     names: list[str] = []
@@ -266,26 +353,194 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
         else:
             names.append(name)
     band = LagBand(log, settings, link_friction)
-    ranked, note = _round(nom, names, (), band)
+    ranked, note = _round(nom, names, (), band, 1)
     causes: tuple[Candidate, ...] = ()
     notes: tuple[tuple[str, str], ...] = ()   # (the cause it is about, the note)
-    round_ = ranked
-    while round_ and round_[0].significant:
-        causes += (round_[0],)
-        notes += ((round_[0].effect, note),) if note else ()
-        rest = [c.effect for c in round_[1:]]
-        round_, note = _round(nom, rest, causes, band) if rest else ([], "")   # Holm
-    causes, notes = _pruned(nom, causes, notes)
+    rounds, round_, stopped, dropped = [ranked], ranked, "", []
+    while round_:
+        top, k = round_[0], len(rounds)
+        if not top.significant:
+            stopped = (f"round {k}: no effect passes its test" if top.testable else
+                       f"round {k}: no effect is testable")
+            break
+        if causes and not top.test.own_share > 100 * FLOOR:
+            stopped = (f"round {k}: {top.effect} passes its test but explains "
+                       f"{top.test.own_share:.3g} % of the held-out residual of the "
+                       f"equations it acts in, under the floor of {100 * FLOOR:g} %")
+            dropped.append(NotNamed(top.effect, "floor", stopped, top.test, k))
+            break
+        causes += (top,)
+        notes += ((top.effect, note),) if note else ()
+        rest = [c.effect for c in round_[1:] if c.testable]
+        if not rest:
+            stopped = f"round {k}: every effect is named"
+            break
+        round_, note = _round(nom, rest, causes, band, k + 1)   # Holm
+        rounds.append(round_)
+    causes, notes, left = _pruned(nom, causes, notes, band)
+    dropped += left
+    if len(causes) > 2:
+        causes, left = _leave_one_out(nom, causes, band)
+        dropped += left
+        notes = tuple(x for x in notes if x[0] in {c.effect for c in causes})
+    alternatives = _alternatives(rounds, causes, len(nom.sig.index))
     # the first round's ranking, with the first named cause at the top
     top = [c for c in ranked if causes and c.effect == causes[0].effect] or ranked[:1]
-    return InverseDiagnosis(nominal=nom, causes=causes, notes=tuple(n for _, n in notes),
-                            candidates=tuple(top + _rank([c for c in ranked if c not in top]
-                                                         + first)))
+    inv = InverseDiagnosis(nominal=nom, causes=causes, notes=tuple(n for _, n in notes),
+                           candidates=tuple(top + _rank([c for c in ranked if c not in top]
+                                                        + first)),
+                           rounds=tuple(tuple(r) for r in rounds), alternatives=alternatives,
+                           stopped=stopped)
+    return replace(inv, not_named=not_named(inv, tuple(dropped)))
+
+
+def _level_m(c: Candidate) -> int:
+    """The number of effects of the round `c` was tested in (its Holm level ALPHA / m)."""
+    return max(1, round(ALPHA / c.alpha)) if c.alpha > 0 else len(EFFECTS)
+
+
+def _against(nom: Nominal, c: Candidate, others: tuple[tuple[str, dict], ...],
+             band: LagBand) -> Candidate:
+    """`c`'s effect fitted and tested again on top of `others` (name, values), at the level
+    of the round it entered, with the lag's second band: its own test there."""
+    ref = reference(nom, others, m=_level_m(c))
+    return replace(second_view(band, candidate(nom, c.effect, ref), others), round=c.round)
+
+
+def _passes(c: Candidate) -> bool:
+    """Significant and, for a cause of a later round, above the floor in its test."""
+    return c.significant and (c.round <= 1 or c.test.own_share > 100 * FLOOR)
+
+
+def _why_fails(c: Candidate) -> str:
+    if not c.significant:
+        return c.why_not
+    return (f"it explains {c.test.own_share:.3g} % of the held-out residual of the "
+            f"equations it acts in, under the floor of {100 * FLOOR:g} %")
+
+
+def _chain(nom: Nominal, causes: tuple[Candidate, ...],
+           band: LagBand) -> tuple[tuple[Candidate, ...], list[NotNamed]]:
+    """`causes` fitted again in order, each against the ones kept before it at its own
+    level; one whose test no longer passes is not named (with why)."""
+    chain: tuple[Candidate, ...] = ()
+    out: list[NotNamed] = []
+    for o in causes:
+        again = _against(nom, o, _model(chain), band)
+        if _passes(again):
+            chain += (again,)
+        else:
+            out.append(NotNamed(o.effect, "left_out",
+                                "fitted again once a cause before it was left out, it no "
+                                f"longer passes: {_why_fails(again)}", again.test, o.round))
+    return chain, out
+
+
+def _leave_one_out(nom: Nominal, causes: tuple[Candidate, ...],
+                   band: LagBand) -> tuple[tuple[Candidate, ...], list[NotNamed]]:
+    """More than two causes: each tested on its own against the model holding all the others
+    (their values as the joint fit has them), at the level of the round it entered; the
+    weakest that fails (least t) is dropped, the others fitted again in order (_chain), and
+    so on while more than two are left."""
+    out: list[NotNamed] = []
+    while len(causes) > 2:
+        values = dict(_model(causes))
+        fails = []
+        for i, c in enumerate(causes):
+            others = tuple((o.effect, values[o.effect]) for o in causes[:i] + causes[i + 1:])
+            again = _against(nom, c, others, band)
+            if not _passes(again):
+                fails.append((again.test.t, i, again))
+        if not fails:
+            break
+        _, i, again = min(fails, key=lambda f: f[0])
+        others = ", ".join(o.effect for o in causes[:i] + causes[i + 1:])
+        out.append(NotNamed(causes[i].effect, "left_out",
+                            f"against the model holding all the others ({others}) it does "
+                            f"not pass: {_why_fails(again)}", again.test, causes[i].round))
+        causes, lost = _chain(nom, causes[:i] + causes[i + 1:], band)
+        out += lost
+    return causes, out
+
+
+def _alternatives(rounds: list[list[Candidate]], causes: tuple[Candidate, ...],
+                  n: int) -> tuple[Alternative, ...]:
+    """One of A or B: in each round that named a cause, every other significant candidate
+    not named in the end whose held-out errors the segment test without margin (_better)
+    cannot separate from the named cause's in either direction at DECIDE."""
+    named = {c.effect for c in causes}
+    out: list[Alternative] = []
+    for k, r in enumerate(rounds, start=1):
+        if not r or r[0].effect not in named or r[0].heldout_errors is None:
+            continue
+        a = r[0]
+        for b in r[1:]:
+            if b.effect in named or not b.significant or b.heldout_errors is None:
+                continue
+            t, p = _better(b, a, n)
+            t2, p2 = _better(a, b, n)
+            if p >= DECIDE and p2 >= DECIDE:
+                out.append(Alternative(a.effect, b.effect, a.heldout_pct, b.heldout_pct,
+                                       t, t2, k))
+    return tuple(out)
+
+
+def not_named(inv: InverseDiagnosis, dropped: tuple[NotNamed, ...] = ()) -> tuple[NotNamed, ...]:
+    """Every effect considered and not named, with why: its last test (the last round it was
+    tested in), or what dropped it (`dropped`: the floor, the leave-one-out test), or why it
+    could not be tested."""
+    named = {c.effect for c in inv.causes}
+    given = {d.effect: d for d in dropped}
+    alt = {a.other: a for a in inv.alternatives}
+    last: dict[str, Candidate] = {}
+    passed: dict[str, Candidate] = {}   # the earliest round it passed in
+    for r in inv.rounds:
+        for c in r:
+            last[c.effect] = c
+            if c.significant and c.effect not in passed:
+                passed[c.effect] = c
+    out: list[NotNamed] = []
+    for c in inv.candidates:
+        e = c.effect
+        if e in named:
+            continue
+        if not c.testable:
+            out.append(NotNamed(e, "untestable", c.reason))
+            continue
+        if e in given:
+            out.append(given[e])
+            continue
+        c = last.get(e, c)
+        test, k = c.test, c.round
+        before = _before(inv, k)
+        if e in alt:
+            out.append(NotNamed(e, "alternative", alt[e].describe(), test, k))
+        elif c.unphysical:
+            out.append(NotNamed(e, "unphysical", c.why_not, test, k))
+        elif e in passed and not c.significant:
+            p = passed[e]
+            out.append(NotNamed(e, "collinear",
+                                f"it passes against {_before(inv, p.round) or 'the nominal'} "
+                                f"(round {p.round}, t = {p.test.t:.3g}) but not once "
+                                f"{before} {'is' if ',' not in before else 'are'} held "
+                                f"(round {k}): {c.why_not}", test, k))
+        elif c.significant:
+            out.append(NotNamed(e, "failed", f"it passes its own test in round {k} but is not "
+                                f"named: {inv.stopped or 'another explains more'}", test, k))
+        else:
+            out.append(NotNamed(e, "failed", c.why_not, test, k))
+    return tuple(out)
+
+
+def _before(inv: InverseDiagnosis, k: int) -> str:
+    """The causes a round-k candidate is tested on top of, in words."""
+    return ", ".join(c.effect for c in inv.causes if 0 < c.round < k)
 
 
 def _pruned(nom: Nominal, causes: tuple[Candidate, ...],
-            notes: tuple[tuple[str, str], ...]) -> tuple[tuple[Candidate, ...],
-                                                         tuple[tuple[str, str], ...]]:
+            notes: tuple[tuple[str, str], ...],
+            band: LagBand) -> tuple[tuple[Candidate, ...], tuple[tuple[str, str], ...],
+                                    list[NotNamed]]:
     """Once the rounds stop, a cause that a later one reduces to (registry `reduces_to`: an
     offset beside an asymmetric friction), fitted on top of all the others, must still
     predict the held-out rows significantly better than they do (the segment test without
@@ -299,6 +554,7 @@ def _pruned(nom: Nominal, causes: tuple[Candidate, ...],
     evidence in the motor equation alone: asymmetric friction first, then backlash, offset
     and hardening)."""
     n, i = len(nom.sig.index), 0
+    out: list[NotNamed] = []
     while i < len(causes):
         c = causes[i]
         if not any(EFFECTS[r.effect].reduces_to == c.effect for r in causes[i + 1:]) and not (
@@ -309,12 +565,20 @@ def _pruned(nom: Nominal, causes: tuple[Candidate, ...],
         values = dict(_model(causes))
         ref = reference(nom, tuple((o.effect, values[o.effect]) for o in others))
         again = candidate(nom, c.effect, ref)
-        if _better(ref.scores.errors, again, n)[1] < c.alpha and not again.unphysical:
+        t, p = _better(ref.scores.errors, again, n)
+        if p < c.alpha and not again.unphysical:
             i += 1
             continue
-        chain: tuple[Candidate, ...] = ()
-        for o in others:
-            ref = reference(nom, _model(chain), m=max(1, round(ALPHA / o.alpha)))
-            chain += (candidate(nom, o.effect, ref),)
-        causes, notes, i = chain, tuple(x for x in notes if x[0] != c.effect), 0
-    return causes, notes
+        out.append(NotNamed(c.effect, "left_out",
+                            "fitted on top of all the other causes it adds nothing the log "
+                            f"supports (what it adds has t = {t:.3g}, p = {p:.2g}, the bar "
+                            f"p < {c.alpha:.2g})" + (f", unphysical ({again.unphysical})"
+                                                     if again.unphysical else ""),
+                            HeldOutTest("on top of all the others, no margin",
+                                        again.heldout_pct, t, p, c.alpha,
+                                        acts_pct=again.acts_pct), c.round))
+        causes, lost = _chain(nom, others, band)
+        out += lost
+        kept = {o.effect for o in causes}
+        notes, i = tuple(x for x in notes if x[0] in kept), 0
+    return causes, notes, out

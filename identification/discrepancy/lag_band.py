@@ -130,4 +130,4 @@ def second_view(band: LagBand, c: Candidate,
               f"({CONSISTENCY_Z:g} sigma and the columns' discretisation)")
     return replace(c, second=SecondView(
         band=band.label, heldout_pct=w.heldout_pct, t_stat=w.t_stat, p_heldout=w.p_heldout,
-        value=tw, agree=agree, detail=detail, unphysical=w.unphysical))
+        value=tw, agree=agree, detail=detail, unphysical=w.unphysical, acts_pct=w.acts_pct))

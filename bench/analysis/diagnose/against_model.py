@@ -279,7 +279,9 @@ def _structural(log: Log, errors: dict[str, ParameterError], model_fs: float,
     fs = errors.get("FS")
     if fs is not None and fs.significant and model_fs == 0 and fs.data > 0:
         named.append("link_coulomb")
-    causes = getattr(d.inverse, "causes", None) or ((d.named,) if d.named else ())
+    # the causes the diagnosis names (none when it is overruled: an unphysical nominal, an
+    # extended model that does not improve the inverse view), each with its passing test
+    causes = d.causes
     # each cause's values from the one fit of all of them (a cause's own fit may predate a
     # later one that searched its value again: identification.discrepancy.candidates)
     joint = dict(joint_parameters(d.inverse.nominal, [c for c in causes if c is not None]))

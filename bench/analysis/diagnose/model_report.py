@@ -58,7 +58,11 @@ def to_json(md: ModelDiagnosis) -> dict:
     }
     d = md.log_diagnosis
     if d is not None:
-        out["candidates"] = d.to_json()["candidates"]
+        log_json = d.to_json()
+        out["candidates"] = log_json["candidates"]
+        # the structural causes' tests (the log's own diagnosis, identification.discrepancy)
+        out["causes"] = log_json["causes"]
+        out["floor_pct"] = log_json["floor_pct"]
     if md.forward:
         out["forward"] = _views_json(md.forward)
         out["gain"] = md.gain()

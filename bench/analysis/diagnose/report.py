@@ -71,6 +71,10 @@ def report_markdown(d: Diagnosis, figures: dict[str, str],
     L += ["", f"**Named cause: {d.named_cause}** (verdict: {d.verdict})", ""]
     L += _causes_lines(d)
     L += [f"Ambiguity: {a}.\n" for a in d.ambiguities]
+    not_named = _not_named_lines(d, "Considered and not named:", "- ")
+    L += not_named[:1] + [""] + not_named[1:] + [""] if not_named else []
+    if d.inverse.stopped:
+        L += [f"The rounds stopped at {d.inverse.stopped}.", ""]
     if d.reason:
         L += [f"Why: {d.reason}.", ""]
     L += [f"Warning: {w}" for w in d.warnings] + ([""] if d.warnings else [])
@@ -110,19 +114,27 @@ def report_markdown(d: Diagnosis, figures: dict[str, str],
 
 
 def _causes_lines(d: Diagnosis) -> list[str]:
-    """Every named cause after the first, each with its own gain."""
-    if len(d.causes) < 2:
+    """Every named cause with the test it is named on (at the level of the round it
+    entered) and its own gain."""
+    if not d.causes:
         return []
     L = ["Named causes, in order (each tested against the nominal extended by the ones "
          "before it):", ""]
     for c in d.causes:
         pars = ", ".join(f"{k} = {v:.4g}" for k, v in c.parameters.items())
         # the test that passed: its own band's, or the second band's that confirmed it
-        test = f"t {c.t_stat:.3g}" + (f"; {c.second_note}" if c.second is not None else "")
-        L.append(f"- {c.effect}: {pars}; held out it explains {c.heldout_pct:.3g} % "
-                 f"({test}); {BLOCK_NAMES[c.block].split(':')[0]} "
+        L.append(f"- {c.effect}: {pars}; its test, round {c.round}, {c.test.describe()}; "
+                 f"{BLOCK_NAMES[c.block].split(':')[0]} "
                  f"{c.before_pct:.3g} % -> {c.after_pct:.3g} % ({c.gain:.2f}x)")
     return L + [""]
+
+
+def _not_named_lines(d: Diagnosis, head: str, indent: str) -> list[str]:
+    """Every effect considered and not named, with why (inverse.NotNamed)."""
+    rows = [n for n in d.not_named if n.kind != "untestable"]
+    if not rows:
+        return []
+    return [head] + [f"{indent}{n.effect} ({n.kind.replace('_', ' ')}): {n.why}" for n in rows]
 
 
 RULE = ("Every effect of docs/effects.md added to the nominal model and fitted on all rows but "
@@ -133,7 +145,11 @@ RULE = ("Every effect of docs/effects.md added to the nominal model and fitted o
         f"differences, one-sided, at {ALPHA:g} divided by the number of effects the round "
         "tests: Holm's step-down Bonferroni) and its fit is physical. The named cause "
         "is the significant one that explains the most of the held-out residual; the others "
-        "are then tested again on top of it. Delta BIC and size are information.")
+        "are then tested again on top of it, and a later one is named only when it also "
+        f"explains more than {100 * MATERIAL:g} % of the held-out residual (the floor). With "
+        "more than two causes each must pass again against the model holding all the "
+        "others. Every named cause carries the test it is named on. Delta BIC and size are "
+        "information.")
 
 
 FIGURES = ("structure", "spectrum", "inverse", "forward", "forward_frf")
@@ -224,10 +240,13 @@ def summary_text(d: Diagnosis) -> str:
     L += ["", f"named cause: {d.named_cause}" + (" (inconclusive)" if d.overruled else "")]
     if len(d.causes) > 1:
         L += [f"named causes: {', '.join(c.effect for c in d.causes)}"]
-        L += [f"  {c.effect}: held out {c.heldout_pct:.3g} %, t {c.t_stat:.3g}, "
-              f"{BLOCK_NAMES[c.block].split(':')[0]} {c.before_pct:.3g} % -> "
-              f"{c.after_pct:.3g} % ({c.gain:.2f}x)" for c in d.causes]
+    L += [f"  {c.effect}: {BLOCK_NAMES[c.block].split(':')[0]} {c.before_pct:.3g} % -> "
+          f"{c.after_pct:.3g} % ({c.gain:.2f}x); its test, round {c.round}, "
+          f"{c.test.describe()}" for c in d.causes]
     L += [f"ambiguity: {a}" for a in d.ambiguities]
+    L += _not_named_lines(d, "considered, not named:", "  ")
+    if d.inverse.stopped and d.inverse.causes:
+        L.append(f"rounds stopped: {d.inverse.stopped}")
     if d.reason:
         L.append(f"why: {d.reason}")
     if d.named is not None:

@@ -26,6 +26,7 @@ from jointbench.identification.filter_choice import choose_filter
 from jointbench.identification.discrepancy import (NUMERICS, Candidate, InverseDiagnosis, Nominal,
                                                    diagnose_inverse)
 from jointbench.identification.discrepancy.candidates import joint_parameters
+from jointbench.identification.discrepancy.inverse import NotNamed
 from jointbench.identification.effects import EFFECTS
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.log import Log, unit_warnings
@@ -95,8 +96,8 @@ def diagnose(log: Log, out_dir: Path | None = None, forward: bool = True,
     # gain; a worse replay of the last one says nothing of the ones named before it).
     while _replay_rejects(judged) and len(judged.inverse.causes) > 1:
         left_out.append(f"{judged.inverse.causes[-1].effect} left out: {judged.overruled}")
-        judged = _judged(replace(d, inverse=_without_last(judged.inverse)), forward, say,
-                         judged.forward_nominal)
+        judged = _judged(replace(d, inverse=_without_last(judged.inverse, judged.overruled)),
+                         forward, say, judged.forward_nominal)
     d = judged
     if left_out and not d.overruled:
         d = replace(d, forward_note="; ".join(n for n in (d.forward_note, *left_out) if n))
@@ -132,10 +133,16 @@ def _replay_rejects(d: Diagnosis) -> bool:
             and d.forward_nominal is not None and not nominal_reason(d))
 
 
-def _without_last(inv: InverseDiagnosis) -> InverseDiagnosis:
+def _without_last(inv: InverseDiagnosis, why: str = "") -> InverseDiagnosis:
     """`inv` without its last named cause, and without the ambiguity notes about it (a
-    note's head "A or B:" names the cause it is about)."""
+    note's head "A or B:" names the cause it is about); the cause listed as not named, left
+    out for `why` (the forward view rejects its extended model)."""
     causes = inv.causes[:-1]
     kept = {c.effect for c in causes}
     notes = tuple(n for n in inv.notes if kept & set(n.split(":", 1)[0].split(" or ")))
-    return replace(inv, causes=causes, notes=notes)
+    last = inv.causes[-1]
+    out = NotNamed(last.effect, "left_out", f"the forward view rejects it: {why}", last.test,
+                   last.round)
+    return replace(inv, causes=causes, notes=notes,
+                   alternatives=tuple(a for a in inv.alternatives if a.named in kept),
+                   not_named=(out,) + inv.not_named)

@@ -9,6 +9,7 @@ import numpy as np
 
 from jointbench.bench.effects import axis_keys
 from jointbench.identification.discrepancy import Candidate, InverseDiagnosis
+from jointbench.identification.discrepancy.inverse import FLOOR, NotNamed
 from jointbench.identification.effects import NONE
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.log import Log
@@ -69,8 +70,21 @@ class Diagnosis:
     @property
     def ambiguities(self) -> tuple[str, ...]:
         """What this log cannot tell apart about the named causes (an offset from a
-        Coulomb-dominated asymmetric friction: identification.discrepancy.inverse)."""
-        return () if self.overruled else self.inverse.notes
+        Coulomb-dominated asymmetric friction: identification.discrepancy.inverse), and
+        every "one of A or B" (inverse._alternatives)."""
+        if self.overruled:
+            return ()
+        notes = self.inverse.notes
+        return notes + tuple(a.describe() for a in self.inverse.alternatives
+                             if not a.stated_in(notes))
+
+    @property
+    def not_named(self) -> tuple[NotNamed, ...]:
+        """Every effect considered and not named, with why (inverse.NotNamed); when the
+        answer is overruled, the inverse view's causes first, with the reason."""
+        over = tuple(NotNamed(c.effect, "overruled", self.overruled, c.test, c.round)
+                     for c in self.inverse.causes) if self.overruled else ()
+        return over + self.inverse.not_named
 
     @property
     def verdict(self) -> str:
@@ -122,6 +136,11 @@ class Diagnosis:
             out["reason"] = self.reason
         if self.ambiguities:
             out["ambiguity"] = list(self.ambiguities)
+        if self.inverse.alternatives and not self.overruled:
+            out["alternatives"] = [a.to_json() for a in self.inverse.alternatives]
+        out["not_named"] = [n.to_json() for n in self.not_named]
+        out["stopped"] = self.inverse.stopped
+        out["floor_pct"] = 100 * FLOOR
         if self.overruled and self.inverse.named is not None:
             out["rejected_cause"] = self.inverse.named.effect
         out["warnings"] = list(self.warnings)
@@ -134,10 +153,14 @@ class Diagnosis:
 
 
 def _cause_json(c: Candidate, prismatic: bool = False) -> dict:
-    """One named cause: its parameters and its own gain, against the causes before it."""
-    return {"effect": c.effect, "after": [e for e, _ in c.base],
+    """One named cause: its parameters, the held-out test it is named on (at the level of
+    the round it entered: heldout_pct, t, p_heldout, alpha are that test's, `test` all of
+    it) and its own gain, against the causes before it."""
+    test = c.test
+    return {"effect": c.effect, "after": [e for e, _ in c.base], "round": c.round,
             "parameters": axis_keys(c.parameters, prismatic),
-            "heldout_pct": c.heldout_pct, "t": c.t_stat, "p_heldout": c.p_heldout,
+            "heldout_pct": test.heldout_pct, "t": test.t, "p_heldout": test.p,
+            "alpha": test.level, "test": test.to_json(),
             "block": BLOCK_NAMES[c.block].split(":")[0], "before_pct": c.before_pct,
             "after_pct": c.after_pct, "gain": c.gain}
 
