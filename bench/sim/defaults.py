@@ -5,6 +5,10 @@ AMPLITUDE_RAD = 0.1        # chirp amplitude [rad] (bench.sim.experiment.default
 ACCELERATION_SHARE = 0.4   # the rigid-body torque (Jm + JL) A (2 pi f)^2 <= share x tau_max
 AMPLITUDE_REDUCTION = 0.7  # the amplitude's factor at each automatic reduction (saturation)
 MAX_REDUCTIONS = 6         # automatic reductions at most
+# MuJoCo steps a control period: the plant's friction switches inside the sample interval,
+# as a real axis' does, so the bench's logs identify through everyone's path
+# (docs/design-notes.md, "Simulator-free estimator")
+DEFAULT_SUBSTEPS = 4
 
 
 def amplitude_help() -> str:

@@ -20,6 +20,7 @@ import mujoco
 import numpy as np
 
 from jointbench.bench.sim.axes import ExperimentModel, build_experiment_model
+from jointbench.bench.sim.defaults import DEFAULT_SUBSTEPS
 from jointbench.bench.sim.controller import Gains, gains_rule
 from jointbench.bench.sim.friction import plant_meta
 from jointbench.bench.sim.defaults import (ACCELERATION_SHARE, AMPLITUDE_REDUCTION, AMPLITUDE_RAD,
@@ -34,7 +35,6 @@ from jointbench.identification.log import Log, format_meta_number
 from jointbench.identification.filter_choice import PAPER_RATE
 
 SAMPLE_RATE_HZ = PAPER_RATE  # the paper's acquisition rate, the mission's
-DEFAULT_SUBSTEPS = 1      # RK4; see README "Substeps" for the convergence check
 
 
 def position_unit(model: mujoco.MjModel, axis) -> str:

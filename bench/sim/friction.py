@@ -92,11 +92,22 @@ def motor_timeconst(model: mujoco.MjModel, motor_dof: int) -> float:
 def plant_meta(model: mujoco.MjModel, motor_dof: int, substeps: int) -> dict[str, str]:
     """How the simulated plant switches its friction, as a log of it carries it: physics steps
     per sample (`substeps`), the integrator and the rotor's friction time constant (META_KEY).
-    The identification reads them (identification.regressors, link_fit) to
-    place the friction as this plant does; a measured log has none of them."""
+    The identification reads none of them; the bench's replays (bias correction, refinement,
+    forward view) do, to simulate the plant as it was; a measured log has none of them."""
     return {PLANT_STEPS_KEY: str(substeps),
             PLANT_INTEGRATOR_KEY: mujoco.mjtIntegrator(model.opt.integrator).name,
             META_KEY: format_meta_number(motor_timeconst(model, motor_dof))}
+
+
+def log_substeps(log: Log, default: int) -> int:
+    """MuJoCo steps per sample that simulate `log`'s plant as it was simulated: the log's own
+    `substeps` (a jointbench log of a MuJoCo plant carries it), else `default`. A replica of
+    the log (bias correction, refinement, replay) then has the log's discretisation."""
+    try:
+        steps = float(log.meta.get(PLANT_STEPS_KEY, ""))
+    except ValueError:
+        return default
+    return int(steps) if steps >= 1 and steps == int(steps) else default
 
 
 def timeconst_for_log(log: Log, default: float, given: float | None = None
