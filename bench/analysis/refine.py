@@ -39,7 +39,7 @@ from scipy import optimize
 from jointbench.bench.sim.controller import Gains
 from jointbench.bench.analysis.refine_sigma import (  # noqa: F401 - public here too
     widen_on_disagreement, withdraw_when_unmoved)
-from jointbench.bench.sim.friction import log_substeps, timeconst_for_log
+from jointbench.bench.sim.friction import integrator_for_log, log_substeps, timeconst_for_log
 from jointbench.bench.sim.nominal import SOLREF_FRICTION, compile_axis, two_mass_axis
 from jointbench.bench.sim.replay import ReplayError, ReplayResult, forward_errors, replay
 from jointbench.identification.identify import Identification
@@ -190,14 +190,16 @@ def axis_for_log(log: Log, theta: dict[str, float], source: str,
                  friction_timeconst: float | None = None) -> tuple[mujoco.MjModel, Axis]:
     """The compiled two-mass axis with parameters `theta` (all of ALL_PARAMETERS) and the
     log's sample period, torque limit, gravity and joint name; its friction time constant
-    `friction_timeconst`, else the log's (bench.sim.friction.timeconst_for_log)."""
+    `friction_timeconst`, else the log's (bench.sim.friction.timeconst_for_log), and the
+    log's plant's integrator (bench.sim.friction.integrator_for_log)."""
     if friction_timeconst is None:
         friction_timeconst = timeconst_for_log(log, SOLREF_FRICTION[0])[0]
     spec = two_mass_axis(*(theta[n] for n in ("Jm", "FVm", "FSm", "K", "JL", "FV", "FS",
                                                "MX", "MY")),
                          timestep=log.ts, tau_max=log.meta_float("tau_max"),
                          gravity=log.gravity, name=log.meta.get("joint") or "axis1",
-                         friction_timeconst=friction_timeconst)
+                         friction_timeconst=friction_timeconst,
+                         integrator=integrator_for_log(log))
     return compile_axis(spec, source)
 
 

@@ -292,7 +292,7 @@ def test_unstable_gains_stop_the_run(scale, reason):
 
 def test_too_large_a_timestep_stops_the_run():
     """arm6 axis1 (mode 14.7 Hz) stepped at 20 Hz, one physics step a control period:
-    w1 dt = 4.6, over RK4's 2.78."""
+    w1 dt = 4.6, over semi-implicit Euler's 2."""
     with pytest.raises(SimulationError, match=r"joint axis1: the simulation stopped at "
                                               r"t = 0\.\d+ s: .*the timestep is too large for "
                                               r"the joint's mode: w1 dt = 4.61"):
