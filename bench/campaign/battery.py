@@ -22,7 +22,7 @@ from jointbench.bench.campaign.visibility import Search, strength_for, visibilit
 from jointbench.bench.effects import BENCH_EFFECTS, HiddenEffect
 from jointbench.bench.sim.axes import build_experiment_model
 from jointbench.bench.sim.controller import gains_rule
-from jointbench.bench.sim.defaults import AMPLITUDE_REDUCTION, DEFAULT_SUBSTEPS
+from jointbench.bench.sim.defaults import AMPLITUDE_REDUCTION, default_substeps
 from jointbench.bench.sim.experiment import default_chirp, run_experiment
 from jointbench.bench.sim.sensors import Sensors
 from jointbench.identification.effects import EFFECTS, NONE
@@ -263,7 +263,7 @@ class BenchRunner:
         exp, gains = self._axis(place)
         hidden = tuple(HiddenEffect(n, s, o) for n, s, o in effects)
         lag = sum(s for n, s, _ in effects if n == "torque_lag")
-        substeps = max(DEFAULT_SUBSTEPS, math.ceil(1.0 / (self.rate_hz * 2.0 * lag))
+        substeps = max(default_substeps(self.rate_hz), math.ceil(1.0 / (self.rate_hz * 2.0 * lag))
                        if lag > 0 else 1)
         return run_experiment(place.model, place.joint, duration=self.duration, seed=seed,
                               effect=hidden, sensors=self._sensors(exp, noise),
