@@ -27,6 +27,7 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py
+	$(BIN)/python benchmarks/lean.py
 
 # Peer methods side by side (mujoco.sysid needs MuJoCo's `sysid` extra) and the campaign
 # benchmark (200-run coverage, filter search); both print figures and assert nothing.

@@ -53,6 +53,7 @@ def identify(log: LogLike | list[LogLike] | tuple[LogLike, ...], model: str = "a
              f1_hz: float | None = None, refine: bool = False,
              refine_max_nfev: int | None = None, debias: int | None = None,
              friction_timeconst: float | None = None, validate: LogLike | None = None,
+             corrections: tuple[str, ...] | None = None,
              progress: Callable[[str], None] | None = None,
              replica_progress: Callable[[int, int], None] | None = None,
              warn: Callable[[str], None] | None = None) -> Fit | RunsFit:
@@ -102,6 +103,11 @@ def identify(log: LogLike | list[LogLike] | tuple[LogLike, ...], model: str = "a
         Debias: the nominal axis' Coulomb friction time constant [s] (default: the log's).
     validate : Log, str or PathLike, optional
         Another log, predicted by the identified model (inverse and forward views).
+    corrections : tuple of str, optional
+        The corrections beyond the paper's chain to apply (`--corrections`; names of
+        identification.identify.CORRECTIONS, docs/method.md); default all of them; () is
+        the paper's chain alone (`--plain`: eqs. 26-29, 22, 13 or 18-20, least squares).
+        The fit's report lists those that ran.
     progress : callable, optional
         Called with a line of refinement progress.
     replica_progress : callable, optional
@@ -152,6 +158,12 @@ def identify(log: LogLike | list[LogLike] | tuple[LogLike, ...], model: str = "a
     from jointbench.identification.saturation import clipping_warnings
     from jointbench.identification.checks.plausibility import sanity_warnings
 
+    from jointbench.identification.corrections import CORRECTIONS, check_corrections
+
+    wanted = check_corrections(CORRECTIONS if corrections is None else corrections)
+    if stencil == 5 and "stencil5" not in wanted:
+        raise ValueError("--stencil 5 is the stencil5 correction, which is switched off "
+                         "(--plain or --corrections without it)")
     say = warn or (lambda text: None)
     loaded = as_log(log)
     source = log_name(log, loaded)
@@ -180,7 +192,8 @@ def identify(log: LogLike | list[LogLike] | tuple[LogLike, ...], model: str = "a
                         wn if fc_hz is None else fc_hz)
         settings, mode = _filter_settings(loaded, band, order, Nd, chain, f1_hz)
     try:
-        result = identify_log(loaded, model, settings, f1_hz=f1_hz, first_mode=mode)
+        result = identify_log(loaded, model, settings, f1_hz=f1_hz, first_mode=mode,
+                              corrections=wanted)
     except InversionError as err:
         raise InversionError(f"{source}: {err}") from None
     flags = estimate_flags(result.physical, result.physical_sigma, loaded.prismatic)
@@ -191,7 +204,7 @@ def identify(log: LogLike | list[LogLike] | tuple[LogLike, ...], model: str = "a
     if debias is not None:
         from jointbench.bench.analysis.debias import debias as debias_fit
         debiased = debias_fit(loaded, result, replicas=debias, progress=replica_progress,
-                              friction_timeconst=friction_timeconst)
+                              friction_timeconst=friction_timeconst, corrections=wanted)
     if other is not None:
         from jointbench.bench.present.cross_validation import forward_validation
         from jointbench.identification.cross_validation import validate_on

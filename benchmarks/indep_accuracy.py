@@ -82,11 +82,12 @@ def band_fits(log: Log) -> dict[str, Identification]:
     choice = choose_filter(log)
     fits = {"chooser": identify(log, "joint-motor", settings=choice.settings,
                                 first_mode=choice.first_mode)}
-    wide, _, _ = wide_settings(log, choice.settings)
+    candidate = wide_settings(log, choice.settings)
+    wide = candidate[0]
     if wide is not None and choice.first_mode is not None and choice.first_mode.found:
         fits["wide"] = identify(log, "joint-motor", settings=wide, first_mode=choice.first_mode)
         fits["defaults"], band = choose_band(
-            log, fits["chooser"], lambda s: fits["wide"],
+            fits["chooser"], fits["wide"], candidate,
             lambda r: (r.physical, r.physical_sigma_corrected))
         fits["defaults"] = replace(fits["defaults"], band=band)
     return fits

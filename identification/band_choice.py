@@ -22,8 +22,8 @@ missed its own design; the wide band is then kept, still with the warning. The
 difference's variance is Hausman's, not a root-sum-square bound, which is too lenient: it
 lets the wide band win near-ties whose K differs from the chooser's. No threshold is tuned
 on test cases:
-the 1 % budgets are the chooser's, the 3 sigma the suite's. Pure numerics; the fits come
-from a callable.
+the 1 % budgets are the chooser's, the 3 sigma the suite's. Pure numerics; the caller fits
+both bands (`wide_settings` gives the wide one) and hands both fits to `choose_band`.
 """
 from __future__ import annotations
 
@@ -186,33 +186,33 @@ def mode_gap(physical: dict[str, float], f1_hz: float | None) -> float:
     return abs(f1_hz / (math.sqrt(K * (1 / Jm + 1 / JL)) / (2 * math.pi)) - 1)
 
 
-def choose_band(log: Log, chosen: Fit, fit: Callable[[FilterSettings], Fit],
+def choose_band(chosen: Fit, other: Fit | Exception | None,
+                wide: tuple[FilterSettings | None, float, str],
                 estimate: Callable[[Fit], tuple[dict, dict] | None],
                 f1_hz: float | None = None) -> tuple[Fit, BandChoice]:
-    """The rule: fit the wide candidate (`wide_settings` of the chooser's fit `chosen`) with
-    `fit`; keep the fit whose largest relative corrected sigma of K, Jm, JL (`max_rel_sigma`
+    """The rule, between the chooser's fit `chosen` and `other`, the same model fitted in
+    the wide band (`wide`: what `wide_settings` gave for the chooser's settings; `other` the
+    error the wide fit raised, or None when there is no wide band): keep the fit whose
+    largest relative corrected sigma of K, Jm, JL (`max_rel_sigma`
     of `estimate(fit)`: (physical, corrected sigma), None when not a joint-motor fit) is the
     smaller, unless, when that is the wide one, the two estimates lie more than CONSISTENCY_Z
     sigmas of their difference apart on any of K, Jm, JL (`disagreement`): then the
     chooser's, and a warning; the wide one, and the warning, when the chooser's model puts
     the first mode more than MODE_DISAGREEMENT from the measured `f1_hz` [Hz] and the wide
     one's within it (`mode_gap`). The chooser's fit also
-    stays when there is no wider band or its fit fails (ValueError and subclasses, the
-    identification's errors)."""
+    stays when there is no wider band or its fit failed."""
     base_est = estimate(chosen)
     settings = chosen.settings
     rel = max_rel_sigma(*base_est) if base_est else math.inf
-    wide, top, why = wide_settings(log, settings)
+    wide, top, why = wide
     keep = BandChoice("chooser", rel, wide, math.nan, top, "")
-    if wide is None:
+    if wide is None or other is None:
         return chosen, replace(keep, reason=f"chooser's band: {why}")
     label = (f"Nd {wide.Nd}, cutoff {wide.decimated_cutoff_hz:.3g} Hz, {wide.stencil} points; "
              f"{why}")
-    try:
-        other = fit(wide)
-    except (ValueError, ArithmeticError, np.linalg.LinAlgError) as err:
+    if isinstance(other, Exception):
         return chosen, replace(keep, reason=f"chooser's band: the wide band ({label}) "
-                                            f"failed: {err}")
+                                            f"failed: {other}")
     other_est = estimate(other)
     alt = max_rel_sigma(*other_est) if other_est else math.inf
     keep = replace(keep, alt_rel_sigma=alt)

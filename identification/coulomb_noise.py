@@ -17,16 +17,9 @@ Everything comes from the log, no width tuned:
   and how that miss correlates with the interval's own noise (the zero-phase chain sees part
   of it ahead), from the chain's filter and stencil alone;
 - `noise_nodes`: Gauss-Hermite nodes of the pair (start-velocity miss, interval noise).
-The friction's state is then averaged over the nodes with the plant's own one-interval law.
-Used for a simulator taking one RK4 step a sample (`substeps: 1`, the bench's MuJoCo logs):
-`stage_state`, MuJoCo's soft friction-loss constraint evaluated at each of the step's four
-stages (the same as mujoco.mj_step on a single rotor to 1e-6). Its position update weights the
-stages (1, 1, 1, 0) / 3, its velocity update (1, 2, 2, 1) / 6: the column takes the position's
-weights, since the logged positions are what the regressor sees (the velocity's bias FVm).
-Without noise MuJoCo's step is itself a staircase, zero friction for |u| < rate T / 2 at zero
-drive, which a sign column (linear reversals) would read as viscous friction.
-
-A continuous plant keeps the noise-free stick-slip state of `friction_state` (regressors).
+These hold for any plant. The regressors do not use them: averaging the motor's stick-slip
+state (`friction_state`) over the nodes moved arm6's Jm by under 0.01 % and biased the
+independent simulator's stiff axis (docs/design-notes.md, "Simulator-free estimator").
 
 Pure numpy.
 """
@@ -34,20 +27,17 @@ Pure numpy.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
-from jointbench.identification.filtering import (FilterSettings, held_integrals, seen_velocity,
-                                                 stencil_view)
-from jointbench.identification.link_sim import FRICTION_D, FRICTION_DMAX
+from jointbench.identification.filtering import FilterSettings, seen_velocity
 
 GH_NODES = 3               # Gauss-Hermite nodes a noise dimension (exact for degree <= 5)
 JITTER_TAIL = 4.0          # |v| / spread within which an interval counts as near a reversal
 JITTER_PASSES = 3          # passes narrowing the samples to the reversals' neighbourhood
 JITTER_MIN_SAMPLES = 200   # fewest intervals the residual's spread is taken from
 CHAIN_SPAN = 512           # samples of the chain's response to one interval's noise
-STAGE_PASSES = 3           # passes rebuilding the start velocity from the state (`stage_column`)
 _GH_X, _GH_W = np.polynomial.hermite_e.hermegauss(GH_NODES)
 _GH_W = _GH_W / _GH_W.sum()
 
@@ -145,94 +135,3 @@ def noise_nodes(sweep: float, s: FilterSettings) -> NoiseNodes | None:
     w = np.outer(_GH_W, _GH_W)
     dv = g * sweep * (rho * x1 + np.sqrt(max(0.0, 1.0 - rho * rho)) * x2)
     return NoiseNodes(dv.ravel(), (x1 * sweep / s.ts).ravel(), w.ravel())
-
-
-def stage_state(u: np.ndarray, a0: np.ndarray, rate: float, ts: float, timeconst: float
-                ) -> tuple[np.ndarray, np.ndarray]:
-    """The friction state (friction / FS) one classical RK4 step applies from the start
-    velocity u [rad/s] with the drive a0 [rad/s^2] (every other force over the inertia, held
-    over the step), as the velocity update weights it, (s1 + 2 s2 + 2 s3 + s4) / 6, and as the
-    position update does, (s1 + s2 + s3) / 3. Each stage's s is MuJoCo's friction loss, the
-    soft constraint s = clip(D (a0 + B v) / rate, -1, 1), B = 2 / (DMAX timeconst)
-    (`link_sim`'s D, DMAX); timeconst 0: hard, sign(v), at rest the drive held if it can."""
-    def at(v: np.ndarray) -> np.ndarray:
-        if timeconst > 0:
-            return np.clip(FRICTION_D * (a0 + 2.0 / (FRICTION_DMAX * timeconst) * v) / rate,
-                           -1.0, 1.0)
-        return np.where(v != 0, np.sign(v), np.clip(a0 / rate, -1.0, 1.0))
-    s1 = at(u)
-    s2 = at(u + ts / 2 * (a0 - rate * s1))
-    s3 = at(u + ts / 2 * (a0 - rate * s2))
-    s4 = at(u + ts * (a0 - rate * s3))
-    return (s1 + 2 * s2 + 2 * s3 + s4) / 6.0, (s1 + s2 + s3) / 3.0
-
-
-def stage_integrals(u: np.ndarray, a0: np.ndarray, rate: float, ts: float, timeconst: float,
-                    nodes: NoiseNodes | None) -> tuple[np.ndarray, np.ndarray]:
-    """Samples of the first and second integrals of the expected `stage_state` (over `nodes`,
-    or none), held on each interval as the RK4 step applies it."""
-    uu = np.nan_to_num(np.asarray(u, dtype=float)[:-1])
-    aa = np.nan_to_num(np.asarray(a0, dtype=float)[:-1])
-    grid = zip(nodes.dv, nodes.da, nodes.w) if nodes is not None else [(0.0, 0.0, 1.0)]
-    vel, pos = np.zeros(len(uu)), np.zeros(len(uu))
-    for dv, da, w in grid:
-        sv, sp = stage_state(uu + dv, aa + da, rate, ts, timeconst)
-        vel += w * sv
-        pos += w * sp
-    S1 = np.concatenate([[0.0], np.cumsum(vel * ts)])
-    S2 = np.concatenate([[0.0], np.cumsum(S1[:-1] * ts + pos * ts * ts / 2)])
-    return S1, S2
-
-
-@dataclass(frozen=True)
-class LogNoise:
-    """What the expected state needs of a log: the raw motor positions [rad], the encoder's
-    resolution [rad] (0: unknown), the logged (held) torque [N m], the chain's deflection
-    qm - q [rad], the previous pass's parameters (eq. 13 names: Jm, FVm, FSm, K) and the
-    once-a-sample RK4 plant's friction time constant [s] (0: a hard Coulomb sign)."""
-
-    positions: np.ndarray
-    resolution: float
-    tau: np.ndarray
-    defl: np.ndarray
-    params: Mapping[str, float] = field(default_factory=dict)
-    timeconst: float = 0.0
-
-    def nodes(self, v: np.ndarray, s: FilterSettings) -> NoiseNodes | None:
-        """`noise_nodes` of this log for the chain's velocity v."""
-        return noise_nodes(torque_noise_sweep(v, self.positions, self.tau, self.defl,
-                                              self.params, s.ts, self.resolution), s)
-
-
-def stage_column(v: np.ndarray, log: LogNoise, s: FilterSettings, rate: float) -> np.ndarray:
-    """The motor's Coulomb column of a once-a-sample RK4 plant: the expected `stage_state`
-    over the log's noise (`LogNoise.nodes`), from the start velocity rebuilt from the chain's
-    v [rad/s] by adding what the chain misses of the held torque's and the friction's steps
-    (u = v + A1 - D(lowpass(A2)), A1, A2 the integrals of tau / Jm - rate s; STAGE_PASSES
-    fixed-point passes), seen as the stencil sees it (5 points), or with eq. (22)'s chain the
-    mean of the two intervals about each sample (as `zoh_align` pairs the torque). NaN where v
-    is. `rate` = FSm / Jm > 0 and `log.params` must hold Jm > 0."""
-    p, ts = log.params, s.ts
-    Jm = p["Jm"]
-    v = np.asarray(v, dtype=float)
-    base = np.nan_to_num(v)
-    nodes = log.nodes(v, s)
-    held = np.asarray(log.tau, dtype=float) / Jm
-    h = held - np.mean(held)       # a constant's share passes the chain whole
-    H1, H2 = held_integrals(h, ts)
-    spring = (p.get("K", 0.0) * np.nan_to_num(log.defl)) / Jm
-    u = base
-    for i in range(STAGE_PASSES):
-        a0 = held - spring - p.get("FVm", 0.0) * u / Jm
-        S1, S2 = stage_integrals(u, a0, rate, ts, log.timeconst, nodes)
-        if i == STAGE_PASSES - 1:
-            break
-        seen = seen_velocity(H2 - rate * S2, s)
-        u = np.where(np.isfinite(seen), base + (H1 - rate * S1) - seen, base)
-    if s.stencil == 5:
-        S2[~np.isfinite(v)] = np.nan
-        return stencil_view(S2, ts, 5)
-    state = np.diff(S1) / ts
-    out = 0.5 * (np.r_[state[:1], state] + np.r_[state, state[-1:]])
-    out[~np.isfinite(v)] = np.nan
-    return out

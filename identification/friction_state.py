@@ -33,7 +33,42 @@ MATCH_PASSES = 2    # passes shifting the drive onto the next sample's velocity
 def _interval(u: np.ndarray, d0: np.ndarray, d1: np.ndarray, visc: float, rate: float,
               ts: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One pass over every interval at once from velocities u: the first and second
-    integrals of the friction state over the interval (from its start) and the end velocity."""
+    integrals of the friction state over the interval (from its start) and the end velocity.
+    An interval that moves one way throughout has the state sign(u) at every sub-step: its
+    velocity is stepped alone, the integrals are those of a constant sign (the same
+    operations as `_slip_stick`'s, so the same numbers), and `_slip_stick` runs on the rest."""
+    h = ts / SUBSTEPS
+    sg = np.sign(u)
+    free = u.copy()
+    one_way = sg != 0
+    slope, friction = d1 - d0, rate * sg
+    d, acc, same = np.empty_like(u), np.empty_like(u), np.empty(len(u), dtype=bool)
+    for j in range(SUBSTEPS):   # in place, the operations of `_slip_stick`'s free step
+        np.multiply(slope, j + 0.5, out=d)
+        np.divide(d, SUBSTEPS, out=d)
+        np.add(d0, d, out=d)
+        np.multiply(free, visc, out=acc)
+        np.subtract(d, acc, out=acc)
+        np.subtract(acc, friction, out=acc)
+        np.multiply(acc, h, out=acc)
+        np.add(free, acc, out=free)
+        np.equal(np.sign(free, out=acc), sg, out=same)
+        one_way &= same
+    p1 = p2 = 0.0
+    for _ in range(SUBSTEPS):     # the integrals of sign = +1 (of -1: their negatives)
+        p2 += p1 * h + 1.0 * h * h / 2
+        p1 += 1.0 * h
+    I1, I2, end = sg * p1, sg * p2, free
+    rest = np.flatnonzero(~one_way)
+    if len(rest):
+        J1, J2, e = _slip_stick(u[rest], d0[rest], d1[rest], visc, rate, ts)
+        I1[rest], I2[rest], end[rest] = J1, J2, e
+    return I1, I2, end
+
+
+def _slip_stick(u: np.ndarray, d0: np.ndarray, d1: np.ndarray, visc: float, rate: float,
+                ts: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`_interval` with the stick-slip law at every sub-step (reversals, rest, breakaway)."""
     h = ts / SUBSTEPS
     I1, I2 = np.zeros(len(u)), np.zeros(len(u))
     for j in range(SUBSTEPS):

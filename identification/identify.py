@@ -11,9 +11,11 @@ import numpy as np
 
 from jointbench.identification import link_fit, regressors
 from jointbench.identification.checks.fit import check_excitation, check_signals
+from jointbench.identification.corrections import CORRECTIONS, check_corrections
 from jointbench.identification.estimate import LSResult, NotIdentifiable, block_weighted, least_squares
 from jointbench.identification.checks.band import band_warnings, check_f1
-from jointbench.identification.band_choice import MODE_DISAGREEMENT, BandChoice, choose_band
+from jointbench.identification.band_choice import (MODE_DISAGREEMENT, BandChoice, choose_band,
+                                                   wide_settings)
 from jointbench.identification.filter_choice import choose_filter, is_paper_prototype, stencil_for
 from jointbench.identification.first_mode import (FirstMode, given_first_mode,
                                                   measure_first_mode)
@@ -25,6 +27,21 @@ from jointbench.identification.saturation import exclude_clipped  # clipped torq
 
 MODEL_CHOICES = ("joint-motor", "motor-only", "motor-only-printed", "rigid", "auto")
 REVERSAL_PASSES = 3   # fixed-point passes of `_place_reversals` (the 3rd moves Jm by < 0.1 %)
+
+def paper_chain(settings: FilterSettings, wanted: frozenset[str]) -> FilterSettings:
+    """`settings` with the chain corrections switched off that `wanted` lacks: eq. (22)'s 3
+    points without stencil5, the torque as logged (no ZOH alignment) without zoh."""
+    if "stencil5" not in wanted and settings.stencil != 3:
+        settings = replace(settings, stencil=3)
+    if "zoh" not in wanted and settings.zoh:
+        settings = replace(settings, zoh=False)
+    return settings
+
+
+def chain_corrections(settings: FilterSettings) -> tuple[str, ...]:
+    """The chain corrections `settings` applies (names of CORRECTIONS)."""
+    return tuple(n for n, on in (("zoh", settings.zoh), ("stencil5", settings.stencil == 5))
+                 if on)
 
 
 @dataclass(frozen=True)
@@ -57,6 +74,7 @@ class Identification:
     # reconstruction (identification/link_fit.py, `physical`) starts; {} when it fails
     physical_eqs18_20: dict[str, float] = field(default_factory=dict)
     band: BandChoice | None = None        # joint-motor with defaults: the band_choice rule
+    corrections: tuple[str, ...] = ()     # the corrections beyond the paper that ran (CORRECTIONS)
 
     @property
     def relative_error_pct(self) -> float:
@@ -111,8 +129,8 @@ def stiffness_rejection(result: Identification) -> str | None:
 
 
 def identify(log: Log, model: str = "auto", settings: FilterSettings | None = None,
-             f1_hz: float | None = None, first_mode: FirstMode | None = None
-             ) -> Identification:
+             f1_hz: float | None = None, first_mode: FirstMode | None = None,
+             corrections: tuple[str, ...] | frozenset[str] = CORRECTIONS) -> Identification:
     """Identify the axis of `log` with `model` (docs/cli.md names, plus
     `motor-only-printed`, the paper's eq. 18 as printed). `auto` takes joint-motor when `q`
     is logged, else motor-only, and falls back to rigid when the data does not identify a
@@ -123,13 +141,17 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
     with a mode found is fitted again in the wide band and the more precise kept
     (`band_choice.choose_band`, reported in `band`); with `settings`,
     `first_mode` (what the caller measured, for example before overriding wn or Nd; measured
-    here when neither it nor f1 is given) is reported and checked against them. Raises
-    LogError for unusable logs and NotIdentifiable when nothing is excited.
+    here when neither it nor f1 is given) is reported and checked against them.
+    `corrections`: the corrections beyond the paper's chain to apply (CORRECTIONS, all by
+    default; empty: the paper's chain alone); those that ran are in `corrections` of the
+    result. Raises LogError for unusable logs, NotIdentifiable when nothing is excited and
+    ValueError for an unknown model or correction.
     """
     if model not in MODEL_CHOICES:
         raise ValueError(f"unknown model {model!r} (choices: {', '.join(MODEL_CHOICES)})")
     if f1_hz is not None:
         check_f1(log, f1_hz)
+    wanted = check_corrections(corrections)
     warnings: list[str] = []
     notes: list[str] = []
     chooser = settings is None
@@ -145,16 +167,26 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
         mode = first_mode or (given_first_mode(f1_hz) if f1_hz is not None
                               else measure_first_mode(log))
         why = f"given: {settings.stencil} points"
+    if settings.stencil == 5 and "stencil5" not in wanted:
+        why = "eq. (22): 3 points (the 5-point stencil switched off)"
+    settings = paper_chain(settings, wanted)
     f1 = mode.f1_hz if mode is not None and mode.found else None
-    result = _identify(log, model, settings, notes, f1)
+    result = _identify(log, model, settings, notes, f1, wanted)
     warnings += result.warnings
-    if chooser and result.model == "joint-motor" and f1 is not None:   # a mode found
-        result, band = choose_band(log, result, lambda s: _identify(log, model, s, [], f1),
-                                   _joint_motor_estimate, f1)
+    if chooser and result.model == "joint-motor" and f1 is not None and "wide_band" in wanted:
+        wide = wide_settings(log, settings)
+        other = None
+        if wide[0] is not None:
+            try:
+                other = _identify(log, model, paper_chain(wide[0], wanted), [], f1, wanted)
+            except (ValueError, ArithmeticError, np.linalg.LinAlgError) as err:
+                other = err
+        result, band = choose_band(result, other, wide, _joint_motor_estimate, f1)
         settings = result.settings
         why = stencil_for(settings)[1] if band.used == "wide" else why
         warnings += [band.warning] if band.warning else []
-        result = replace(result, band=band)
+        result = replace(result, band=band, corrections=result.corrections + (
+            ("wide_band",) if band.used == "wide" else ()))
     if mode is not None and mode.found and mode.method != "given" and result.model != "rigid":
         mode, text = model_first_mode(result, mode)
         if text:
@@ -212,13 +244,15 @@ def model_first_mode(result: Identification, measured: FirstMode) -> tuple[First
 
 
 def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
-              f1_hz: float | None = None) -> Identification:
-    """`identify` with the settings chosen; the joint-motor model is solved with the
-    reference's instruments when the log has q_ref (`_instruments`)."""
+              f1_hz: float | None = None, wanted: frozenset[str] = frozenset(CORRECTIONS)
+              ) -> Identification:
+    """`identify` with the settings chosen and the corrections `wanted`; the joint-motor
+    model is solved with the reference's instruments when the log has q_ref
+    (`_instruments`)."""
     if model == "auto":
         flexible = "joint-motor" if log.q is not None else "motor-only"
         try:
-            result = _identify(log, flexible, settings, [], f1_hz)
+            result = _identify(log, flexible, settings, [], f1_hz, wanted)
         except (InversionError, NotIdentifiable) as err:
             notes.append(f"auto: {flexible} model rejected ({err}); rigid model used")
             rejected = (str(err), {})
@@ -229,22 +263,37 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
             notes.append(f"auto: the data does not identify a stiffness in the band "
                          f"({flexible} model: {why}); rigid model used")
             rejected = (why, dict(result.physical))
-        return replace(_identify(log, "rigid", settings, notes, f1_hz), rejected=rejected)
+        return replace(_identify(log, "rigid", settings, notes, f1_hz, wanted),
+                       rejected=rejected)
     if model != "rigid" and not (settings.zoh and settings.filter_torque):
         notes.append("the no-ZOH / unfiltered-torque options apply to the rigid model only")
     nd = 4 if model.startswith("motor-only") else 2
     _check_length(log, settings, nd)
     check_signals(log, model, settings)
+    ran = list(chain_corrections(settings))
     if model == "joint-motor":
-        reg = exclude_clipped(regressors.joint_motor(log, settings), log)
-        Z = _instruments(log, reg, f1_hz, notes)
+        chain = regressors.JointMotorChain(log, settings)
+        reg = exclude_clipped(chain.regressor(), log)
+        if "instruments" in wanted:
+            Z = _instruments(log, reg, f1_hz, notes)
+        else:
+            Z = None
+            notes.append("least squares: instruments switched off")
+        ran += ["instruments"] if Z is not None else []
         ls = block_weighted(reg.W, reg.y, reg.names, reg.block, time=reg.index, instruments=Z)
-        reg, ls = _place_reversals(log, settings, reg, ls, Z, notes)
+        if "reversals" in wanted:
+            reg, ls, placed = _place_reversals(log, chain, reg, ls, Z, notes,
+                                               "stick_phases" in wanted)
+            ran += placed
+    elif model == "motor-only" and "motor_only_columns" not in wanted:
+        reg = exclude_clipped(regressors.motor_only(log, settings, corrected=False), log)
+        ls = least_squares(reg.W, reg.y, reg.names)
     elif model == "motor-only":
         # least squares: the torque's own derivatives are columns here, and instruments
         # predicted for them are weak and bias K more than least squares does
         reg = exclude_clipped(regressors.motor_only(log, settings, corrected=True), log)
         ls = least_squares(reg.W, reg.y, reg.names)
+        ran.append("motor_only_columns")
     elif model == "motor-only-printed":
         reg = exclude_clipped(regressors.motor_only(log, settings, corrected=False), log)
         ls = least_squares(reg.W, reg.y, reg.names)
@@ -268,7 +317,7 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
         try:
             phys = invert_motor_only(ls, g=log.gravity, qc=float(np.mean(log.q_m)))
         except InversionError as err:
-            if model != "motor-only":
+            if reg.model != "motor-only":
                 raise
             notes.append(f"eqs. (18)-(20) do not invert ({err})")
             physical, sigma, sigma_corr = {}, {}, {}
@@ -276,9 +325,10 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
             physical, sigma = phys.as_dict(), {n: phys.std(n) for n in phys.names}
             sigma_corr = _motor_only_sigma_corrected(ls, log)
         eqs18_20 = dict(physical)
-        if model == "motor-only":
+        if reg.model == "motor-only" and "link_reconstruction" in wanted:
             physical, sigma, sigma_corr = _link_reconstructed(log, settings, physical, f1_hz,
                                                               notes, warnings)
+            ran.append("link_reconstruction")
     else:
         for n in ls.names:
             if n not in ls.unidentifiable:
@@ -297,7 +347,8 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
                           settings=settings, y=reg.y, y_pred=y_pred, t=log.t[reg.index],
                           block=reg.block, notes=tuple(notes), table3=t3,
                           prismatic=log.prismatic, physical_sigma_corrected=sigma_corr,
-                          physical_eqs18_20=eqs18_20, warnings=tuple(warnings))
+                          physical_eqs18_20=eqs18_20, warnings=tuple(warnings),
+                          corrections=tuple(n for n in CORRECTIONS if n in ran))
 
 
 def reversal_rates(p: dict[str, float]) -> tuple[float, float]:
@@ -308,33 +359,38 @@ def reversal_rates(p: dict[str, float]) -> tuple[float, float]:
                  for f, j in (("FSm", "Jm"), ("FS", "JL")))
 
 
-def _place_reversals(log: Log, settings: FilterSettings, reg: regressors.Regressor,
-                     ls: LSResult, Z: np.ndarray | None, notes: list[str]
-                     ) -> tuple[regressors.Regressor, LSResult]:
+def _place_reversals(log: Log, chain: regressors.JointMotorChain, reg: regressors.Regressor,
+                     ls: LSResult, Z: np.ndarray | None, notes: list[str],
+                     stick: bool = True
+                     ) -> tuple[regressors.Regressor, LSResult, tuple[str, ...]]:
     """Eq. (13) solved again with the Coulomb columns built from the previous pass's
-    parameters, REVERSAL_PASSES times (`regressors.joint_motor` with them): the velocity's
-    zero crossings put back where the friction's kink and the held torque's steps have them
+    parameters, REVERSAL_PASSES times (the log's `regressors.JointMotorChain` with them): the
+    velocity's zero crossings put back where the friction's kink and the held torque's steps have them
     (`filtering.kink_corrected`), placed inside the sample interval with the kink
     (`filtering.crossing_share`), and the motor's stick phases, where the friction holds the
     drive instead of +-FSm (`friction_state`). The filtered velocity's own crossings come late
-    by an amount that grows with FS / J, and Jm with them."""
+    by an amount that grows with FS / J, and Jm with them. `stick` False: the reversals
+    alone (the rates), no stick phases. Also returns the corrections that ran (names of
+    CORRECTIONS)."""
     rates = (0.0, 0.0)
+    stuck = False
     for _ in range(REVERSAL_PASSES):
         p = {n: ls.value(n) for n in ls.names if n not in ls.unidentifiable}
         rates = reversal_rates(p)
         if not any(rates):
-            return reg, ls
-        again = exclude_clipped(regressors.joint_motor(log, settings, p), log)
+            return reg, ls, ()
+        stuck = stick and rates[0] > 0 and p.get("K", 0.0) > 0   # `_friction_models`' rule
+        again = exclude_clipped(chain.regressor(p if stick else rates), log)
         if not np.array_equal(again.index, reg.index):   # NaN rows moved: keep the first pass
-            return reg, ls
+            return reg, ls, ()
         reg = again
         ls = block_weighted(reg.W, reg.y, reg.names, reg.block, time=reg.index, instruments=Z)
     if not any(rates):
-        return reg, ls
+        return reg, ls, ()
     notes.append(f"Coulomb reversals placed by the identified FSm / Jm = {rates[0]:.4g} and "
                  f"FS / JL = {rates[1]:.4g} (the filtered velocity's zero crossings come late "
                  f"by the friction's kink; {REVERSAL_PASSES} passes)")
-    return reg, ls
+    return reg, ls, ("reversals", "stick_phases") if stuck else ("reversals",)
 
 
 def _instruments(log: Log, reg: regressors.Regressor, f1_hz: float | None,

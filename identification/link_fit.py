@@ -20,15 +20,13 @@ estimate; the link friction phi, the gravity terms and the motor reversals (plac
 joint-motor model places them) come from the previous round. The reference's instruments
 (identification/instruments.py) then replace least squares for the last passes. A gravity the
 data cannot tell from zero is left out (it trades with K). JL = K / a, FV = b JL, FS = c JL.
-The link is stepped as the log's plant steps it (`link_stepper`): a simulator taking one RK4
-step a sample switches the link friction at its stages, not inside the interval.
+The link's friction switches inside the sample interval (`simulate_link`), as a real axis'
+does.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import partial
-from typing import Callable
 
 import numpy as np
 from scipy import optimize
@@ -37,10 +35,8 @@ from jointbench.identification import regressors
 from jointbench.identification.estimate import LSResult, least_squares
 from jointbench.identification.filtering import FilterSettings, decimate_parallel, zoh_align
 from jointbench.identification.instruments import instrument_log
-from jointbench.identification.link_sim import (inverse, simulate_link, simulate_link_rk4,
-                                                 spectra)
+from jointbench.identification.link_sim import inverse, simulate_link, spectra
 from jointbench.identification.log import Log
-from jointbench.identification.log.schema import PLANT_INTEGRATOR_KEY, PLANT_STEPS_KEY
 from jointbench.identification.saturation import exclude_clipped
 
 NAMES = ("Jm", "FVm", "FSm", "K", "Kc", "Kgx", "Kgy", "a", "b")
@@ -68,23 +64,6 @@ class LinkFit:
     warnings: tuple[str, ...] = ()
 
 
-def link_stepper(log: Log) -> tuple[Callable[..., tuple[np.ndarray, np.ndarray]], str]:
-    """The link simulator for this log's plant and a note: `simulate_link_rk4` when the log's
-    metadata says one RK4 step a sample (`substeps: 1`, `integrator: mjINT_RK4`, MuJoCo's
-    arm6 and prototype at the paper's rate), with the log's `friction_timeconst_s` (0 when
-    absent: a hard Coulomb friction); else `simulate_link`, a plant integrated continuously
-    (a measured axis has no such keys). Raises LogError when the time constant is not a
-    number."""
-    meta = log.meta
-    steps = meta.get(PLANT_STEPS_KEY, "").strip()
-    if steps == "1" and "RK4" in meta.get(PLANT_INTEGRATOR_KEY, "").upper():
-        tc = log.plant_timeconst() or 0.0
-        return (partial(simulate_link_rk4, timeconst=tc),
-                f"the link's friction as the log's one RK4 step a sample switches it (at each "
-                f"stage; soft, time constant {tc:g} s)")
-    return simulate_link, "the link's friction switching inside the sample interval"
-
-
 class _Rows:
     """The motor rows of one log for given (a, b) and given profiles (phi, gravity, reversal
     rate): the filtered motor derivatives are computed once."""
@@ -96,7 +75,6 @@ class _Rows:
         self.g = log.gravity
         self.bad = ~np.isfinite(self.qm[2])
         self.gravity = self.g != 0    # False: the gravity columns are zero (not identified)
-        self.stepper, self.stepper_note = link_stepper(log)
 
     def profiles(self, p: dict[str, float]) -> None:
         """The link friction phi and gravity (link_sim with p's a, b, c, gx, gy) and the motor
@@ -106,14 +84,14 @@ class _Rows:
         c = max(p["Kc"] / K, 0.0) if K > 0 else 0.0
         gx, gy = ((self.g * p["Kgx"] / K, self.g * p["Kgy"] / K) if K > 0 and self.gravity
                   else (0.0, 0.0))
-        q, phi = self.stepper(self.log.q_m, self.s.ts, a, b, c, gx, gy)
+        q, phi = simulate_link(self.log.q_m, self.s.ts, a, b, c, gx, gy)
         self.phi = zoh_align(phi)            # the step means at the samples
         g = self.g if self.gravity else 0.0
         self.cos, self.sin = g * np.cos(q), g * np.sin(q)
         self.spectra = spectra([self.qm[2], self.qm[1], self.phi, self.cos, self.sin],
                                self.s.ts)
         rate = p["FSm"] / p["Jm"] if p["Jm"] > 0 and p["FSm"] > 0 else 0.0
-        # the reversals placed as the joint-motor chain places them for this log's plant
+        # the reversals placed as the joint-motor chain places them
         motor, _ = regressors._friction_models(self.log, (rate, 0.0), self.log.q_m)
         self.sign = regressors._sign(self.qm[1], self.s, *motor)
 
@@ -300,7 +278,7 @@ def fit(log: Log, s: FilterSettings, start: dict[str, float], f1_hz: float | Non
     (p, ls, y, J, idx), warning = _final_checked(rows, log, p, Z)
     notes = [f"motor-only: link reconstructed from q_m through eq. (5) (stick-slip link "
              f"friction), variable projection from the eqs. (18)-(20) estimate, {ROUNDS} "
-             f"rounds; {why}; {rows.stepper_note}"]
+             f"rounds; {why}; the link's friction switching inside the sample interval"]
     left_out = None
     if rows.gravity and not _significant(ls, ("Kgx", "Kgy")):
         # a gravity stiffness the data cannot tell from zero still trades with K (both stiffen

@@ -14,9 +14,6 @@ Three pieces:
   linear part propagated exactly, the reversal or sticking instant placed inside the step by
   linear interpolation of the velocity), returning q and the friction phi averaged over each
   step;
-- `simulate_link_rk4`: the same link as a simulator that takes one classical RK4 step a
-  sample sees it (MuJoCo at `substeps: 1`): its friction cannot switch inside the step but at
-  each of the four stages, and MuJoCo's friction is a soft constraint;
 - `link_response`: the linear part, d = H u with H = 1 / (s^2 + b s + a), applied in the
   frequency domain (exact for band-limited samples; the filtered derivatives the regressors
   use are), with its derivatives with respect to a and b for Gauss-Newton.
@@ -114,65 +111,6 @@ def simulate_link(qm: np.ndarray, ts: float, a: float, b: float, c: float = 0.0,
             q, v = (qx if stuck else qn), (0.0 if stuck else vn)
         out_q[k + 1] = q
     return out_q, phi
-
-
-# MuJoCo's Coulomb friction (frictionloss) as a soft constraint: the force that brings the
-# velocity v to rest at the reference acceleration -B v, B = 2 / (DMAX tc), with impedance
-# D, clipped to +-FS (models/arm6.xml's solimpfriction, bench/sim/nominal.py's).
-FRICTION_D, FRICTION_DMAX = 0.99, 0.999
-
-
-def simulate_link_rk4(qm: np.ndarray, ts: float, a: float, b: float, c: float = 0.0,
-                      gx: float = 0.0, gy: float = 0.0, timeconst: float = 0.0
-                      ) -> tuple[np.ndarray, np.ndarray]:
-    """`simulate_link` for a plant integrated by one RK4 step a sample (the log's metadata
-    `substeps: 1`, `integrator: mjINT_RK4`): the motor angle linear between samples, the link
-    friction taken at each stage from that stage's state, as MuJoCo's soft constraint of time
-    constant `timeconst` [s] (0: hard, the Coulomb sign) gives it; phi[k] is the friction / FS
-    as the step's velocity update weights it, (f1 + 2 f2 + 2 f3 + f4) / 6. This matches
-    MuJoCo's logged link, where `simulate_link`, which switches the friction inside the step,
-    biases the link frictions and the motor-only K.
-    Raises ValueError unless a > 0, b, c >= 0."""
-    if not (a > 0 and b >= 0 and c >= 0):
-        raise ValueError(f"the link needs a > 0, b >= 0, c >= 0 (got {a}, {b}, {c})")
-    u = np.asarray(qm, dtype=float).tolist()
-    n, h, h2 = len(u), ts, ts / 2
-    band = 2.0 / (FRICTION_DMAX * timeconst) if timeconst > 0 else math.inf
-    cos, sin = math.cos, math.sin
-    gravity, soft, fd = gx != 0 or gy != 0, math.isfinite(band), FRICTION_D
-
-    def acc(q: float, v: float, um: float) -> tuple[float, float]:
-        """The acceleration and the friction / FS at the state (q, v), motor angle um."""
-        a0 = a * (um - q) - b * v
-        if gravity:
-            a0 -= gx * cos(q) + gy * sin(q)
-        if c > 0:
-            if soft:
-                f = -fd * (a0 + band * v)
-            else:
-                f = -math.copysign(c, v) if v != 0 else -a0   # at rest: held if it can
-            f = c if f > c else (-c if f < -c else f)
-            return a0 + f, f / c
-        return a0, -1.0 if v > 0 else 1.0
-
-    q, v = rest_angle(u[0], a, gx, gy), 0.0
-    out_q, phi = [q], []
-    for k in range(n - 1):
-        u0, u1 = u[k], u[k + 1]
-        um = 0.5 * (u0 + u1)
-        a1, f1 = acc(q, v, u0)
-        v2 = v + h2 * a1
-        a2, f2 = acc(q + h2 * v, v2, um)
-        v3 = v + h2 * a2
-        a3, f3 = acc(q + h2 * v2, v3, um)
-        v4 = v + h * a3
-        a4, f4 = acc(q + h * v3, v4, u1)
-        q += h / 6 * (v + 2 * v2 + 2 * v3 + v4)
-        v += h / 6 * (a1 + 2 * a2 + 2 * a3 + a4)
-        phi.append(-(f1 + 2 * f2 + 2 * f3 + f4) / 6)
-        out_q.append(q)
-    phi.append(0.0)
-    return np.array(out_q[:n]), np.array(phi[:n])
 
 
 def spectra(signals: list[np.ndarray], ts: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -186,7 +186,8 @@ def to_json(result: Identification, truth: dict[str, float] | None = None) -> di
            "relative_error_pct": result.relative_error_pct,
            "condition_number": ls.cond,
            "notes": list(result.notes),
-           "warnings": list(result.warnings)}
+           "warnings": list(result.warnings),
+           "corrections": list(result.corrections)}
     mode = result.first_mode
     if mode is not None:
         out["first_mode"] = finite_json({"f1_hz": mode.f1_hz, "sigma_hz": mode.sigma_hz,

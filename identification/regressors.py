@@ -22,15 +22,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from jointbench.identification.filtering import (Drive, FilterSettings, as_acceleration_sees,
-                                                 coulomb_integrals,
+                                                 coulomb_integrals, decimate,
                                                  decimate_parallel, derivatives, kink_corrected,
                                                  lowpass, stencil_view, zoh_align)
-from jointbench.identification.coulomb_noise import LogNoise, stage_column
 from jointbench.identification.log import Log, LogError
-from jointbench.identification.log.schema import PLANT_INTEGRATOR_KEY, PLANT_STEPS_KEY
 from jointbench.identification.parameters import JOINT_MOTOR, MOTOR_ONLY, MOTOR_ONLY_CORRECTED, RIGID
 
-MOTOR_RESOLUTION_KEY = "motor_encoder_resolution_rad"
 MODELS = ("joint-motor", "motor-only", "rigid")
 
 
@@ -57,7 +54,7 @@ def _filtered(x: np.ndarray, s: FilterSettings, nd: int) -> list[np.ndarray]:
 
 def _sign(x: np.ndarray, s: FilterSettings, rate: float = 0.0,
           held: np.ndarray | None = None, drive: Drive | None = None,
-          inside: bool = True, noise: LogNoise | None = None) -> np.ndarray:
+          inside: bool = True) -> np.ndarray:
     """sign(x) at the samples (the paper's chain), or as the 5-point stencil sees it (the
     `stencil_view` of `coulomb_integrals`: each reversal placed between samples, weighted as
     its acceleration).
@@ -65,11 +62,7 @@ def _sign(x: np.ndarray, s: FilterSettings, rate: float = 0.0,
     kink has them (`kink_corrected`, with the held drive `held` = tau / J when given) and
     placed between samples with that kink (`crossing_share`); with `drive`, the friction's
     state with its stick phases (`coulomb_integrals`) in place of sign(x). `inside` False:
-    the reversals placed linearly between samples (`_friction_models`). `noise`: a
-    once-a-sample RK4 plant's log, whose motor state is MuJoCo's per-stage friction over the
-    log's unlogged noise (`jitter.stage_column`), in place of everything above."""
-    if noise is not None and rate > 0:
-        return stage_column(x, noise, s, rate)
+    the reversals placed linearly between samples."""
     if rate > 0:
         x = kink_corrected(x, rate, s, held=held, drive=drive, inside=inside)
     if s.stencil == 5:
@@ -108,27 +101,81 @@ def joint_motor(log: Log, s: FilterSettings,
     `friction` places the Coulomb reversals of the sign columns (`_sign`): the rates
     (FSm / Jm, FS / JL), or the parameters of an earlier estimate (names of eq. 13), which
     add the held torque's kinks and the stick phases (`_friction_models`); zero keeps the
-    filtered velocity's."""
-    if log.q is None:
-        raise LogError("the joint-motor model needs the link position column 'q'", log.path,
-                       column="q")
-    qm = _filtered(log.q_m, s, 2)
-    q = _filtered(log.q, s, 2)
-    tau = _torque(log, s)
-    g = log.gravity
-    n = len(log.t)
-    zero = np.zeros(n)
-    defl = qm[0] - q[0]
-    motor, link = _friction_models(log, friction, defl)
-    seen = _as_seen(s)
-    W1 = np.column_stack([qm[2], seen(qm[1], 1), _sign(qm[1], s, *motor), seen(defl, 0), zero,
-                          zero, zero, zero, zero])
-    W2 = np.column_stack([zero, zero, zero, -seen(defl, 0), q[2], seen(g * np.cos(q[0]), 0),
-                          seen(g * np.sin(q[0]), 0), seen(q[1], 1), _sign(q[1], s, *link)])
-    y1, W1, i1 = decimate_parallel(tau, W1, s)
-    y2, W2, i2 = decimate_parallel(zero, W2, s)
-    return Regressor("joint-motor", JOINT_MOTOR, np.concatenate([y1, y2]), np.vstack([W1, W2]),
-                     np.r_[np.zeros(len(y1), int), np.ones(len(y2), int)], np.r_[i1, i2], s)
+    filtered velocity's. One call of `JointMotorChain`; build that once to fit the same log
+    and filter again with other friction (the reversal passes)."""
+    return JointMotorChain(log, s).regressor(friction)
+
+
+class JointMotorChain:
+    """Eq. (13)'s chain on one log at one filter setting, built once: the filtered and
+    differentiated positions, the torque, the columns that do not depend on the friction and
+    their decimation (per row span, `decimate_parallel`'s), so that each `regressor` call
+    rebuilds and decimates the two Coulomb columns alone. The numbers are
+    `decimate_parallel`'s: the decimation filters every column on its own."""
+
+    MOTOR_SIGN, LINK_SIGN = 2, 8   # the sign columns of the motor and link blocks
+
+    def __init__(self, log: Log, s: FilterSettings):
+        if log.q is None:
+            raise LogError("the joint-motor model needs the link position column 'q'",
+                           log.path, column="q")
+        self.log, self.s = log, s
+        self.qm = _filtered(log.q_m, s, 2)
+        self.q = q = _filtered(log.q, s, 2)
+        self.tau = _torque(log, s)
+        qm, g, n = self.qm, log.gravity, len(log.t)
+        zero = np.zeros(n)
+        self.zero = zero
+        self.defl = defl = qm[0] - q[0]
+        seen = _as_seen(s)
+        self.W1 = np.column_stack([qm[2], seen(qm[1], 1), zero, seen(defl, 0), zero, zero, zero,
+                                   zero, zero])
+        self.W2 = np.column_stack([zero, zero, zero, -seen(defl, 0), q[2],
+                                   seen(g * np.cos(q[0]), 0), seen(g * np.sin(q[0]), 0),
+                                   seen(q[1], 1), zero])
+        self._decimated: dict[tuple[int, int, int], tuple[np.ndarray, np.ndarray]] = {}
+
+    def regressor(self, friction: tuple[float, float] | Mapping[str, float] = (0.0, 0.0)
+                  ) -> Regressor:
+        """`joint_motor(log, s, friction)` from the chain's columns."""
+        s = self.s
+        motor, link = _friction_models(self.log, friction, self.defl)
+        W1, W2 = self.W1.copy(), self.W2.copy()
+        W1[:, self.MOTOR_SIGN] = _sign(self.qm[1], s, *motor)
+        W2[:, self.LINK_SIGN] = _sign(self.q[1], s, *link)
+        y1, W1, i1 = self._decimate(0, self.tau, W1, self.MOTOR_SIGN)
+        y2, W2, i2 = self._decimate(1, self.zero, W2, self.LINK_SIGN)
+        return Regressor("joint-motor", JOINT_MOTOR, np.concatenate([y1, y2]),
+                         np.vstack([W1, W2]),
+                         np.r_[np.zeros(len(y1), int), np.ones(len(y2), int)], np.r_[i1, i2], s)
+
+    def _decimate(self, block: int, y: np.ndarray, W: np.ndarray, varying: int
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """`decimate_parallel(y, W, s)` with y and the columns other than `varying`
+        decimated once per row span."""
+        s = self.s
+        n = len(y)
+        valid = np.all(np.isfinite(W), axis=1) & np.isfinite(y)
+        first, last = max(int(np.argmax(valid)), s.skip), n - int(np.argmax(valid[::-1]))
+        sl = slice(first, last)
+        key = (block, first, last)
+        if key not in self._decimated:
+            if s.Nd > 1:
+                self._decimated[key] = (decimate(y[sl], s.Nd), decimate(W[sl], s.Nd, axis=0))
+            else:
+                self._decimated[key] = (y[sl].copy(), W[sl].copy())
+        yd, Wd = self._decimated[key]
+        yd, Wd = yd.copy(), Wd.copy()
+        if s.Nd > 1:
+            Wd[:, varying] = decimate(W[sl, varying], s.Nd)
+        else:
+            Wd[:, varying] = W[sl, varying]
+        index = first + np.arange(len(yd)) * s.Nd
+        e = s.edge
+        keep = slice(e, len(yd) - e)
+        yd, Wd, index = yd[keep], Wd[keep], index[keep]
+        ok = np.all(np.isfinite(Wd), axis=1) & np.isfinite(yd)
+        return yd[ok], Wd[ok], index[ok]
 
 
 def _as_seen(s: FilterSettings):
@@ -142,48 +189,26 @@ def _as_seen(s: FilterSettings):
 
 def _friction_models(log: Log, friction: tuple[float, float] | Mapping[str, float],
                      defl: np.ndarray) -> tuple[tuple, tuple]:
-    """`_sign`'s arguments after the velocity for the motor and the link columns.
-
-    A plant integrated continuously (a real axis, or a simulator with several steps a
-    sample): from rates (FSm / Jm, FS / JL), the reversals placed inside the sample
-    interval with the friction's kink; from parameters p, the motor column also gets the held
-    torque tau / Jm and its drive between samples, (tau[k] - K defl) / Jm at the interval's
-    start and end with the viscous rate FVm / Jm, for its stick phases (`friction_state`),
-    since the closed loop holds the motor at its reversals. The link, driven by the spring
-    alone, keeps its reversals slip-through. A log whose metadata says the simulator took
-    one RK4 step a sample (`substeps: 1`) cannot switch its friction inside a sample: from
-    rates, the reversals placed linearly between samples; from parameters, the motor's
-    state is MuJoCo's per-stage soft friction of the log's `friction_timeconst_s` over the
-    noise (`jitter.stage_column`), once the previous pass has a positive K: where the motor
-    sticks that state balances the drive, the logged torque included, and on a log whose
-    motion is the noise's alone (where the first pass's K is negative) such a column would
-    explain the torque by itself. Zero where a friction or inertia is missing or not
+    """`_sign`'s arguments after the velocity for the motor and the link columns, the same
+    for every log (the plant's friction switches inside the sample interval, as a real axis'
+    does): from rates (FSm / Jm, FS / JL), the reversals placed inside the sample interval
+    with the friction's kink; from parameters p, the motor column also gets the held torque
+    tau / Jm and its drive between samples, (tau[k] - K defl) / Jm at the interval's start and
+    end with the viscous rate FVm / Jm, for its stick phases (`friction_state`), since the
+    closed loop holds the motor at its reversals. The link, driven by the spring alone, keeps
+    its reversals slip-through. Zero where a friction or inertia is missing or not
     positive."""
     rates = friction if not isinstance(friction, Mapping) else tuple(
         friction[f] / friction[j] if friction.get(j, 0) > 0 and friction.get(f, 0) > 0
         else 0.0 for f, j in (("FSm", "Jm"), ("FS", "JL")))
     p = friction if isinstance(friction, Mapping) else {}
     K, Jm = p.get("K", 0.0), p.get("Jm", 0.0)
-    tau = np.asarray(log.tau_m, dtype=float)
-    if log.meta.get(PLANT_STEPS_KEY, "").strip() == "1":
-        if "RK4" in log.meta.get(PLANT_INTEGRATOR_KEY, "") and rates[0] > 0 and K > 0:
-            noise = LogNoise(np.asarray(log.q_m, dtype=float), _resolution(log), tau, defl, p,
-                             log.plant_timeconst() or 0.0)
-            return (rates[0], None, None, False, noise), (rates[1], None, None, False)
-        return (rates[0], None, None, False), (rates[1], None, None, False)
     if not (rates[0] > 0 and K > 0):
         return (rates[0],), (rates[1],)
+    tau = np.asarray(log.tau_m, dtype=float)
     nxt = np.r_[defl[1:], defl[-1:]]
     drive = ((tau - K * defl) / Jm, (tau - K * nxt) / Jm, max(p.get("FVm", 0.0), 0.0) / Jm)
     return (rates[0], tau / Jm, drive), (rates[1],)
-
-
-def _resolution(log: Log) -> float:
-    """The motor encoder's resolution [rad] the log's metadata gives, 0 when it gives none."""
-    try:
-        return max(float(log.meta.get(MOTOR_RESOLUTION_KEY, "0")), 0.0)
-    except ValueError:
-        return 0.0
 
 
 def motor_only(log: Log, s: FilterSettings, corrected: bool = True) -> Regressor:

@@ -47,7 +47,7 @@ from typing import Callable
 
 import numpy as np
 
-from jointbench.bench.sim.friction import motor_timeconst, timeconst_for_log
+from jointbench.bench.sim.friction import log_substeps, motor_timeconst, timeconst_for_log
 from jointbench.bench.sim.nominal import SOLREF_FRICTION
 from jointbench.bench.analysis.refine import RefineError, axis_for_log, require_replayable, start_parameters
 from jointbench.bench.sim.replay import ReplayError, replay
@@ -115,12 +115,16 @@ def _sensors(log: Log, sensors: Sensors | None) -> Sensors:
 
 
 def debias(log: Log, ident: Identification, *, replicas: int = DEFAULT_REPLICAS, seed: int = 0,
-           substeps: int = 1, sensors: Sensors | None = None,
+           substeps: int | None = None, sensors: Sensors | None = None,
            friction_timeconst: float | None = None,
+           corrections: frozenset[str] | tuple[str, ...] | None = None,
            progress: Callable[[int, int], None] | None = None) -> DebiasResult:
     """Bias-correct `ident`, the identification of `log`, by `replicas` closed-loop replays of
     the experiment on the nominal axis at its estimate (module docstring). `substeps`: MuJoCo
-    steps per log sample in the replays; `progress(done, total)` after each replica.
+    steps per log sample in the replays (default: the log's own, else 1,
+    `bench.sim.friction.log_substeps`); `corrections`: those the replicas' identification
+    applies, as `ident`'s did (default all, identification.identify.CORRECTIONS);
+    `progress(done, total)` after each replica.
 
     Raises LogError when the log cannot be replayed, DebiasError when the identification has
     no two-mass estimate or the log no sensor description, ValueError for bad arguments."""
@@ -137,6 +141,8 @@ def debias(log: Log, ident: Identification, *, replicas: int = DEFAULT_REPLICAS,
     model, axis = axis_for_log(log, theta, "bias-correction axis", tc)
     notes = [*notes, f"nominal axis: Coulomb friction time constant {1e3 * tc:g} ms "
              f"(solreffriction), {source}"]
+    if substeps is None:
+        substeps = log_substeps(log, 1)
     start = time.perf_counter()
     rows: list[dict[str, float]] = []
     failed: list[str] = []
@@ -147,7 +153,9 @@ def debias(log: Log, ident: Identification, *, replicas: int = DEFAULT_REPLICAS,
             sim = Log(t=r.t, q_m=r.q_m, tau_m=r.tau_m, q=r.q, q_ref=log.q_ref, meta=log.meta,
                       path=f"replica {b} of {log.path or 'the log'}")
             rows.append(identify(sim, ident.model, ident.settings,
-                                     first_mode=ident.first_mode).physical)
+                                 first_mode=ident.first_mode,
+                                 **({} if corrections is None else
+                                    {"corrections": corrections})).physical)
         except (ReplayError, LogError, NotIdentifiable, np.linalg.LinAlgError) as err:
             failed.append(f"replica {b}: {err}")
         if progress is not None:

@@ -39,7 +39,7 @@ from scipy import optimize
 from jointbench.bench.sim.controller import Gains
 from jointbench.bench.analysis.refine_sigma import (  # noqa: F401 - public here too
     widen_on_disagreement, withdraw_when_unmoved)
-from jointbench.bench.sim.friction import timeconst_for_log
+from jointbench.bench.sim.friction import integrator_for_log, log_substeps, timeconst_for_log
 from jointbench.bench.sim.nominal import SOLREF_FRICTION, compile_axis, two_mass_axis
 from jointbench.bench.sim.replay import ReplayError, ReplayResult, forward_errors, replay
 from jointbench.identification.identify import Identification
@@ -190,22 +190,27 @@ def axis_for_log(log: Log, theta: dict[str, float], source: str,
                  friction_timeconst: float | None = None) -> tuple[mujoco.MjModel, Axis]:
     """The compiled two-mass axis with parameters `theta` (all of ALL_PARAMETERS) and the
     log's sample period, torque limit, gravity and joint name; its friction time constant
-    `friction_timeconst`, else the log's (bench.sim.friction.timeconst_for_log)."""
+    `friction_timeconst`, else the log's (bench.sim.friction.timeconst_for_log), and the
+    log's plant's integrator (bench.sim.friction.integrator_for_log)."""
     if friction_timeconst is None:
         friction_timeconst = timeconst_for_log(log, SOLREF_FRICTION[0])[0]
     spec = two_mass_axis(*(theta[n] for n in ("Jm", "FVm", "FSm", "K", "JL", "FV", "FS",
                                                "MX", "MY")),
                          timestep=log.ts, tau_max=log.meta_float("tau_max"),
                          gravity=log.gravity, name=log.meta.get("joint") or "axis1",
-                         friction_timeconst=friction_timeconst)
+                         friction_timeconst=friction_timeconst,
+                         integrator=integrator_for_log(log))
     return compile_axis(spec, source)
 
 
-def simulate(log: Log, theta: dict[str, float], *, substeps: int = 1) -> ReplayResult:
+def simulate(log: Log, theta: dict[str, float], *, substeps: int | None = None
+             ) -> ReplayResult:
     """One closed-loop replay of `log` on the two-mass axis with parameters `theta` (all of
-    ALL_PARAMETERS), the log's sample period, torque limit and gravity."""
+    ALL_PARAMETERS), the log's sample period, torque limit and gravity; `substeps` MuJoCo
+    steps a sample (default: the log's own, else 1, `bench.sim.friction.log_substeps`)."""
     model, axis = axis_for_log(log, theta, "refinement candidate")
-    return replay(model, axis, log, substeps=substeps)
+    return replay(model, axis, log,
+                  substeps=log_substeps(log, 1) if substeps is None else substeps)
 
 
 def _standard_deviations(J: np.ndarray, r: np.ndarray, scale: np.ndarray,
@@ -233,7 +238,7 @@ def _standard_deviations(J: np.ndarray, r: np.ndarray, scale: np.ndarray,
 
 def refine(log: Log, ident: Identification, *, params: tuple[str, ...] | None = None,
            outputs: tuple[str, ...] | None = None, max_nfev: int | None = None,
-           substeps: int = 1, skip: int = 0, diff_step: float = DIFF_STEP,
+           substeps: int | None = None, skip: int = 0, diff_step: float = DIFF_STEP,
            progress: Callable[[str], None] | None = None) -> RefineResult:
     """Refine the two-mass identification `ident` of `log` by closed-loop output error (module
     docstring). `params`: the free parameters (default `FREE[ident.model]`); `outputs`: the

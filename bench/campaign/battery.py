@@ -22,7 +22,7 @@ from jointbench.bench.campaign.visibility import Search, strength_for, visibilit
 from jointbench.bench.effects import BENCH_EFFECTS, HiddenEffect
 from jointbench.bench.sim.axes import build_experiment_model
 from jointbench.bench.sim.controller import gains_rule
-from jointbench.bench.sim.defaults import AMPLITUDE_REDUCTION
+from jointbench.bench.sim.defaults import AMPLITUDE_REDUCTION, default_substeps
 from jointbench.bench.sim.experiment import default_chirp, run_experiment
 from jointbench.bench.sim.sensors import Sensors
 from jointbench.identification.effects import EFFECTS, NONE
@@ -217,8 +217,9 @@ class Runner(Protocol):
 class BenchRunner:
     """The bench (bench.sim.experiment.run_experiment) at `rate_hz`, `duration` s logs. Every
     run of an axis and feedforward setting keeps the chirp of its clean run (shrunk as that
-    run needed), so that an effect changes nothing else; a torque lag runs with the
-    substeps that keep MuJoCo's RK4 stable on the actuator filter (h <= 2 lag)."""
+    run needed), so that an effect changes nothing else; the bench's default substeps, or for
+    a torque lag more if MuJoCo's RK4 needs them to stay stable on the actuator filter
+    (h <= 2 lag)."""
 
     def __init__(self, duration: float = 40.0, rate_hz: float = PAPER_RATE):
         self.duration, self.rate_hz = duration, rate_hz
@@ -262,7 +263,8 @@ class BenchRunner:
         exp, gains = self._axis(place)
         hidden = tuple(HiddenEffect(n, s, o) for n, s, o in effects)
         lag = sum(s for n, s, _ in effects if n == "torque_lag")
-        substeps = max(1, math.ceil(1.0 / (self.rate_hz * 2.0 * lag))) if lag > 0 else 1
+        substeps = max(default_substeps(self.rate_hz), math.ceil(1.0 / (self.rate_hz * 2.0 * lag))
+                       if lag > 0 else 1)
         return run_experiment(place.model, place.joint, duration=self.duration, seed=seed,
                               effect=hidden, sensors=self._sensors(exp, noise),
                               sample_rate_hz=self.rate_hz, substeps=substeps,

@@ -31,7 +31,7 @@ from jointbench.bench.campaign.table import CampaignTable
 from jointbench.bench.campaign.times import read_times, times_path, write_times
 from jointbench.bench.effects import parse_effects
 from jointbench.bench.sim.axes import build_experiment_model
-from jointbench.bench.sim.experiment import DEFAULT_SUBSTEPS, SAMPLE_RATE_HZ, run_experiment
+from jointbench.bench.sim.experiment import SAMPLE_RATE_HZ, run_experiment
 from jointbench.bench.sim.sensors import Sensors
 from jointbench.identification.filter_choice import choose_filter
 from jointbench.identification.filtering import FilterSettings
@@ -171,7 +171,7 @@ def _truth_cells(settings: RunSettings, scatter_seed: int) -> tuple[tuple[str, s
         model_ref, joint = _run_model(task, tmp)
         rate = {} if settings.rate is None else {"sample_rate_hz": settings.rate}
         exp = build_experiment_model(
-            model_ref, joint, substeps=DEFAULT_SUBSTEPS,
+            model_ref, joint,
             effect=parse_effects(settings.effect) if settings.effect else None,
             **{"sample_rate_hz": SAMPLE_RATE_HZ, **rate})
     truth = exp.truth.as_dict()

@@ -8,6 +8,7 @@ import json
 import sys
 
 from jointbench.bench.cli.common import UsageError, positive
+from jointbench.identification.corrections import CORRECTIONS
 
 # The library `run` imports, loaded by the dispatcher before it traps the signals.
 LIBRARY = ("jointbench.bench.api",)
@@ -53,6 +54,14 @@ def add_arguments(i: argparse.ArgumentParser) -> None:
                         "the experiment on the nominal axis with the log's sensors (parametric "
                         "bootstrap; 8 is a good start; needs q_ref, the gains and the sensor "
                         "metadata; bench/analysis/debias.py)")
+    i.add_argument("--plain", action="store_true",
+                   help="the paper's chain alone: eqs. (26)-(29) design, eq. (22) central "
+                        "differences, eq. (13) or (18)-(20), least squares; no correction "
+                        "beyond it (docs/method.md)")
+    i.add_argument("--corrections", metavar="NAME,...",
+                   help="the corrections beyond the paper's chain to apply, separated by "
+                        "commas, or none (default: all of them: " + ", ".join(CORRECTIONS) +
+                        "; docs/method.md)")
     i.add_argument("--friction-timeconst", type=positive, default=None, metavar="S",
                    help="--debias: Coulomb friction time constant of the nominal axis in s "
                         "(MuJoCo solreffriction; default: the log's friction_timeconst_s, which "
@@ -65,6 +74,18 @@ def _check_options(args: argparse.Namespace) -> None:
         raise UsageError("--refine-max-nfev applies to --refine")
     if args.friction_timeconst is not None and args.debias is None:
         raise UsageError("--friction-timeconst applies to --debias")
+    if args.plain and args.corrections is not None:
+        raise UsageError("give --plain or --corrections, not both")
+    if args.corrections is not None:
+        names = [n.strip() for n in args.corrections.split(",")]
+        unknown = [n for n in names if n not in CORRECTIONS and n != "none"]
+        if unknown or ("none" in names and len(names) > 1):
+            raise UsageError(f"--corrections {args.corrections}: names are none or "
+                             f"{', '.join(CORRECTIONS)}, separated by commas")
+    if args.stencil == 5 and (args.plain or (args.corrections is not None and "stencil5" not in
+                                              args.corrections.split(","))):
+        raise UsageError("--stencil 5 is the stencil5 correction, which --plain or "
+                         "--corrections switches off")
     if args.debias is not None and args.debias < 2:
         raise UsageError(f"--debias needs at least 2 replicas, got {args.debias}")
 
@@ -83,6 +104,16 @@ def _check_filter_options(args: argparse.Namespace) -> None:
         raise UsageError(f"--order {args.order}: must lie in [1, {MAX_ORDER}]")
     if args.skip < 0:
         raise UsageError(f"--skip {args.skip}: must be >= 0")
+
+
+def _corrections(args: argparse.Namespace) -> tuple[str, ...] | None:
+    """The `corrections` of `jointbench.identify`: () with --plain, the names given, None
+    (all) by default."""
+    if args.plain:
+        return ()
+    if args.corrections is None:
+        return None
+    return tuple(n.strip() for n in args.corrections.split(",") if n.strip() != "none")
 
 
 def _debias_progress():
@@ -123,7 +154,7 @@ def run(args: argparse.Namespace) -> int:
                    filter_torque=not args.no_torque_filter, stencil=args.stencil,
                    f1_hz=args.f1, refine=args.refine, refine_max_nfev=args.refine_max_nfev,
                    debias=args.debias, friction_timeconst=args.friction_timeconst,
-                   validate=args.validate,
+                   validate=args.validate, corrections=_corrections(args),
                    progress=None if args.json else _refine_progress,
                    replica_progress=None if args.json else _debias_progress(), warn=_warn)
     if args.json:

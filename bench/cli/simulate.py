@@ -12,7 +12,7 @@ from pathlib import Path
 from jointbench.bench.cli.common import (UsageError, check_output_file, finite, parse_config,
                                          positive, seed)
 from jointbench.bench.cli.resources import check_memory
-from jointbench.bench.sim.defaults import amplitude_help
+from jointbench.bench.sim.defaults import PHYSICS_STEP, amplitude_help
 
 # The library `run` imports, loaded by the dispatcher before it traps the signals: a virtual
 # experiment needs no scipy (start-up, README "Speed"); the replay identifies and does.
@@ -52,7 +52,10 @@ def add_arguments(s: argparse.ArgumentParser) -> None:
                                     "an entry for the moving axis centres its chirp (default: "
                                     "its rest position)")
     s.add_argument("--amplitude", type=positive, help=amplitude_help())
-    s.add_argument("--substeps", type=int, default=1, help="physics steps per control tick (default 1)")
+    s.add_argument("--substeps", type=int, default=None,
+                   help=f"physics steps per control tick (default: the fewest that keep the "
+                        f"step within {1e3 * PHYSICS_STEP:g} ms, at least 4; with --replay: "
+                        f"the log's own, else 1)")
     s.add_argument("--rate", type=_rate, default=None, metavar="HZ|auto",
                    help="sample (control and log) rate in Hz (default 350.87, the paper's); "
                         "auto: twice the Fs of eq. (29) for the axis' first mode, about 105 f1")
@@ -100,7 +103,7 @@ def _check_numbers(args: argparse.Namespace) -> None:
     from jointbench.bench.sim.reference import Chirp
     from jointbench.identification.log.read import MAX_RATE_HZ, MIN_RATE_HZ
 
-    if not 1 <= args.substeps <= MAX_SUBSTEPS:
+    if args.substeps is not None and not 1 <= args.substeps <= MAX_SUBSTEPS:
         raise UsageError(f"--substeps {args.substeps}: must lie in [1, {MAX_SUBSTEPS}]")
     if args.skip < 0:
         raise UsageError(f"--skip {args.skip}: must be >= 0")
@@ -148,8 +151,8 @@ def run(args: argparse.Namespace) -> int:
                                 amplitude=args.amplitude, config=parse_config(args.config),
                                 lock=args.lock, effect=effect,
                                 sensors=Sensors.ideal() if args.ideal_sensors else None,
-                                substeps=args.substeps, progress=fraction(b),
-                                sample_rate_hz=rate)
+                                substeps=args.substeps,
+                                progress=fraction(b), sample_rate_hz=rate)
     write_log(result.log, out)
     warnings = saturation_warnings(result)
     for text in warnings:

@@ -46,6 +46,8 @@ def _filter_chain(source: str, log: Log, result: Identification) -> list[str]:
              if on]
     if result.band is not None:
         lines.append(f"band: {result.band.reason}")
+    lines.append("corrections beyond the paper: " + (", ".join(result.corrections)
+                                                     or "none (the paper's chain)"))
     if log.prismatic or chain:
         lines.append("; ".join((["prismatic axis: positions in m, forces in N, masses in kg"]
                                 if log.prismatic else []) + chain))

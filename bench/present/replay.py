@@ -9,6 +9,7 @@ import mujoco
 
 from jointbench.bench.sim.axes import build_experiment_model
 from jointbench.bench.sim.controller import controller_from_log, describe
+from jointbench.bench.sim.friction import log_substeps
 from jointbench.bench.sim.nominal import compile_axis, for_log
 from jointbench.bench.sim.replay import ReplayResult, forward_errors, replay
 from jointbench.identification.identify import identify
@@ -59,7 +60,7 @@ class ReplayReport:
 
 def replay_log_file(path, model: str | None = None, joint: str | None = None,
                     config: dict[str, float] | None = None, lock: str = "rigid",
-                    substeps: int = 1, tau0: float | None = None, skip: int = 0,
+                    substeps: int | None = None, tau0: float | None = None, skip: int = 0,
                     identify_model: str = "auto") -> ReplayReport:
     """Read the log at `path` and replay it (`replay`) on `model` (shipped name or MJCF file,
     through `bench.axes.build_experiment_model` with the other axes locked as `config`
@@ -71,6 +72,8 @@ def replay_log_file(path, model: str | None = None, joint: str | None = None,
         raise LogError("cannot replay: the log has no column 'q_ref' (the reference the "
                        "controller tracked)", log.path, column="q_ref")
     gains = controller_from_log(log)
+    if substeps is None:   # the log's plant's discretisation (a measured log: one step)
+        substeps = log_substeps(log, 1)
     notes: list[str] = []
     if model is None:
         ident = identify(log, identify_model)

@@ -21,6 +21,7 @@ import mujoco
 import numpy as np
 
 from jointbench.bench.effects import HiddenEffect, apply_to_spec, as_effects, strength_of
+from jointbench.bench.sim.defaults import default_substeps
 from jointbench.models import (Axis, ModelStructureError, find_axes, load_model, select_axis,
                                torque_limit)
 from jointbench.models.truth import AxisTruth, axis_truth
@@ -182,7 +183,7 @@ def build_experiment_model(model: str | Path = "prototype", joint: str | None = 
                            config: dict[str, float] | None = None, center: float | None = None,
                            lock: str = "rigid",
                            effect: HiddenEffect | tuple[HiddenEffect, ...] | None = None,
-                           substeps: int = 1, sample_rate_hz: float = PAPER_RATE,
+                           substeps: int | None = None, sample_rate_hz: float = PAPER_RATE,
                            tau_max: float | None = None) -> ExperimentModel:
     """Compile the experiment model of axis `joint` (default: the first axis).
 
@@ -195,6 +196,8 @@ def build_experiment_model(model: str | Path = "prototype", joint: str | None = 
     effects = as_effects(effect)   # one hidden effect, several, or none
     if lock not in LOCKS:
         raise ValueError(f"lock must be one of {', '.join(LOCKS)}, got {lock!r}")
+    if substeps is None:
+        substeps = default_substeps(sample_rate_hz)
     if substeps < 1:
         raise ValueError(f"substeps must be >= 1, got {substeps}")
     if Path(str(model)).is_dir():

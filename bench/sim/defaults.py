@@ -1,10 +1,32 @@
 """The default reference of a virtual experiment, the one source for the code and for the
-command line's help (standard library only: `simulate --help` reads it without numpy)."""
+command line's help (standard library only: `simulate --help` reads it without numpy), and
+the physics steps a control period."""
+
+import math
 
 AMPLITUDE_RAD = 0.1        # chirp amplitude [rad] (bench.sim.experiment.default_chirp)
 ACCELERATION_SHARE = 0.4   # the rigid-body torque (Jm + JL) A (2 pi f)^2 <= share x tau_max
 AMPLITUDE_REDUCTION = 0.7  # the amplitude's factor at each automatic reduction (saturation)
 MAX_REDUCTIONS = 6         # automatic reductions at most
+# MuJoCo steps a control period: the plant's friction switches inside the sample interval,
+# as a real axis' does, so the bench's logs identify through everyone's path
+# (docs/design-notes.md, "Simulator-free estimator"). The shipped models' Coulomb friction is
+# dead-beat at the physics step h (semi-implicit Euler, the constraint's time constant 2 h,
+# bench/sim/friction.py): it switches on the step after the velocity's crossing, about h / 2
+# late, and Jm's bias follows h (a 16 Hz two-link shoulder at 350.87 Hz: -0.70 / -0.54 /
+# -0.46 % at 8 / 16 / 32 steps a period, sigma 0.23 %). The physics step is therefore at most
+# PHYSICS_STEP, whatever the rate; DEFAULT_SUBSTEPS is the count at the paper's rate.
+PHYSICS_STEP = 1e-4        # the longest physics step [s] of a default run
+MIN_SUBSTEPS = 4           # at least this many steps a period at any rate
+
+
+def default_substeps(sample_rate_hz: float) -> int:
+    """Physics steps a control period at `sample_rate_hz` [Hz]: the fewest that keep the step
+    within PHYSICS_STEP, at least MIN_SUBSTEPS."""
+    return max(MIN_SUBSTEPS, math.ceil(1.0 / (sample_rate_hz * PHYSICS_STEP) - 1e-9))
+
+
+DEFAULT_SUBSTEPS = default_substeps(350.87)   # 29 at the paper's 350.87 Hz
 
 
 def amplitude_help() -> str:

@@ -20,6 +20,7 @@ import mujoco
 import numpy as np
 
 from jointbench.bench.sim.axes import ExperimentModel, build_experiment_model
+from jointbench.bench.sim.defaults import default_substeps
 from jointbench.bench.sim.controller import Gains, gains_rule
 from jointbench.bench.sim.friction import plant_meta
 from jointbench.bench.sim.defaults import (ACCELERATION_SHARE, AMPLITUDE_REDUCTION, AMPLITUDE_RAD,
@@ -34,7 +35,6 @@ from jointbench.identification.log import Log, format_meta_number
 from jointbench.identification.filter_choice import PAPER_RATE
 
 SAMPLE_RATE_HZ = PAPER_RATE  # the paper's acquisition rate, the mission's
-DEFAULT_SUBSTEPS = 1      # RK4; see README "Substeps" for the convergence check
 
 
 def position_unit(model: mujoco.MjModel, axis) -> str:
@@ -90,7 +90,7 @@ def run_experiment(model: str | Path = "prototype", joint: str | None = None, *,
                    lock: str = "rigid",
                    effect: HiddenEffect | tuple[HiddenEffect, ...] | None = None,
                    sensors: Sensors | None = None, gains: Gains | None = None,
-                   substeps: int = DEFAULT_SUBSTEPS, sample_rate_hz: float = SAMPLE_RATE_HZ,
+                   substeps: int | None = None, sample_rate_hz: float = SAMPLE_RATE_HZ,
                    tau_max: float | None = None,
                    progress: Callable[[float], None] | None = None) -> ExperimentResult:
     """Run one closed-loop chirp experiment and return its log (docs/log-format.md).
@@ -100,6 +100,8 @@ def run_experiment(model: str | Path = "prototype", joint: str | None = None, *,
     diverges, ModelStructureError for a model off the axis convention, ValueError for bad
     arguments.
     """
+    if substeps is None:
+        substeps = default_substeps(sample_rate_hz)
     exp = build_experiment_model(model, joint, config=config, lock=lock, effect=effect,
                                  substeps=substeps, sample_rate_hz=sample_rate_hz,
                                  tau_max=tau_max)

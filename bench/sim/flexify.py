@@ -12,8 +12,9 @@ and, per joint X:
   - moves the rigid joint's armature (the rotor inertia the rigid model lumps on the link) to
     the rotor: X's armature becomes 0, and Jm defaults to it;
   - sets X's damping FV and frictionloss FS when given, and records `X_gear_ratio` N.
-Both Coulomb frictions get the stick band of models/arm6.xml (solreffriction FRICTION_TC, refsafe
-disabled) and the integrator is RK4, as the bench's experiments are validated with.
+Both Coulomb frictions get the dead-beat constraint of models/arm6.xml (solreffriction
+FRICTION_TC, under two physics steps, which refsafe raises to two) and the integrator is
+semi-implicit Euler, as the bench's experiments are validated with (bench/sim/friction.py).
 
 Values (joint side, SI): `--set` first, then a survey or identify JSON, then the defaults:
   Jm   the joint's armature, else the link inertia JL at qpos0 (an inertia ratio of 1);
@@ -35,7 +36,7 @@ from jointbench.models import ModelStructureError, find_axes
 
 PARAMETERS = ("K", "Jm", "FVm", "FSm", "FV", "FS", "N", "tau_max")
 F1_DEFAULT_HZ = 15.0          # default K: the locked first mode of arm6's axes (14.7-18.9 Hz)
-FRICTION_TC = 0.00025         # solreffriction time constant [s] of models/arm6.xml
+FRICTION_TC = 1e-6            # solreffriction time constant [s] of models/arm6.xml (refsafe: 2 steps)
 SOLIMP_FRICTION = (0.99, 0.999, 0.001)
 ROTOR_MASS, ROTOR_INERTIA = 1e-6, 1e-9   # the rotor body: its inertia is the armature Jm
 SUFFIXES = ("_motor", "_rotor", "_spring")
@@ -193,10 +194,10 @@ def flexify(path: str | os.PathLike, given: dict[str, dict[str, float]],
     for (name, j, act, _), drive in zip(plan, drives):
         _edit(spec, model, name, j, drive.values)
         spec.delete(actuators[act])
-    changes = ["integrator RK4", "refsafe disabled (the friction's stick band "
-               f"solreffriction {FRICTION_TC:g} s is under two timesteps)"]
-    spec.option.integrator = mujoco.mjtIntegrator.mjINT_RK4
-    spec.option.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_REFSAFE)
+    changes = ["integrator Euler", "refsafe enabled (the frictions' solreffriction "
+               f"{FRICTION_TC:g} s runs at two physics steps: dead-beat Coulomb friction)"]
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_EULER
+    spec.option.disableflags &= ~int(mujoco.mjtDisableBit.mjDSBL_REFSAFE)
     try:
         flex = spec.compile()
     except ValueError as err:

@@ -6,8 +6,19 @@ b = 2 / (dmax timeconst), the friction saturates at FS only for |v| > v_b = FS d
 timeconst / (2 J), J the dof's inertia; timeconst is solreffriction's, raised to two time
 steps unless `<flag refsafe="disable"/>`. MuJoCo's default (0.02 s) gives arm6-like axes
 v_b ~ 0.01 rad/s, inside which a chirp spends a few % of its samples: Jm +6 %, FVm +70 %,
-FS -22 %. models/arm6.xml's `solreffriction="0.00025 1"` with refsafe disabled
-gives v_b ~ 1e-4 rad/s.
+FS -22 %.
+
+The shipped models make the friction as hard as the physics step h allows: a solreffriction
+under two steps, which refsafe raises to timeconst = 2 h, so that b h = 1 / dmax, and the
+semi-implicit Euler integrator, which solves the constraint once a step. A velocity inside
+v_b = FS dmax h / J (what the friction takes away in one step) then stops within the step,
+and beyond it the friction is FS sign(v): the Karnopp stick-slip law of an ideal Coulomb
+friction, switching at the physics step inside the sample interval as a real axis' friction
+switches between samples. A fixed time constant instead leaves a ramp of width v_b around
+every reversal, a lag of about timeconst / 2 in the friction's switch, which biases Jm in
+proportion (arm6 axis6, 60 s: Jm about +0.12 % at 0.25 ms, +0.05 % at 0.05 ms, against
++0.01 % dead-beat); RK4 evaluates the constraint at four stages and blends their forces, so
+a stick that starts inside a step is smeared over it.
 """
 
 from __future__ import annotations
@@ -26,12 +37,16 @@ SOFT_ERROR_MAX = 0.01   # friction error RMS over the torque RMS above which the
 
 @dataclass(frozen=True)
 class FrictionBand:
-    """The velocity band [rad/s or m/s] below which a dof's Coulomb friction is a ramp."""
+    """The velocity band [rad/s or m/s] below which a dof's Coulomb friction is a ramp, unless
+    `dead_beat`: a single-stage integrator and a time constant between one and two physics
+    steps stop a velocity inside the band within one step, the Karnopp stick of an ideal
+    Coulomb friction at the physics step (module docstring), and there is no ramp."""
 
     dof: str            # "motor" or "link"
     v_band: float
     timeconst: float    # effective solreffriction time constant [s]
     FS: float           # the dof's frictionloss [N m or N]
+    dead_beat: bool = False
 
 
 def friction_bands(model: mujoco.MjModel, motor_dof: int, link_dof: int) -> list[FrictionBand]:
@@ -40,17 +55,18 @@ def friction_bands(model: mujoco.MjModel, motor_dof: int, link_dof: int) -> list
     mujoco.mj_forward(model, data)
     M = np.zeros((model.nv, model.nv))
     mujoco.mj_fullM(model, data, M)
-    refsafe = not model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_REFSAFE
     out = []
     for name, dof in (("motor", motor_dof), ("link", link_dof)):
         fs = float(model.dof_frictionloss[dof])
-        tc = float(model.dof_solref[dof][0])
+        tc = effective_timeconst(model, dof)
         if fs <= 0 or tc <= 0:   # no friction, or solref given as (-stiffness, -damping)
             continue
-        if refsafe:
-            tc = max(tc, 2 * model.opt.timestep)
         dmax = float(model.dof_solimp[dof][1])
-        out.append(FrictionBand(name, fs * dmax * tc / (2 * float(M[dof, dof])), tc, fs))
+        h = float(model.opt.timestep)
+        dead_beat = (int(model.opt.integrator) != int(mujoco.mjtIntegrator.mjINT_RK4)
+                     and h <= tc <= 2 * h * (1 + 1e-9))
+        out.append(FrictionBand(name, fs * dmax * tc / (2 * float(M[dof, dof])), tc, fs,
+                                dead_beat))
     return out
 
 
@@ -63,6 +79,8 @@ def soft_friction_warnings(bands: list[FrictionBand], v_motor: np.ndarray,
     out = []
     scale = float(np.sqrt(np.mean(np.square(tau)))) if len(tau) else 0.0
     for b in bands:
+        if b.dead_beat:
+            continue
         v = v_motor if b.dof == "motor" else v_link
         if v is None or not len(v) or scale == 0:
             continue
@@ -75,28 +93,59 @@ def soft_friction_warnings(bands: list[FrictionBand], v_motor: np.ndarray,
                 f"{b.timeconst:.3g} s) it is a viscous ramp, not FS sign(v); {100 * share:.2g} % "
                 f"of the samples lie there and the difference is {100 * ratio:.2g} % of the "
                 "torque (RMS), which biases Jm and the frictions; fix: solreffriction="
-                f"\"{period / 10:.3g} 1\" on the joints and <flag refsafe=\"disable\"/> in "
-                "<option> (as models/arm6.xml)")
+                "\"0.000001 1\" on the joints, refsafe on (MuJoCo's default) and "
+                "integrator=\"Euler\" in <option>: the friction dead-beat at the physics step "
+                "(as models/arm6.xml)")
     return out
 
 
 META_KEY = PLANT_TIMECONST_KEY   # docs/log-format.md: the simulated axis' solreffriction
 
 
+def effective_timeconst(model: mujoco.MjModel, dof: int) -> float:
+    """The time constant [s] the friction constraint of `dof` runs with: its solreffriction,
+    raised to two physics steps when refsafe is on (MuJoCo's rule)."""
+    tc = float(model.dof_solref[dof][0])
+    if tc > 0 and not model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_REFSAFE:
+        tc = max(tc, 2 * float(model.opt.timestep))
+    return tc
+
+
 def motor_timeconst(model: mujoco.MjModel, motor_dof: int) -> float:
-    """The solreffriction time constant of the rotor dof [s] (what a log of this model carries
-    under META_KEY, so that replicas of it stick as it does)."""
-    return float(model.dof_solref[motor_dof][0])
+    """The friction time constant the rotor dof runs with [s] (`effective_timeconst`: what a
+    log of this model carries under META_KEY, so that replicas of it, at the log's physics
+    steps and with refsafe off, stick as it does)."""
+    return effective_timeconst(model, motor_dof)
+
+
+def integrator_for_log(log: Log) -> mujoco.mjtIntegrator:
+    """The integrator that replays `log`'s plant as it was simulated: the log's own when it
+    names one of MuJoCo's (a jointbench log carries it), else RK4, whose four stages keep a
+    friction constraint slower than the step stable (a measured axis' replica has no physics
+    step of its own)."""
+    name = log.meta.get(PLANT_INTEGRATOR_KEY, "").strip()
+    return mujoco.mjtIntegrator.__members__.get(name, mujoco.mjtIntegrator.mjINT_RK4)
 
 
 def plant_meta(model: mujoco.MjModel, motor_dof: int, substeps: int) -> dict[str, str]:
     """How the simulated plant switches its friction, as a log of it carries it: physics steps
     per sample (`substeps`), the integrator and the rotor's friction time constant (META_KEY).
-    The identification reads them (identification.regressors, link_fit) to
-    place the friction as this plant does; a measured log has none of them."""
+    The identification reads none of them; the bench's replays (bias correction, refinement,
+    forward view) do, to simulate the plant as it was; a measured log has none of them."""
     return {PLANT_STEPS_KEY: str(substeps),
             PLANT_INTEGRATOR_KEY: mujoco.mjtIntegrator(model.opt.integrator).name,
             META_KEY: format_meta_number(motor_timeconst(model, motor_dof))}
+
+
+def log_substeps(log: Log, default: int) -> int:
+    """MuJoCo steps per sample that simulate `log`'s plant as it was simulated: the log's own
+    `substeps` (a jointbench log of a MuJoCo plant carries it), else `default`. A replica of
+    the log (bias correction, refinement, replay) then has the log's discretisation."""
+    try:
+        steps = float(log.meta.get(PLANT_STEPS_KEY, ""))
+    except ValueError:
+        return default
+    return int(steps) if steps >= 1 and steps == int(steps) else default
 
 
 def timeconst_for_log(log: Log, default: float, given: float | None = None

@@ -18,9 +18,11 @@ models/__init__.py, so that `models.find_axes`, `bench.replay.replay` and
   prismatic rotor would need its mass in a body for its friction (see above), which the
   truth reading (Jm = armature) does not allow.
 
-Both use the options of models/prototype_axis.xml (RK4, contact disabled, refsafe disabled,
-Coulomb friction with solreffriction 0.002 s, solimpfriction 0.99 0.999 0.001; README
-"Modelling choices") and the log's sample period as timestep. The builders return the MjSpec
+Both have contact and refsafe disabled, the Coulomb friction's solimpfriction 0.99 0.999
+0.001 and a given solreffriction time constant (default 2 ms, for a log that carries none),
+the given integrator (default RK4: the replica of a measured axis; a jointbench log's replica
+takes its plant's, bench.sim.friction.integrator_for_log, so that with the log's physics steps
+and time constant its friction is the plant's) and the log's sample period as timestep. The builders return the MjSpec
 so that callers can add effects before compiling.
 """
 
@@ -34,6 +36,7 @@ import mujoco
 # static_link_position is imported from here by bench.sim.replay.
 from jointbench.bench.sim.axes import static_link_position  # noqa: F401
 from jointbench.bench.effects.offset import add_offset_load
+from jointbench.bench.sim.friction import integrator_for_log
 from jointbench.identification.identify import Identification
 from jointbench.identification.log import Log, atomic_write_text
 from jointbench.models import Axis, ModelStructureError, find_axes
@@ -60,7 +63,9 @@ class NominalAxis:
     notes: tuple[str, ...] = ()
 
 
-def _new_spec(name: str, timestep: float, gravity: float) -> mujoco.MjSpec:
+def _new_spec(name: str, timestep: float, gravity: float,
+              integrator: mujoco.mjtIntegrator = mujoco.mjtIntegrator.mjINT_RK4
+              ) -> mujoco.MjSpec:
     if not (timestep > 0 and math.isfinite(timestep)):
         raise ValueError(f"timestep must be a positive number of seconds, got {timestep}")
     spec = mujoco.MjSpec()
@@ -68,7 +73,7 @@ def _new_spec(name: str, timestep: float, gravity: float) -> mujoco.MjSpec:
     spec.compiler.degree = False
     spec.compiler.autolimits = True
     spec.option.timestep = timestep
-    spec.option.integrator = mujoco.mjtIntegrator.mjINT_RK4
+    spec.option.integrator = integrator
     spec.option.gravity = [0.0, 0.0, -gravity]
     spec.option.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
     spec.option.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_REFSAFE)
@@ -129,12 +134,14 @@ def _check(values: dict[str, float], positive: tuple[str, ...],
 
 def rigid_axis(J: float, FV: float, FS: float, offset: float = 0.0, *, timestep: float,
                prismatic: bool = False, tau_max: float | None = None, gravity: float = 9.81,
-               gear_ratio: float | None = None, name: str = "axis1") -> mujoco.MjSpec:
+               gear_ratio: float | None = None, name: str = "axis1",
+               integrator: mujoco.mjtIntegrator = mujoco.mjtIntegrator.mjINT_RK4
+               ) -> mujoco.MjSpec:
     """The rigid model tau_m = J qmdd + FV qmd + FS sign(qmd) + offset as an MjSpec (module
     docstring). J in kg m^2 (kg for a prismatic axis, a horizontal slide), FV, FS, offset in
     the joint's units. ValueError for J <= 0, FV < 0 or FS < 0."""
     _check({"J": J, "FV": FV, "FS": FS, "offset": offset}, ("J",), ("FV", "FS"))
-    spec = _new_spec(f"nominal_rigid_{name}", timestep, gravity)
+    spec = _new_spec(f"nominal_rigid_{name}", timestep, gravity, integrator)
     body = spec.worldbody.add_body()
     body.name = f"{name}_link"
     armature = RIGID_ROTOR_SHARE * J
@@ -155,18 +162,20 @@ def two_mass_axis(Jm: float, FVm: float, FSm: float, K: float, JL: float, FV: fl
                   FS: float = 0.0, MX: float = 0.0, MY: float = 0.0, *, timestep: float,
                   prismatic: bool = False, tau_max: float | None = None, gravity: float = 9.81,
                   gear_ratio: float | None = None, name: str = "axis1",
-                  friction_timeconst: float = SOLREF_FRICTION[0]) -> mujoco.MjSpec:
+                  friction_timeconst: float = SOLREF_FRICTION[0],
+                  integrator: mujoco.mjtIntegrator = mujoco.mjtIntegrator.mjINT_RK4
+                  ) -> mujoco.MjSpec:
     """The joint-motor model of eqs. (5)-(7) as an MjSpec (module docstring), hinges only
     (`prismatic=True` raises ValueError). `friction_timeconst` [s]: the solreffriction time
-    constant of both Coulomb frictions, the width of their stick band (models/arm6.xml uses
-    0.25 ms). ValueError for non-positive Jm, K, JL or negative friction."""
+    constant of both Coulomb frictions, the width of their stick band (the shipped models run
+    with two physics steps, bench.sim.friction). ValueError for non-positive Jm, K, JL or negative friction."""
     _check({"Jm": Jm, "FVm": FVm, "FSm": FSm, "K": K, "JL": JL, "FV": FV, "FS": FS,
             "MX": MX, "MY": MY}, ("Jm", "K", "JL"), ("FVm", "FSm", "FV", "FS"))
     if prismatic:
         raise ValueError("two-mass nominal axes are hinges only: a slide joint's Coulomb "
                          "friction needs the rotor mass in a body, the truth reading needs it "
                          "as armature (bench/sim/nominal.py)")
-    spec = _new_spec(f"nominal_two_mass_{name}", timestep, gravity)
+    spec = _new_spec(f"nominal_two_mass_{name}", timestep, gravity, integrator)
     rotor = spec.worldbody.add_body()
     rotor.name = f"{name}_rotor"
     _inertial(rotor, ROTOR_MASS, ROTOR_INERTIA)
@@ -201,7 +210,9 @@ def two_mass_axis(Jm: float, FVm: float, FSm: float, K: float, JL: float, FV: fl
 
 
 def from_identification(ident: Identification, *, timestep: float, tau_max: float | None = None,
-                        gravity: float = 9.81, name: str = "axis1") -> NominalAxis:
+                        gravity: float = 9.81, name: str = "axis1",
+                        integrator: mujoco.mjtIntegrator = mujoco.mjtIntegrator.mjINT_RK4
+                        ) -> NominalAxis:
     """The nominal axis of an identification: `rigid` -> `rigid_axis`; `joint-motor` and
     `motor-only` (physical parameters) -> `two_mass_axis`. Friction that came out negative or
     unidentified is set to 0 (named in `notes`); non-positive inertia or stiffness raises
@@ -230,22 +241,23 @@ def from_identification(ident: Identification, *, timestep: float, tau_max: floa
         params = {"J": need("J"), "FV": friction("FV"), "FS": friction("FS"),
                   "offset": float(p.get("offset", 0.0))}
         spec = rigid_axis(**params, timestep=timestep, prismatic=ident.prismatic,
-                          tau_max=tau_max, gravity=gravity, name=name)
+                          tau_max=tau_max, gravity=gravity, name=name, integrator=integrator)
         return NominalAxis(spec, "rigid", params, tuple(notes))
     params = {"Jm": need("Jm"), "FVm": friction("FVm"), "FSm": friction("FSm"), "K": need("K"),
               "JL": need("JL"), "FV": friction("FV"), "FS": friction("FS"),
               "MX": 0.0 if ident.prismatic else float(p.get("MX", 0.0)),
               "MY": 0.0 if ident.prismatic else float(p.get("MY", 0.0))}
     spec = two_mass_axis(**params, timestep=timestep, prismatic=ident.prismatic,
-                         tau_max=tau_max, gravity=gravity, name=name)
+                         tau_max=tau_max, gravity=gravity, name=name, integrator=integrator)
     return NominalAxis(spec, "joint-motor", params, tuple(notes))
 
 
 def for_log(ident: Identification, log: Log, name: str | None = None) -> NominalAxis:
-    """`from_identification` with the log's sample period as timestep, its `tau_max`, gravity
-    and joint name (default axis1)."""
+    """`from_identification` with the log's sample period as timestep, its `tau_max`, gravity,
+    joint name (default axis1) and its plant's integrator (bench.sim.friction)."""
     return from_identification(ident, timestep=log.ts, tau_max=log.meta_float("tau_max"),
-                               gravity=log.gravity, name=name or log.meta.get("joint") or "axis1")
+                               gravity=log.gravity, name=name or log.meta.get("joint") or "axis1",
+                               integrator=integrator_for_log(log))
 
 
 def compile_axis(spec: mujoco.MjSpec, source: str = "<nominal>") -> tuple[mujoco.MjModel, Axis]:

@@ -28,7 +28,7 @@ import mujoco
 import numpy as np
 
 from jointbench.bench.sim.controller import controller_from_log
-from jointbench.bench.sim.friction import plant_meta
+from jointbench.bench.sim.friction import log_substeps, plant_meta
 from jointbench.bench.sim.loop import LoopChecks, first_warning, run_loop
 from jointbench.bench.sim.nominal import static_link_position
 from jointbench.bench.sim.sensors import Sensors
@@ -131,7 +131,7 @@ def _check_tau0(tau0: float | None, tau_max: float) -> None:
 
 
 def replay(model: mujoco.MjModel, axis: Axis, log: Log, disturbance: np.ndarray | None = None,
-           substeps: int = 1, *, disturbance_at: str = "link",
+           substeps: int | None = None, *, disturbance_at: str = "link",
            tau0: float | None = None, loop=None, sensors: Sensors | None = None,
            seed: int = 0) -> ReplayResult:
     """Re-run the logged closed-loop experiment of `log` on `axis` of `model` (module
@@ -145,8 +145,9 @@ def replay(model: mujoco.MjModel, axis: Axis, log: Log, disturbance: np.ndarray 
     the virtual experiment does (`bench.experiment`): the controller and the returned q_m, q
     see the quantised encoders, and white torque noise (seeded by `seed`, as an experiment's)
     adds to the applied torque but not to the recorded tau_m; default: exact measurements, no
-    noise (step 1 above). The model is not modified (a copy takes the log's timestep when it
-    differs).
+    noise (step 1 above). `substeps`: MuJoCo steps a sample, default the log's own (a
+    jointbench log carries them), else 1 (`friction.log_substeps`). The model is not modified
+    (a copy takes the log's timestep when it differs).
 
     Raises LogError when the log lacks q_ref or the controller gains, ValueError for bad
     arguments, ReplayError when the simulation diverges.
@@ -156,6 +157,8 @@ def replay(model: mujoco.MjModel, axis: Axis, log: Log, disturbance: np.ndarray 
                        "controller tracked)", log.path, column="q_ref")
     gains = controller_from_log(log)
     _check_tau0(tau0, float(gains.tau_max))
+    if substeps is None:
+        substeps = log_substeps(log, 1)
     if substeps < 1:
         raise ValueError(f"substeps must be >= 1, got {substeps}")
     if disturbance_at not in DISTURBANCE_AT:

@@ -21,6 +21,7 @@ from hypothesis import strategies as st
 
 from jointbench.bench.cli import main
 from jointbench.bench.sim.controller import Gains
+from jointbench.bench.sim.defaults import DEFAULT_SUBSTEPS
 from jointbench.bench.sim.experiment import SimulationError, run_experiment
 from jointbench.bench.sim.reference import Chirp
 from jointbench.identification.checks import fit as checks
@@ -134,17 +135,23 @@ def test_chirp_excites_many_lines(prototype_log):
 
 
 def test_too_small_an_amplitude_is_refused(tmp_path, capsys):
-    """A 1e-6 rad chirp: the motion is the torque noise's (37.5 N m); the models explain
-    almost nothing of the torque, so no number is printed."""
+    """A 1e-6 rad chirp: the motion is the torque noise's (37.5 N m); the rigid model explains
+    almost nothing of the torque, so no number is printed. The link does not move at all: the
+    spring passes it K 1e-6 rad = 0.02 N m, far inside its Coulomb friction FS = 8.46 N m,
+    which holds it (its true travel, 2.5e-7 rad, is under the link encoder's quantum), so the
+    joint-motor model is refused for its constant q."""
     res = run_experiment("prototype", duration=20.0, seed=2, amplitude=1e-6)
     path = tmp_path / "tiny.csv"
     write_log(res.log, path)
-    for model in ("joint-motor", "rigid"):
-        rc, out, err = cli(["identify", str(path), "--model", model], capsys)
-        assert rc == 2 and out == ""
-        assert re.search(rf"tiny.csv: the {model} model explains only [0-9.]+ % of the "
-                         r"torque's variation .*too small an amplitude", err)
-        assert "relative standard deviations: " in err
+    rc, out, err = cli(["identify", str(path), "--model", "rigid"], capsys)
+    assert rc == 2 and out == ""
+    assert re.search(r"tiny.csv: the rigid model explains only [0-9.]+ % of the "
+                     r"torque's variation .*too small an amplitude", err)
+    assert "relative standard deviations: " in err
+    rc, out, err = cli(["identify", str(path), "--model", "joint-motor"], capsys)
+    assert rc == 2 and out == ""
+    assert re.search(r"tiny.csv: q is constant .*the link does not move, so the joint-motor "
+                     r"model's link equation identifies nothing", err)
 
 
 def test_poorly_conditioned_directions_are_named():
@@ -284,31 +291,34 @@ def test_unstable_gains_stop_the_run(scale, reason):
 
 
 def test_too_large_a_timestep_stops_the_run():
-    """arm6 axis1 (mode 14.7 Hz) stepped at 20 Hz: w1 dt = 4.6, over RK4's 2.78."""
+    """arm6 axis1 (mode 14.7 Hz) stepped at 20 Hz, one physics step a control period:
+    w1 dt = 4.6, over semi-implicit Euler's 2."""
     with pytest.raises(SimulationError, match=r"joint axis1: the simulation stopped at "
                                               r"t = 0\.\d+ s: .*the timestep is too large for "
                                               r"the joint's mode: w1 dt = 4.61"):
-        run_experiment("arm6", duration=5.0, seed=0, sample_rate_hz=20.0)
+        run_experiment("arm6", duration=5.0, seed=0, sample_rate_hz=20.0, substeps=1)
 
 
 def test_too_large_a_timestep_from_the_command_line(tmp_path, capsys):
     out = tmp_path / "a1.csv"
-    rc, stdout, err = cli(["simulate", "--model", "arm6", "--rate", "20", "--duration", "5",
-                           "--out", str(out)], capsys)
+    rc, stdout, err = cli(["simulate", "--model", "arm6", "--rate", "20", "--substeps", "1",
+                           "--duration", "5", "--out", str(out)], capsys)
     assert rc == 2 and stdout == "" and not out.exists() and list(tmp_path.iterdir()) == []
     assert re.fullmatch(r"jointbench simulate: error: joint axis1: the simulation stopped at "
                         r"t = 0\.\d+ s: .*w1 dt = 4.61 .*\n", err)
 
 
 def test_mjcf_timestep_is_replaced_by_the_control_period(tmp_path):
-    """A user MJCF with timestep 0.05 runs at the experiment's period (350.87 Hz), so its own
-    timestep cannot make the run diverge."""
+    """A user MJCF with timestep 0.05 runs at the experiment's physics step, the control
+    period (350.87 Hz) over the physics steps a period, so its own timestep cannot make the
+    run diverge."""
     xml = model_path("prototype").read_text().replace('timestep="0.002850058"',
                                                       'timestep="0.05"')
     path = tmp_path / "coarse.xml"
     path.write_text(xml)
     res = run_experiment(path, duration=5.0, seed=0)
-    assert res.experiment.model.opt.timestep == pytest.approx(1 / RATE, rel=1e-9)
+    assert res.experiment.model.opt.timestep == pytest.approx(1 / (RATE * DEFAULT_SUBSTEPS),
+                                                              rel=1e-9)
 
 
 def test_torque_saturation_is_reported():

@@ -5,7 +5,6 @@ same path; what cannot be converted is refused with exit 2 naming the file, line
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -15,7 +14,6 @@ from jointbench.bench.cli import main
 from jointbench.identification.identify import identify
 from jointbench.identification.log import read_log, write_log
 from jointbench.identification.log.raw import ImportSpec, convert, parse_raw
-from jointbench.identification.regressors import PLANT_STEPS_KEY
 
 N, KT, CPR = 100.0, 0.5, 2**17  # prototype gear ratio, torque constant [N m/A], counts per turn
 T0_MS = 12.5
@@ -61,11 +59,10 @@ def test_raw_drive_file_identifies_as_the_native_log(native, tmp_path, capsys):
     assert log.meta["motor_encoder_resolution_rad"] == "4.793689962e-07"
     for name in ("q_m", "q", "tau_m", "q_ref"):
         assert np.allclose(getattr(log, name), getattr(native, name), rtol=1e-10, atol=1e-13)
-    # a raw file cannot say how a simulator integrated it: the bench's `substeps: 1` (its
-    # friction switches once a sample, identification.regressors._friction_models) stays out
-    plant = replace(native, meta={k: v for k, v in native.meta.items() if k != PLANT_STEPS_KEY})
+    # a raw file cannot say how a simulator integrated it, and the identification reads none
+    # of the simulator's metadata: the imported log identifies as the native one
     for model in ("joint-motor", "motor-only"):
-        a, b = identify(plant, model).physical, identify(log, model).physical
+        a, b = identify(native, model).physical, identify(log, model).physical
         assert set(a) == set(b)
         for k in a:  # the bar: 0.1 %; measured: identical
             assert b[k] == pytest.approx(a[k], rel=1e-3), (model, k)

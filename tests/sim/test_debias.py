@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from jointbench.bench.sim.axes import build_experiment_model
+from jointbench.bench.sim.defaults import default_substeps
 from jointbench.bench.campaign.run import run_task
 from jointbench.bench.campaign.settings import CampaignError, RunSettings
 from jointbench.bench.campaign.spec import CampaignSpec
@@ -136,8 +137,11 @@ def test_debias_errors():
 
 
 def test_friction_timeconst_of_reads_the_model():
-    assert friction_timeconst_of(*_model_axis("prototype", None)) == pytest.approx(0.002)
-    assert friction_timeconst_of(*_model_axis("arm6", "axis4")) == pytest.approx(0.00025)
+    """The time constant the rotor's friction runs with: the shipped models' 1 us raised by
+    refsafe to two physics steps, the period over the default sub-steps."""
+    two_steps = 2 / (350.87 * default_substeps(350.87))
+    assert friction_timeconst_of(*_model_axis("prototype", None)) == pytest.approx(two_steps)
+    assert friction_timeconst_of(*_model_axis("arm6", "axis4")) == pytest.approx(two_steps)
 
 
 def _model_axis(model, joint):
@@ -195,9 +199,10 @@ def test_friction_timeconst_comes_from_the_log():
     from jointbench.bench.sim.friction import META_KEY, timeconst_for_log
     from jointbench.bench.sim.nominal import SOLREF_FRICTION
     log = run_experiment("arm6", "axis4", seed=1, duration=6.0).log
-    assert float(log.meta[META_KEY]) == pytest.approx(0.00025)
+    two_steps = 2 * log.ts / int(log.meta["substeps"])   # refsafe's, on the 1 us of the model
+    assert float(log.meta[META_KEY]) == pytest.approx(two_steps, rel=1e-6)
     assert timeconst_for_log(log, SOLREF_FRICTION[0]) == (
-        pytest.approx(0.00025), f"the log's {META_KEY} (the simulated model's)")
+        pytest.approx(two_steps, rel=1e-6), f"the log's {META_KEY} (the simulated model's)")
     bare = dataclasses.replace(log, meta={k: v for k, v in log.meta.items() if k != META_KEY})
     tc, source = timeconst_for_log(bare, SOLREF_FRICTION[0])
     assert tc == SOLREF_FRICTION[0] and source.startswith("default")

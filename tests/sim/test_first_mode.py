@@ -21,9 +21,8 @@ ARM = tuple(f"axis{j}" for j in range(1, 7))
 # (axis2's Jm was +0.56 % before the Coulomb reversals were placed by the identified friction,
 # identify._place_reversals: now -0.01 %)
 JOINT_MOTOR_OVER: dict[str, str] = {}
-# motor-only (the link reconstructed from q_m) beyond 3 corrected sigma, seed 1: none since the
-# link is stepped as MuJoCo's one RK4 step a sample steps it (link_fit.link_stepper): axis1's K
-# was -0.45 % (z -3.8), now -0.28 % (z -2.4)
+# motor-only (the link reconstructed from q_m) beyond 3 corrected sigma, seed 1: none (the bench
+# steps its physics 4 times a sample, and the link is reconstructed as a continuous plant's)
 MOTOR_ONLY_Z_OVER: dict[str, str] = {}
 
 

@@ -1,52 +1,15 @@
-"""The Coulomb state under the log's own noise (identification/coulomb_noise.py) against MuJoCo and
-against synthetic plants whose noise is known."""
+"""The log's own noise as the Coulomb state sees it (identification/coulomb_noise.py), against
+synthetic plants whose noise is known."""
 
 from __future__ import annotations
 
-import mujoco
 import numpy as np
 import pytest
 
 from jointbench.identification.filtering import FilterSettings, derivatives, lowpass
-from jointbench.identification.coulomb_noise import (chain_jitter, noise_nodes, stage_state,
-                                              torque_noise_sweep)
+from jointbench.identification.coulomb_noise import chain_jitter, noise_nodes, torque_noise_sweep
 
 TS = 1 / 350.87
-
-
-def _rotor(J: float, FS: float, timeconst: float) -> tuple[mujoco.MjModel, mujoco.MjData]:
-    """One hinge with armature J and frictionloss FS, stepped once a sample by RK4, the soft
-    friction of models/arm6.xml (solimpfriction 0.99 0.999, refsafe disabled)."""
-    xml = f"""<mujoco><option timestep="{TS}" integrator="RK4" gravity="0 0 0">
-      <flag contact="disable" refsafe="disable"/></option>
-      <worldbody><body><joint type="hinge" armature="{J}" frictionloss="{FS}"
-        solreffriction="{timeconst} 1" solimpfriction="0.99 0.999 0.001"/>
-      <geom type="sphere" size="0.001" mass="1e-6"/></body></worldbody></mujoco>"""
-    m = mujoco.MjModel.from_xml_string(xml)
-    return m, mujoco.MjData(m)
-
-
-@pytest.mark.parametrize("timeconst", [0.00025, 0.002])
-def test_stage_state_is_what_one_mujoco_rk4_step_applies(timeconst):
-    # near a reversal (|u| up to 1.5 rate T) and with drives inside and outside the band the
-    # step's friction, from its velocity update, is the model's (s1 + 2 s2 + 2 s3 + s4) / 6
-    J, FS = 1.5, 4.0
-    rate = FS / J
-    m, d = _rotor(J, FS, timeconst)
-    u = np.linspace(-1.5 * rate * TS, 1.5 * rate * TS, 31)
-    for a0 in (0.0, 0.4 * rate, -0.8 * rate, 1.6 * rate):
-        got = []
-        for ui in u:
-            mujoco.mj_resetData(m, d)
-            d.qvel[0], d.qfrc_applied[0] = ui, J * a0
-            mujoco.mj_step(m, d)
-            got.append((a0 - (d.qvel[0] - ui) / TS) / rate)
-        vel, _ = stage_state(u, np.full(len(u), a0), rate, TS, timeconst)
-        # the armature-free body's 1e-6 kg adds ~1e-9 to the inertia
-        assert np.max(np.abs(vel - np.array(got))) < 1e-6, a0
-    # far from a reversal it is the Coulomb sign, in velocity and in position
-    vel, pos = stage_state(np.array([-1.0, 1.0]), np.zeros(2), rate, TS, timeconst)
-    assert np.array_equal(vel, [-1, 1]) and np.array_equal(pos, [-1, 1])
 
 
 def _inertia(n: int, J: float, sigma: float, seed: int = 1) -> tuple[np.ndarray, ...]:

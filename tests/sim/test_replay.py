@@ -13,7 +13,9 @@ import pytest
 
 from jointbench.bench.sim.axes import build_experiment_model
 from jointbench.bench.cli import main
+from jointbench.bench.sim.defaults import DEFAULT_SUBSTEPS
 from jointbench.bench.sim.experiment import run_experiment
+from jointbench.bench.sim.friction import effective_timeconst, integrator_for_log
 from jointbench.bench.sim.nominal import compile_axis, for_log, rigid_axis, two_mass_axis, write_xml
 from jointbench.bench.sim.replay import ReplayResult, forward_errors, replay, simulated_log
 from jointbench.bench.sim.sensors import Sensors
@@ -47,15 +49,28 @@ def test_two_mass_nominal_reads_back_as_table1():
             9.81 * (TABLE1["MX"] * math.cos(q) + TABLE1["MY"] * math.sin(q)), rel=1e-9)
 
 
-def test_nominal_options_are_the_prototypes():
-    proto, _, _ = load_model("prototype")
-    for spec in (two_mass_axis(**TABLE1, timestep=T), rigid_axis(2.0, 1.0, 0.5, timestep=T),
-                 rigid_axis(95.0, 200.0, 20.0, timestep=1e-3, prismatic=True)):
+def test_nominal_options_are_the_prototypes(ideal_run):
+    """A nominal axis built for a log of the prototype, with the log's integrator and friction
+    time constant (what the bias correction and the refinement give it), at the log's physics
+    step steps its friction as the prototype did: the same integrator, contact off, the same
+    impedance and the same effective time constant (two physics steps, refsafe's on the
+    prototype, given outright on the nominal)."""
+    log = ideal_run.log
+    proto = ideal_run.experiment.model
+    h = proto.opt.timestep
+    assert log.ts / h == pytest.approx(int(log.meta["substeps"]), rel=1e-9)
+    common = dict(timestep=h, integrator=integrator_for_log(log))
+    for spec in (two_mass_axis(**TABLE1, friction_timeconst=log.plant_timeconst(), **common),
+                 rigid_axis(2.0, 1.0, 0.5, **common),
+                 rigid_axis(95.0, 200.0, 20.0, prismatic=True, **common)):
         model = spec.compile()
         assert model.opt.integrator == proto.opt.integrator
-        assert model.opt.disableflags == proto.opt.disableflags
-        np.testing.assert_array_equal(model.dof_solref[0], proto.dof_solref[0])
+        assert model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONTACT
         np.testing.assert_array_equal(model.dof_solimp[0], proto.dof_solimp[0])
+    model = two_mass_axis(**TABLE1, friction_timeconst=log.plant_timeconst(), **common).compile()
+    assert effective_timeconst(model, 0) == pytest.approx(effective_timeconst(proto, 0),
+                                                         rel=1e-9)
+    assert effective_timeconst(proto, 0) == pytest.approx(2 * h, rel=1e-12)
 
 
 @pytest.mark.parametrize("prismatic", [False, True])
@@ -117,15 +132,16 @@ def test_replay_reproduces_virtual_log_with_true_nominal(ideal_run):
     while a 0.1 % change of any parameter gives 0.06-0.1 % (K 0.1 % -> 0.098 %)."""
     log, truth = ideal_run.log, ideal_run.experiment.truth
     params = {k: getattr(truth, k) for k in TABLE1}
+    plant = dict(friction_timeconst=log.plant_timeconst(), integrator=integrator_for_log(log))
     model, axis = compile_axis(two_mass_axis(**params, timestep=log.ts, tau_max=3000.0,
-                                             gravity=truth.g))
+                                             gravity=truth.g, **plant))
     result = replay(model, axis, log)
     e = forward_errors(log, result)
     assert e["torque_rel_pct"] < 1e-5 and e["position_rel_pct"] < 1e-5
     assert e["link_position_rel_pct"] < 1e-5 and result.saturated == 0
     params["K"] *= 1.001
     model, axis = compile_axis(two_mass_axis(**params, timestep=log.ts, tau_max=3000.0,
-                                             gravity=truth.g))
+                                             gravity=truth.g, **plant))
     assert forward_errors(log, replay(model, axis, log))["torque_rel_pct"] > 0.05
 
 
@@ -135,7 +151,9 @@ def test_replay_through_written_xml(ideal_run, tmp_path):
     log, truth = ideal_run.log, ideal_run.experiment.truth
     path = tmp_path / "nominal.xml"
     write_xml(two_mass_axis(**{k: getattr(truth, k) for k in TABLE1}, timestep=log.ts,
-                            tau_max=3000.0, gravity=truth.g), path)
+                            tau_max=3000.0, gravity=truth.g,
+                            friction_timeconst=log.plant_timeconst(),
+                            integrator=integrator_for_log(log)), path)
     model, axes, _ = load_model(path)
     e = forward_errors(log, replay(model, axes[0], log))
     assert e["torque_rel_pct"] < 0.01 and e["position_rel_pct"] < 0.01
@@ -272,12 +290,12 @@ def test_auto_on_rigid_virtual_log_with_two_encoders(tmp_path):
 
 def test_simulated_log_describes_the_replays_plant(ideal_run):
     """A replay's log carries the replay's plant (substeps, integrator, friction time
-    constant), not the measured log's: the identification places the friction by them."""
+    constant), not the measured log's: the bench's own replays of it read them."""
     log = ideal_run.log
     model, axis = compile_axis(rigid_axis(222.0, 320.0, 50.0, timestep=log.ts))
-    result = replay(model, axis, log, np.zeros(len(log)), substeps=4)
+    result = replay(model, axis, log, np.zeros(len(log)), substeps=3)
     sim = simulated_log(log, result, "test")
-    assert log.meta["substeps"] == "1" and sim.meta["substeps"] == "4"
+    assert log.meta["substeps"] == str(DEFAULT_SUBSTEPS) and sim.meta["substeps"] == "3"
     assert sim.meta["integrator"] == mujoco.mjtIntegrator(model.opt.integrator).name
     assert float(sim.meta["friction_timeconst_s"]) == pytest.approx(
         float(model.dof_solref[axis.motor_dof][0]), rel=1e-9)

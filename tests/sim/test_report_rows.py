@@ -53,18 +53,22 @@ def test_demo_discrepancy_rows_survive_machine_level_differences(backlash_log):
     """The demo's example (README): the hardening fit, unphysical (K < 0 along the direction
     where a hardening with K -> 0 is a backlash), stays on its branch after one-count encoder
     flips at 40 samples (what another CPU's last bits can do to a quantised simulation); the
-    README's older row (ratio 14.63, K 1306) is another branch.
+    README's older row (ratio +14.63, K +1306) is another branch.
 
-    The branch is told apart at BRANCH (1 %), not at the fit's printed digits: a quantised
-    closed loop simulated on another CPU (another SIMD path in MuJoCo, another BLAS kernel)
-    flips encoder counts as the flips below do, and those move this fit by a few 1e-3
-    (measured 4e-3 here, 2.5e-3 on an AVX2 machine's own simulation); the other branch is
-    a factor of 2 away in the ratio and of 5 in K, with the opposite sign."""
+    The branch is told by what the truth fixes, not by the fit's printed digits: the fit is
+    unphysical (K < 0, a negative hardening ratio, the other branch has both positive), and
+    its deflection is the hidden backlash's 0.002 rad (the hardening sets in where the gap
+    closes; measured 3 % short) within 10 %, about one and a half steps of the geometric
+    search grid (6.4 % apart, identification/effects/hardening.py) that the bounded
+    refinement starts from. The flips are told apart at
+    BRANCH (1 %): a quantised closed loop simulated on another CPU (another SIMD path in
+    MuJoCo, another BLAS kernel) flips encoder counts as the flips below do, and those move
+    this fit by a few 1e-3 (measured 4e-3); the other branch is a factor of 2 away in the
+    ratio and of 5 in K, with the opposite sign."""
     rows = _candidates(backlash_log)
-    # the branch of the nominal with FS and the chain's error, the hardening grid over the
-    # whole deflection range, the nominal's weights estimated with a motor constant beside it
-    assert rows["hardening"] == pytest.approx(
-        {"hardening_ratio": -33.381, "deflection_rad": 0.0019438, "K": -628.22}, rel=BRANCH)
+    hardening = rows["hardening"]
+    assert hardening["K"] < 0 and hardening["hardening_ratio"] < 0, hardening
+    assert hardening["deflection_rad"] == pytest.approx(0.002, rel=0.1), hardening
     rng = np.random.default_rng(3)
     q, qm = backlash_log.q.copy(), backlash_log.q_m.copy()
     for x, res in ((q, 2 * np.pi / 2**20), (qm, 2 * np.pi / (2**17 * 100))):

@@ -94,7 +94,8 @@ def _choose(jm_wide, rel_wide, rel_chooser=0.01):
     log = _chirp_log(30.0)
     base = default_settings(RATE, 6.0)
     chosen = _fit(base, 1.0, rel_chooser)
-    return choose_band(log, chosen, lambda s: _fit(s, jm_wide, rel_wide), _estimate)
+    wide = wide_settings(log, base)
+    return choose_band(chosen, _fit(wide[0], jm_wide, rel_wide), wide, _estimate)
 
 
 def test_the_more_precise_band_is_kept():
@@ -118,9 +119,8 @@ def test_disagreeing_bands_keep_the_chooser_s_and_warn():
 
 
 def test_a_failing_wide_fit_keeps_the_chooser_s():
-    def fail(settings):
-        raise ValueError("too few rows")
     chosen = _fit(default_settings(RATE, 6.0), 1.0, 0.01)
-    fit, band = choose_band(_chirp_log(30.0), chosen, fail, _estimate)
+    wide = wide_settings(_chirp_log(30.0), chosen.settings)
+    fit, band = choose_band(chosen, ValueError("too few rows"), wide, _estimate)
     assert fit is chosen and band.used == "chooser" and "too few rows" in band.reason
     assert math.isnan(band.alt_rel_sigma) and band.to_json()["alternative"] is not None

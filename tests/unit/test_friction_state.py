@@ -93,29 +93,20 @@ def test_friction_integrals_hold_a_drive_inside_the_band():
     assert np.diff(S1) / TS == pytest.approx([d / rate, d / rate], abs=1e-12)
 
 
-def test_a_one_step_a_sample_simulator_keeps_the_linear_placement():
-    """A log whose metadata says the simulator took one RK4 step a sample (`substeps: 1`, the
-    bench's MuJoCo logs at 350.87 Hz) switches its friction at most once a sample: the
-    joint-motor columns keep the reversals placed linearly between samples (inside=False),
-    without stick phases; from parameters, the motor's is MuJoCo's per-stage friction of the
-    log's time constant over the log's noise (the raw positions, the encoder resolution, the
-    held torque and the parameters: identification/coulomb_noise.py). Any other log (a real axis: no
-    such key) gets the sub-sample model with its stick phases."""
+def test_the_friction_models_ignore_the_simulator_metadata():
+    """identification/ reads no simulator metadata: a log that says its simulator took one
+    RK4 step a sample gets the same sub-sample model with its stick phases as one without
+    (a real axis'): from parameters, the motor's held torque and drive; from rates, the
+    reversals alone."""
     t = np.arange(50) * TS
     log = Log(t=t, q_m=np.sin(t), tau_m=np.cos(t), q=np.sin(t),
               meta={"substeps": "1", "integrator": "mjINT_RK4", "friction_timeconst_s": "0.002",
                     "motor_encoder_resolution_rad": "2e-6"})
     p = {"K": 100.0, "Jm": 1.0, "JL": 2.0, "FSm": 3.0, "FVm": 0.5, "FS": 1.0}
-    motor, link = _friction_models(log, p, np.zeros(50))
-    assert motor[:4] == (3.0, None, None, False) and link == (0.5, None, None, False)
-    noise = motor[4]
-    assert np.array_equal(noise.positions, log.q_m) and noise.resolution == 2e-6
-    assert np.array_equal(noise.tau, log.tau_m) and noise.params == p
-    assert noise.timeconst == 0.002
-    # rates alone (the first pass), or another integrator: the linear placement, no noise
-    assert _friction_models(log, (3.0, 0.5), np.zeros(50)) == ((3.0, None, None, False),
-                                                              (0.5, None, None, False))
-    euler = replace(log, meta={"substeps": "1", "integrator": "mjINT_EULER"})
-    assert _friction_models(euler, p, np.zeros(50))[0] == (3.0, None, None, False)
-    motor, link = _friction_models(replace(log, meta={}), p, np.zeros(50))
-    assert motor[0] == 3.0 and len(motor) == 3 and motor[2][2] == 0.5 and link == (0.5,)
+    for meta in (log.meta, {}):
+        motor, link = _friction_models(replace(log, meta=meta), p, np.zeros(50))
+        assert motor[0] == 3.0 and len(motor) == 3 and motor[2][2] == 0.5 and link == (0.5,)
+        assert np.array_equal(motor[1], log.tau_m / 1.0)
+        assert _friction_models(replace(log, meta=meta), (3.0, 0.5), np.zeros(50)) == (
+            (3.0,), (0.5,))
+

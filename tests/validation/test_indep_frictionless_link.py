@@ -19,7 +19,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pytest
 
-from jointbench.identification.band_choice import MODE_DISAGREEMENT, choose_band, mode_gap
+from jointbench.testing import FAMILIES, simulate
+from jointbench.identification.band_choice import (MODE_DISAGREEMENT, choose_band, mode_gap,
+                                                   wide_settings)
 from jointbench.identification.filter_choice import PAPER_RATE, default_settings
 from jointbench.identification.identify import identify
 from jointbench.identification.log import Log
@@ -76,7 +78,9 @@ def test_disagreeing_bands_settled_by_the_measured_mode(f1_of, used):
     wide = lambda s: _Fit(s, {"K": 1.0, "Jm": 1.0, "JL": 1.0},  # noqa: E731
                           {"K": 0.01, "Jm": 0.001, "JL": 0.001})
     f1 = None if f1_of is None else _two_mass_f1(f1_of)
-    fit, band = choose_band(_chirp_log(), chosen, wide, lambda f: (f.physical, f.sigma), f1)
+    candidate = wide_settings(_chirp_log(), base)
+    fit, band = choose_band(chosen, wide(candidate[0]), candidate,
+                            lambda f: (f.physical, f.sigma), f1)
     assert band.used == used and fit.physical["K"] == (1.0 if used == "wide" else 0.5)
     assert "one of them is biased" in band.warning
 

@@ -15,7 +15,7 @@ from jointbench.identification.filter_choice import choose_filter
 from jointbench.identification.identify import identify
 from jointbench.bench.sim.experiment import run_experiment
 from jointbench.bench.sim.sensors import Sensors
-from jointbench.identification.link_sim import link_response, simulate_link, simulate_link_rk4
+from jointbench.identification.link_sim import link_response, simulate_link
 from jointbench.testing import FAMILIES, frictionless, simulate
 
 TS = 1 / 350.87
@@ -57,43 +57,6 @@ def test_the_link_sticks_while_the_spring_cannot_move_it():
     assert np.all(q == 0.0)
     assert np.abs(phi).max() <= 1.0
     assert phi[:-1] == pytest.approx(a * (qm[1:] + qm[:-1]) / 2 / c)
-
-
-def test_rk4_link_sticks_too():
-    """The one-RK4-step stepper with a hard friction holds the link the same way, and the
-    friction it reports stays within FS."""
-    t = np.arange(0, 5, TS)
-    a, c = 400.0, 2.0
-    qm = 0.9 * c / a * np.sin(2 * np.pi * t)
-    q, phi = simulate_link_rk4(qm, TS, a, 0.5, c)
-    assert np.all(q == 0.0) and np.abs(phi).max() <= 1.0
-
-
-def _implied_errors(step, log) -> np.ndarray:
-    """The relative errors [%] of (a, b, c) that would best explain the difference between
-    the logged link angle and `step`'s from the true parameters (linearised)."""
-    tr, ts = log.truth(), log.ts
-    p = np.array([tr["K"], tr["FV"], tr["FS"]]) / tr["JL"]
-    q = step(log.q_m, ts, *p)[0]
-    cols = [(step(log.q_m, ts, *(p * (1 + 0.01 * (np.arange(3) == i))))[0] - q) / 0.01
-            for i in range(3)]
-    return 100 * np.linalg.lstsq(np.column_stack(cols), log.q - q, rcond=None)[0]
-
-
-def test_mujoco_one_step_link_is_stepped_as_mujoco_steps_it():
-    """arm6 axis1 at the paper's rate (MuJoCo, one RK4 step a sample, ideal sensors, 20 s):
-    the log's metadata picks the RK4 stepper, whose link (true a, b, c) explains the logged
-    one with FV within 0.3 % (measured -0.05 %); the stepper that switches the friction inside
-    the interval needs FV -1.3 % (the motor-only fit took FV -33 %, K -0.45 % from it)."""
-    log = run_experiment("arm6", "axis1", duration=20.0, seed=1,
-                         sensors=Sensors(0.0, 0.0, 0.0)).log
-    step, note = link_fit.link_stepper(log)
-    assert "one RK4 step a sample" in note and "0.00025 s" in note
-    rk4, inside = _implied_errors(step, log), _implied_errors(simulate_link, log)
-    assert abs(rk4[1]) < 0.3 and abs(rk4[0]) < 0.05, rk4
-    assert inside[1] < -0.8, inside
-    plain = replace(log, meta={k: v for k, v in log.meta.items() if k != "substeps"})
-    assert link_fit.link_stepper(plain)[0] is simulate_link   # a measured log: continuous
 
 
 @pytest.mark.parametrize("family", [FAMILIES["heavy_link"], replace(FAMILIES["balanced"], MY=0.3)],

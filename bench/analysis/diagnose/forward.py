@@ -26,7 +26,7 @@ from jointbench.bench.analysis.diagnose.types import Diagnosis, ForwardView
 from jointbench.bench.effects import loop_effects_from_model, write_effects
 from jointbench.bench.effects.base import positive_part as _pos
 from jointbench.bench.sim import nominal as nominal_axes
-from jointbench.bench.sim.friction import timeconst_for_log
+from jointbench.bench.sim.friction import integrator_for_log, timeconst_for_log
 from jointbench.bench.sim.controller import controller_from_log, has_controller
 from jointbench.bench.sim.replay import ReplayError, replay
 from jointbench.identification.discrepancy import SEGMENTS
@@ -52,7 +52,8 @@ def build_spec(d: Diagnosis, extended: bool, substeps: int = 1) -> mujoco.MjSpec
     if causes:
         p.update(d.extended_parameters)
     common = dict(timestep=log.ts / substeps, tau_max=log.meta_float("tau_max"),
-                  gravity=log.gravity, prismatic=log.prismatic, name=name)
+                  gravity=log.gravity, prismatic=log.prismatic, name=name,
+                  integrator=integrator_for_log(log))
     if "K" in d.nominal_parameters:
         # FS: the nominal's link Coulomb friction (eq. 13); the extended model's is refitted.
         FS = _pos(p, "FS")
