@@ -171,14 +171,15 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
         why = "eq. (22): 3 points (the 5-point stencil switched off)"
     settings = paper_chain(settings, wanted)
     f1 = mode.f1_hz if mode is not None and mode.found else None
-    result = _identify(log, model, settings, notes, f1, wanted)
+    made: dict = {}   # what both bands share (the instruments' log), made once
+    result = _identify(log, model, settings, notes, f1, wanted, made)
     warnings += result.warnings
     if chooser and result.model == "joint-motor" and f1 is not None and "wide_band" in wanted:
         wide = wide_settings(log, settings)
         other = None
         if wide[0] is not None:
             try:
-                other = _identify(log, model, paper_chain(wide[0], wanted), [], f1, wanted)
+                other = _identify(log, model, paper_chain(wide[0], wanted), [], f1, wanted, made)
             except (ValueError, ArithmeticError, np.linalg.LinAlgError) as err:
                 other = err
         result, band = choose_band(result, other, wide, _joint_motor_estimate, f1)
@@ -244,15 +245,17 @@ def model_first_mode(result: Identification, measured: FirstMode) -> tuple[First
 
 
 def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
-              f1_hz: float | None = None, wanted: frozenset[str] = frozenset(CORRECTIONS)
-              ) -> Identification:
+              f1_hz: float | None = None, wanted: frozenset[str] = frozenset(CORRECTIONS),
+              made: dict | None = None) -> Identification:
     """`identify` with the settings chosen and the corrections `wanted`; the joint-motor
     model is solved with the reference's instruments when the log has q_ref
-    (`_instruments`)."""
+    (`_instruments`). `made` keeps what does not depend on the settings (the instruments'
+    log) for another band's fit of the same log."""
+    made = {} if made is None else made
     if model == "auto":
         flexible = "joint-motor" if log.q is not None else "motor-only"
         try:
-            result = _identify(log, flexible, settings, [], f1_hz, wanted)
+            result = _identify(log, flexible, settings, [], f1_hz, wanted, made)
         except (InversionError, NotIdentifiable) as err:
             notes.append(f"auto: {flexible} model rejected ({err}); rigid model used")
             rejected = (str(err), {})
@@ -263,7 +266,7 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
             notes.append(f"auto: the data does not identify a stiffness in the band "
                          f"({flexible} model: {why}); rigid model used")
             rejected = (why, dict(result.physical))
-        return replace(_identify(log, "rigid", settings, notes, f1_hz, wanted),
+        return replace(_identify(log, "rigid", settings, notes, f1_hz, wanted, made),
                        rejected=rejected)
     if model != "rigid" and not (settings.zoh and settings.filter_torque):
         notes.append("the no-ZOH / unfiltered-torque options apply to the rigid model only")
@@ -275,7 +278,7 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
         chain = regressors.JointMotorChain(log, settings)
         reg = exclude_clipped(chain.regressor(), log)
         if "instruments" in wanted:
-            Z = _instruments(log, reg, f1_hz, notes)
+            Z = _instruments(log, reg, f1_hz, notes, made)
         else:
             Z = None
             notes.append("least squares: instruments switched off")
@@ -394,10 +397,15 @@ def _place_reversals(log: Log, chain: regressors.JointMotorChain, reg: regressor
 
 
 def _instruments(log: Log, reg: regressors.Regressor, f1_hz: float | None,
-                 notes: list[str]) -> np.ndarray | None:
+                 notes: list[str], made: dict | None = None) -> np.ndarray | None:
     """The regressor rebuilt from the reference's predictions (identification/instruments.py),
-    or None (least squares) without q_ref; a note says which."""
-    inst = instrument_log(log, f1_hz)
+    or None (least squares) without q_ref; a note says which. The predicted log is made once
+    per f1 in `made` (it does not depend on the band)."""
+    made = {} if made is None else made
+    key = ("instrument_log", f1_hz)
+    if key not in made:
+        made[key] = instrument_log(log, f1_hz)
+    inst = made[key]
     if inst is None:
         why = "no q_ref to build instruments from" if log.q_ref is None else \
             "the log is too short for instruments (under four Welch segments at f1 / 40)"

@@ -128,9 +128,10 @@ class JointMotorChain:
         self.zero = zero
         self.defl = defl = qm[0] - q[0]
         seen = _as_seen(s)
-        self.W1 = np.column_stack([qm[2], seen(qm[1], 1), zero, seen(defl, 0), zero, zero, zero,
+        spring = seen(defl, 0)   # one column in both equations: filtered once
+        self.W1 = np.column_stack([qm[2], seen(qm[1], 1), zero, spring, zero, zero, zero,
                                    zero, zero])
-        self.W2 = np.column_stack([zero, zero, zero, -seen(defl, 0), q[2],
+        self.W2 = np.column_stack([zero, zero, zero, -spring, q[2],
                                    seen(g * np.cos(q[0]), 0), seen(g * np.sin(q[0]), 0),
                                    seen(q[1], 1), zero])
         self._decimated: dict[tuple[int, int, int], tuple[np.ndarray, np.ndarray]] = {}
