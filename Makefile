@@ -25,9 +25,11 @@ check: $(STAMP)
 test: $(STAMP)
 	$(BIN)/python -m pytest -q
 
+# The speed figures, then the estimator's cost ratios (benchmarks/speed_ratios.py), written
+# with the commit, date and machine into docs/validation.md (section speed-ratios).
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py
-	$(BIN)/python benchmarks/lean.py
+	$(BIN)/python benchmarks/validate.py --sections speed-ratios --show
 
 # Peer methods side by side (mujoco.sysid needs MuJoCo's `sysid` extra) and the campaign
 # benchmark (200-run coverage, filter search); both print figures and assert nothing.

@@ -120,6 +120,8 @@ SECTIONS: tuple[Section, ...] = (
             minutes=0.2),
     Section("modelling", note="no generator: the figures come from probes described in the record"),
     Section("speed", (_cmd("{py} {root}/benchmarks/run.py"),), minutes=1),
+    Section("speed-ratios", (_cmd("{py} {root}/benchmarks/speed_ratios.py"),), minutes=3,
+            note="identify, diagnose and --debias against the plain chain (`make bench`)"),
     Section("diagnose-speed", (_cmd("{py} {root}/benchmarks/diagnose_speed.py"),), minutes=3),
     Section("accuracy", (_cmd("{jb} simulate --seed 1 --out demo.csv --quiet"),),
             summary=_accuracy_table, minutes=1),
@@ -314,6 +316,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--sections", help="comma-separated section names (default: all with a generator)")
     ap.add_argument("--file", type=Path, default=DOC, help="the document (default docs/validation.md)")
     ap.add_argument("--list", action="store_true", help="list the sections and exit")
+    ap.add_argument("--show", action="store_true", help="also print each block written")
     args = ap.parse_args(argv)
     if args.list:
         for s in SECTIONS:
@@ -347,6 +350,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             continue
         write_atomic(args.file, replace_block(args.file.read_text(), s.name, block))
         print(f"[{s.name}] written", file=sys.stderr)
+        if args.show:
+            print(block, flush=True)
     if failed:
         print(f"validate.py: {len(failed)} section(s) failed: {', '.join(failed)}", file=sys.stderr)
         return 1

@@ -81,6 +81,11 @@ def _unidentified(Ws: np.ndarray, names: tuple[str, ...]) -> dict[str, str]:
     reasons: dict[str, str] = {}
     live = list(range(len(names)))
     while live:
+        # the singular values alone decide whether a direction is near-null; the vectors
+        # (an n x p U besides) are computed only when one is
+        sv = np.linalg.svd(Ws[:, live], compute_uv=False)
+        if sv[0] != 0 and sv[-1] >= sv[0] / COND_LIMIT:
+            break
         _, sv, Vt = np.linalg.svd(Ws[:, live], full_matrices=False)
         if sv[0] == 0:
             for i in live:

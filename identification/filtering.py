@@ -93,6 +93,27 @@ def lowpass(x: np.ndarray, wn: float, ts: float, m: int = 4) -> np.ndarray:
     return signal.sosfiltfilt(np.array(butterworth(m, wn * ts / np.pi)), x)
 
 
+class Lowpassed:
+    """`lowpass` of a log's arrays, each filtered once per Butterworth (wn, ts, m) and kept
+    while this object lives: the chooser's band and the wide one, the excitation check and
+    the instruments' chains all filter the same positions with the same Butterworth (they
+    differ in the decimation and the stencil). The arrays returned are read-only: they are
+    shared."""
+
+    def __init__(self) -> None:
+        self._kept: dict[tuple[int, float, float, int], tuple[np.ndarray, np.ndarray]] = {}
+
+    def __call__(self, x: np.ndarray, wn: float, ts: float, m: int = 4) -> np.ndarray:
+        key = (id(x), float(wn), float(ts), int(m))
+        hit = self._kept.get(key)
+        if hit is not None and hit[0] is x:   # the input is held: its id is not reused
+            return hit[1]
+        y = lowpass(x, wn, ts, m)
+        y.setflags(write=False)
+        self._kept[key] = (x, y)
+        return y
+
+
 def central_difference(x: np.ndarray, ts: float) -> np.ndarray:
     """Eq. (22): (x[k+1] - x[k-1]) / (2 ts); the two end samples are NaN (undefined)."""
     out = np.full_like(x, np.nan, dtype=float)

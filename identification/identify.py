@@ -19,7 +19,7 @@ from jointbench.identification.band_choice import (MODE_DISAGREEMENT, BandChoice
 from jointbench.identification.filter_choice import choose_filter, is_paper_prototype, stencil_for
 from jointbench.identification.first_mode import (FirstMode, given_first_mode,
                                                   measure_first_mode)
-from jointbench.identification.filtering import FilterSettings
+from jointbench.identification.filtering import FilterSettings, Lowpassed, lowpass
 from jointbench.identification.instruments import instrument_log
 from jointbench.identification.log import Log, LogError
 from jointbench.identification.physical import InversionError, invert_motor_only, table3
@@ -171,14 +171,16 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
         why = "eq. (22): 3 points (the 5-point stencil switched off)"
     settings = paper_chain(settings, wanted)
     f1 = mode.f1_hz if mode is not None and mode.found else None
-    result = _identify(log, model, settings, notes, f1, wanted)
+    # what both bands share, made once: the instruments' log, the Butterworth's outputs
+    made: dict = {"lowpass": Lowpassed()}
+    result = _identify(log, model, settings, notes, f1, wanted, made)
     warnings += result.warnings
     if chooser and result.model == "joint-motor" and f1 is not None and "wide_band" in wanted:
         wide = wide_settings(log, settings)
         other = None
         if wide[0] is not None:
             try:
-                other = _identify(log, model, paper_chain(wide[0], wanted), [], f1, wanted)
+                other = _identify(log, model, paper_chain(wide[0], wanted), [], f1, wanted, made)
             except (ValueError, ArithmeticError, np.linalg.LinAlgError) as err:
                 other = err
         result, band = choose_band(result, other, wide, _joint_motor_estimate, f1)
@@ -244,15 +246,18 @@ def model_first_mode(result: Identification, measured: FirstMode) -> tuple[First
 
 
 def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
-              f1_hz: float | None = None, wanted: frozenset[str] = frozenset(CORRECTIONS)
-              ) -> Identification:
+              f1_hz: float | None = None, wanted: frozenset[str] = frozenset(CORRECTIONS),
+              made: dict | None = None) -> Identification:
     """`identify` with the settings chosen and the corrections `wanted`; the joint-motor
     model is solved with the reference's instruments when the log has q_ref
-    (`_instruments`)."""
+    (`_instruments`). `made` keeps what does not depend on the band (the instruments' log,
+    the Butterworth's outputs: `filtering.Lowpassed`) for another band's fit of the log."""
+    made = {} if made is None else made
+    lp = made.setdefault("lowpass", Lowpassed())
     if model == "auto":
         flexible = "joint-motor" if log.q is not None else "motor-only"
         try:
-            result = _identify(log, flexible, settings, [], f1_hz, wanted)
+            result = _identify(log, flexible, settings, [], f1_hz, wanted, made)
         except (InversionError, NotIdentifiable) as err:
             notes.append(f"auto: {flexible} model rejected ({err}); rigid model used")
             rejected = (str(err), {})
@@ -263,19 +268,19 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
             notes.append(f"auto: the data does not identify a stiffness in the band "
                          f"({flexible} model: {why}); rigid model used")
             rejected = (why, dict(result.physical))
-        return replace(_identify(log, "rigid", settings, notes, f1_hz, wanted),
+        return replace(_identify(log, "rigid", settings, notes, f1_hz, wanted, made),
                        rejected=rejected)
     if model != "rigid" and not (settings.zoh and settings.filter_torque):
         notes.append("the no-ZOH / unfiltered-torque options apply to the rigid model only")
     nd = 4 if model.startswith("motor-only") else 2
     _check_length(log, settings, nd)
-    check_signals(log, model, settings)
+    check_signals(log, model, settings, lp)
     ran = list(chain_corrections(settings))
     if model == "joint-motor":
-        chain = regressors.JointMotorChain(log, settings)
+        chain = regressors.JointMotorChain(log, settings, lp)
         reg = exclude_clipped(chain.regressor(), log)
         if "instruments" in wanted:
-            Z = _instruments(log, reg, f1_hz, notes)
+            Z = _instruments(log, reg, f1_hz, notes, made)
         else:
             Z = None
             notes.append("least squares: instruments switched off")
@@ -286,16 +291,16 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
                                                "stick_phases" in wanted)
             ran += placed
     elif model == "motor-only" and "motor_only_columns" not in wanted:
-        reg = exclude_clipped(regressors.motor_only(log, settings, corrected=False), log)
+        reg = exclude_clipped(regressors.motor_only(log, settings, corrected=False, lp=lp), log)
         ls = least_squares(reg.W, reg.y, reg.names)
     elif model == "motor-only":
         # least squares: the torque's own derivatives are columns here, and instruments
         # predicted for them are weak and bias K more than least squares does
-        reg = exclude_clipped(regressors.motor_only(log, settings, corrected=True), log)
+        reg = exclude_clipped(regressors.motor_only(log, settings, corrected=True, lp=lp), log)
         ls = least_squares(reg.W, reg.y, reg.names)
         ran.append("motor_only_columns")
     elif model == "motor-only-printed":
-        reg = exclude_clipped(regressors.motor_only(log, settings, corrected=False), log)
+        reg = exclude_clipped(regressors.motor_only(log, settings, corrected=False, lp=lp), log)
         ls = least_squares(reg.W, reg.y, reg.names)
     else:
         reg = exclude_clipped(regressors.rigid(log, settings), log)
@@ -327,7 +332,7 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
         eqs18_20 = dict(physical)
         if reg.model == "motor-only" and "link_reconstruction" in wanted:
             physical, sigma, sigma_corr = _link_reconstructed(log, settings, physical, f1_hz,
-                                                              notes, warnings)
+                                                              notes, warnings, lp)
             ran.append("link_reconstruction")
     else:
         for n in ls.names:
@@ -394,17 +399,23 @@ def _place_reversals(log: Log, chain: regressors.JointMotorChain, reg: regressor
 
 
 def _instruments(log: Log, reg: regressors.Regressor, f1_hz: float | None,
-                 notes: list[str]) -> np.ndarray | None:
+                 notes: list[str], made: dict | None = None) -> np.ndarray | None:
     """The regressor rebuilt from the reference's predictions (identification/instruments.py),
-    or None (least squares) without q_ref; a note says which."""
-    inst = instrument_log(log, f1_hz)
+    or None (least squares) without q_ref; a note says which. The predicted log is made once
+    per f1 in `made` (it does not depend on the band)."""
+    made = {} if made is None else made
+    key = ("instrument_log", f1_hz)
+    if key not in made:
+        made[key] = instrument_log(log, f1_hz)
+    inst = made[key]
     if inst is None:
         why = "no q_ref to build instruments from" if log.q_ref is None else \
             "the log is too short for instruments (under four Welch segments at f1 / 40)"
         notes.append(f"least squares: {why}; closed-loop torque noise may bias Jm up and K "
                      "down")
         return None
-    Z = regressors.joint_motor(inst, reg.settings)
+    Z = regressors.JointMotorChain(inst, reg.settings,
+                                   made.get("lowpass", lowpass)).regressor()
     # the same rows (block, sample) as the regressor's, which may have lost clipped ones
     rows = {key: i for i, key in enumerate(zip(Z.block.tolist(), Z.index.tolist()))}
     pick = [rows.get(key) for key in zip(reg.block.tolist(), reg.index.tolist())]
@@ -416,7 +427,8 @@ def _instruments(log: Log, reg: regressors.Regressor, f1_hz: float | None,
 
 
 def _link_reconstructed(log: Log, settings: FilterSettings, start: dict[str, float],
-                        f1_hz: float | None, notes: list[str], warnings: list[str]
+                        f1_hz: float | None, notes: list[str], warnings: list[str],
+                        lp: Lowpassed | None = None
                         ) -> tuple[dict[str, float], dict[str, float], dict[str, float]]:
     """The physical parameters of the motor-only model from the link reconstructed out of q_m
     (identification/link_fit.py), started from the eqs. (18)-(20) inversion `start` (or, when
@@ -432,7 +444,7 @@ def _link_reconstructed(log: Log, settings: FilterSettings, start: dict[str, flo
         notes.append("the link reconstruction started from the best link antiresonance in "
                      "the band")
     try:
-        result = link_fit.fit(log, settings, start, f1_hz)
+        result = link_fit.fit(log, settings, start, f1_hz, lp or Lowpassed())
     except ValueError as err:
         raise InversionError(str(err)) from err
     notes.extend(result.notes)

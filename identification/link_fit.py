@@ -26,6 +26,7 @@ does.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -33,7 +34,8 @@ from scipy import optimize
 
 from jointbench.identification import regressors
 from jointbench.identification.estimate import LSResult, least_squares
-from jointbench.identification.filtering import FilterSettings, decimate_parallel, zoh_align
+from jointbench.identification.filtering import (FilterSettings, decimate_parallel, lowpass,
+                                                 zoh_align)
 from jointbench.identification.instruments import instrument_log
 from jointbench.identification.link_sim import inverse, simulate_link, spectra
 from jointbench.identification.log import Log
@@ -68,10 +70,10 @@ class _Rows:
     """The motor rows of one log for given (a, b) and given profiles (phi, gravity, reversal
     rate): the filtered motor derivatives are computed once."""
 
-    def __init__(self, log: Log, s: FilterSettings):
+    def __init__(self, log: Log, s: FilterSettings, lp: Callable = lowpass):
         self.log, self.s = log, s
-        self.qm = regressors._filtered(log.q_m, s, 2)
-        self.tau = regressors._torque(log, s)
+        self.qm = regressors._filtered(log.q_m, s, 2, lp)
+        self.tau = regressors._torque(log, s, lp=lp)
         self.g = log.gravity
         self.bad = ~np.isfinite(self.qm[2])
         self.gravity = self.g != 0    # False: the gravity columns are zero (not identified)
@@ -257,11 +259,12 @@ def _final_checked(rows: _Rows, log: Log, p: dict[str, float], Z) -> tuple[tuple
     return _final(rows, log, p, None), warning
 
 
-def fit(log: Log, s: FilterSettings, start: dict[str, float], f1_hz: float | None = None
-        ) -> LinkFit:
+def fit(log: Log, s: FilterSettings, start: dict[str, float], f1_hz: float | None = None,
+        lp: Callable = lowpass) -> LinkFit:
     """The motor-only estimate from a starting point `start` (physical names: K, JL, Jm, FV,
-    FVm, FSm and optionally FS, MX, MY). Raises ValueError when the start has no positive
-    K and JL."""
+    FVm, FSm and optionally FS, MX, MY); `lp`: the Butterworth (`lowpass`, or a
+    `filtering.Lowpassed` shared with the eqs. (18)-(20) fit). Raises ValueError when the
+    start has no positive K and JL."""
     K, JL = start.get("K", 0.0), start.get("JL", 0.0)
     if not (K > 0 and JL > 0):
         raise ValueError(f"the link reconstruction needs a positive K and JL to start from "
@@ -272,7 +275,7 @@ def fit(log: Log, s: FilterSettings, start: dict[str, float], f1_hz: float | Non
          "FSm": start.get("FSm", 0.0), "K": K, "Kc": a * start.get("FS", 0.0),
          "Kgx": a * start.get("MX", 0.0), "Kgy": a * start.get("MY", 0.0), "a": a,
          "b": max(start.get("FV", 0.0) / JL, B_FLOOR)}
-    rows = _Rows(log, s)
+    rows = _Rows(log, s, lp)
     p = _converge(rows, log, p, ROUNDS)
     Z, why = _instruments(log, s, f1_hz)
     (p, ls, y, J, idx), warning = _final_checked(rows, log, p, Z)

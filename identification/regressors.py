@@ -16,7 +16,7 @@ linear relation survives the filtering (section 3.2).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -48,8 +48,11 @@ class Regressor:
     settings: FilterSettings
 
 
-def _filtered(x: np.ndarray, s: FilterSettings, nd: int) -> list[np.ndarray]:
-    return derivatives(lowpass(x, s.wn, s.ts, s.m), s.ts, nd, s.stencil)
+def _filtered(x: np.ndarray, s: FilterSettings, nd: int, lp: Callable = lowpass
+              ) -> list[np.ndarray]:
+    """[x, x', ..., x^(nd)] of the Butterworth-filtered x (`lp`: `lowpass`, or a
+    `filtering.Lowpassed` that filters each array once)."""
+    return derivatives(lp(x, s.wn, s.ts, s.m), s.ts, nd, s.stencil)
 
 
 def _sign(x: np.ndarray, s: FilterSettings, rate: float = 0.0,
@@ -83,13 +86,14 @@ def _sign(x: np.ndarray, s: FilterSettings, rate: float = 0.0,
     return out
 
 
-def _torque(log: Log, s: FilterSettings, filtered: bool = True) -> np.ndarray:
+def _torque(log: Log, s: FilterSettings, filtered: bool = True, lp: Callable = lowpass
+            ) -> np.ndarray:
     """The torque paired with the positions: ZOH-aligned (`zoh_align`; exact with the 5-point
     chain, applied after the Butterworth since both are linear and the exact view leaves NaN
-    at the ends) and Butterworth filtered when `filtered`."""
+    at the ends) and Butterworth filtered when `filtered` (`lp` as `_filtered`'s)."""
     tau = np.asarray(log.tau_m, dtype=float)
     if s.zoh and s.stencil == 5:
-        return zoh_align(lowpass(tau, s.wn, s.ts, s.m) if filtered else tau, exact=True, ts=s.ts)
+        return zoh_align(lp(tau, s.wn, s.ts, s.m) if filtered else tau, exact=True, ts=s.ts)
     tau = zoh_align(tau) if s.zoh else tau
     return lowpass(tau, s.wn, s.ts, s.m) if filtered else tau
 
@@ -111,28 +115,34 @@ class JointMotorChain:
     differentiated positions, the torque, the columns that do not depend on the friction and
     their decimation (per row span, `decimate_parallel`'s), so that each `regressor` call
     rebuilds and decimates the two Coulomb columns alone. The numbers are
-    `decimate_parallel`'s: the decimation filters every column on its own."""
+    `decimate_parallel`'s: the decimation filters every column on its own. `lp`: the
+    Butterworth (`lowpass`, or a `filtering.Lowpassed` shared with other chains of the log)."""
 
     MOTOR_SIGN, LINK_SIGN = 2, 8   # the sign columns of the motor and link blocks
 
-    def __init__(self, log: Log, s: FilterSettings):
+    def __init__(self, log: Log, s: FilterSettings, lp: Callable = lowpass):
         if log.q is None:
             raise LogError("the joint-motor model needs the link position column 'q'",
                            log.path, column="q")
         self.log, self.s = log, s
-        self.qm = _filtered(log.q_m, s, 2)
-        self.q = q = _filtered(log.q, s, 2)
-        self.tau = _torque(log, s)
+        self.qm = _filtered(log.q_m, s, 2, lp)
+        self.q = q = _filtered(log.q, s, 2, lp)
+        self.tau = _torque(log, s, lp=lp)
         qm, g, n = self.qm, log.gravity, len(log.t)
         zero = np.zeros(n)
         self.zero = zero
         self.defl = defl = qm[0] - q[0]
         seen = _as_seen(s)
-        self.W1 = np.column_stack([qm[2], seen(qm[1], 1), zero, seen(defl, 0), zero, zero, zero,
-                                   zero, zero])
-        self.W2 = np.column_stack([zero, zero, zero, -seen(defl, 0), q[2],
-                                   seen(g * np.cos(q[0]), 0), seen(g * np.sin(q[0]), 0),
-                                   seen(q[1], 1), zero])
+        spring = seen(defl, 0)   # one column in both equations: filtered once
+        motor = [qm[2], seen(qm[1], 1), None, spring, None, None, None, None, None]
+        link = [None, None, None, -spring, q[2], seen(g * np.cos(q[0]), 0),
+                seen(g * np.sin(q[0]), 0), seen(q[1], 1), None]
+        self.W1 = np.column_stack([zero if c is None else c for c in motor])
+        self.W2 = np.column_stack([zero if c is None else c for c in link])
+        # the columns decimated once: neither a sign column nor one of the equation's zeros
+        # (their decimation is zero: the filter is linear)
+        self._fixed = tuple([j for j, c in enumerate(cols) if c is not None and j != sign]
+                            for cols, sign in ((motor, self.MOTOR_SIGN), (link, self.LINK_SIGN)))
         self._decimated: dict[tuple[int, int, int], tuple[np.ndarray, np.ndarray]] = {}
 
     def regressor(self, friction: tuple[float, float] | Mapping[str, float] = (0.0, 0.0)
@@ -152,7 +162,8 @@ class JointMotorChain:
     def _decimate(self, block: int, y: np.ndarray, W: np.ndarray, varying: int
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """`decimate_parallel(y, W, s)` with y and the columns other than `varying`
-        decimated once per row span."""
+        decimated once per row span (the equation's zero columns, and y = 0 of the link
+        equation, not at all: their decimation is zero)."""
         s = self.s
         n = len(y)
         valid = np.all(np.isfinite(W), axis=1) & np.isfinite(y)
@@ -161,7 +172,11 @@ class JointMotorChain:
         key = (block, first, last)
         if key not in self._decimated:
             if s.Nd > 1:
-                self._decimated[key] = (decimate(y[sl], s.Nd), decimate(W[sl], s.Nd, axis=0))
+                fixed = self._fixed[block]
+                Wd = np.zeros((len(range(first, last, s.Nd)), W.shape[1]))
+                Wd[:, fixed] = decimate(W[sl][:, fixed], s.Nd, axis=0)
+                yd = np.zeros(len(Wd)) if y is self.zero else decimate(y[sl], s.Nd)
+                self._decimated[key] = (yd, Wd)
             else:
                 self._decimated[key] = (y[sl].copy(), W[sl].copy())
         yd, Wd = self._decimated[key]
@@ -211,11 +226,12 @@ def _friction_models(log: Log, friction: tuple[float, float] | Mapping[str, floa
     return (rates[0], tau / Jm, drive), (rates[1],)
 
 
-def motor_only(log: Log, s: FilterSettings, corrected: bool = True) -> Regressor:
+def motor_only(log: Log, s: FilterSettings, corrected: bool = True,
+               lp: Callable = lowpass) -> Regressor:
     """Eqs. (18)-(20): y = tau_m, D = (-tau'', -tau', qm'''', qm''', qm'', qm', sign(qm'))
-    [+ (s'', s', g cos qm, g sin qm) when corrected]."""
-    qm = _filtered(log.q_m, s, 4)
-    tau = derivatives(_torque(log, s), s.ts, 2, s.stencil)
+    [+ (s'', s', g cos qm, g sin qm) when corrected]. `lp` as `_filtered`'s."""
+    qm = _filtered(log.q_m, s, 4, lp)
+    tau = derivatives(_torque(log, s, lp=lp), s.ts, 2, s.stencil)
     sgn = _sign(qm[1], s)
     cols = [-tau[2], -tau[1], qm[4], qm[3], qm[2], qm[1], sgn]
     names = MOTOR_ONLY

@@ -33,7 +33,9 @@ Checks around the least squares of eq. (21), on numpy arrays (no I/O):
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
+from functools import lru_cache
 
 import numpy as np
 from scipy import signal
@@ -67,11 +69,13 @@ def _constant(x: np.ndarray) -> bool:
     return float(np.ptp(x)) <= 8 * np.finfo(float).eps * scale
 
 
-def excited_lines(log: Log, settings: FilterSettings) -> tuple[float, float, float]:
+def excited_lines(log: Log, settings: FilterSettings, lp: Callable = lowpass
+                  ) -> tuple[float, float, float]:
     """(lines, f_peak, band_hz): the effective number of frequency lines of the motor velocity
     (the filtered q_m differenced) in 0 < f <= the decimated cutoff, the strongest frequency,
-    and that cutoff. See the module docstring."""
-    v = np.diff(lowpass(log.q_m, settings.wn, settings.ts, settings.m))
+    and that cutoff. See the module docstring. `lp`: the Butterworth (`lowpass`, or a
+    `filtering.Lowpassed` shared with the regressor's chain)."""
+    v = np.diff(lp(log.q_m, settings.wn, settings.ts, settings.m))
     fs = 1.0 / settings.ts
     nperseg = int(min(len(v), 4096))
     f, P = signal.welch(v, fs, nperseg=nperseg, detrend="linear")
@@ -80,9 +84,7 @@ def excited_lines(log: Log, settings: FilterSettings) -> tuple[float, float, flo
     if not len(P) or not P.sum() > 0:
         return 0.0, float("nan"), settings.decimated_cutoff_hz
     peak = float(f[int(np.argmax(P))])
-    _, tone = signal.welch(np.sin(2 * np.pi * peak * np.arange(len(v)) / fs), fs,
-                           nperseg=nperseg, detrend="linear")
-    tone = tone[band]
+    tone = _tone_spectrum(peak, len(v), fs, nperseg)[band]
 
     def participation(p: np.ndarray) -> float:
         return float(p.sum() ** 2 / (p ** 2).sum())
@@ -90,9 +92,22 @@ def excited_lines(log: Log, settings: FilterSettings) -> tuple[float, float, flo
     return participation(P) / participation(tone), peak, settings.decimated_cutoff_hz
 
 
-def check_signals(log: Log, model: str, settings: FilterSettings | None = None) -> None:
+@lru_cache(maxsize=16)
+def _tone_spectrum(f_hz: float, n: int, fs: float, nperseg: int) -> np.ndarray:
+    """The Welch spectrum (linear detrend) of n samples of a unit sine at f_hz, the single
+    line `excited_lines` measures a motion's participation against: made once per setting
+    (read-only: shared)."""
+    _, tone = signal.welch(np.sin(2 * np.pi * f_hz * np.arange(n) / fs), fs,
+                           nperseg=nperseg, detrend="linear")
+    tone.setflags(write=False)
+    return tone
+
+
+def check_signals(log: Log, model: str, settings: FilterSettings | None = None,
+                  lp: Callable = lowpass) -> None:
     """NotIdentifiable when a signal the model needs does not vary at all, or (given the
-    filter `settings`) when the motion holds fewer frequency lines than the model needs."""
+    filter `settings`) when the motion holds fewer frequency lines than the model needs
+    (`lp` as `excited_lines`')."""
     where = f"{log.path or '<log>'}: "
     if _constant(log.q_m):
         raise NotIdentifiable(
@@ -111,7 +126,7 @@ def check_signals(log: Log, model: str, settings: FilterSettings | None = None) 
     if settings is None or model not in LINES_NEEDED:
         return
     need, why = LINES_NEEDED[model]
-    lines, peak, band = excited_lines(log, settings)
+    lines, peak, band = excited_lines(log, settings, lp)
     if lines < need - 0.5:
         raise NotIdentifiable(
             f"{where}the motion excites about {lines:.2g} frequency line(s) in the band "

@@ -110,3 +110,23 @@ def test_the_friction_models_ignore_the_simulator_metadata():
         assert _friction_models(replace(log, meta=meta), (3.0, 0.5), np.zeros(50)) == (
             (3.0,), (0.5,))
 
+
+
+def test_intervals_known_one_way_without_stepping_give_the_stepped_integrals():
+    """`_integrals` steps only the intervals `_surely_one_way` leaves in doubt: every interval
+    it skips is one the sub-steps find moving one way, and the integrals are the stepped ones,
+    bit for bit (velocities from far above the drive's reach down to rest)."""
+    from jointbench.identification import friction_state as fs
+
+    rng = np.random.default_rng(7)
+    n, ts, rate, visc = 20000, 1 / 350.87, 40.0, 1.5
+    u = rng.standard_normal(n) * np.exp(rng.uniform(-8, 2, n))
+    u[::50] = 0.0
+    d0 = rng.standard_normal(n) * 60.0
+    d1 = d0 + rng.standard_normal(n) * 20.0
+    sure = fs._surely_one_way(u, d0, d1, visc, rate, ts)
+    assert 0.2 < sure.mean() < 0.9   # both kinds occur
+    I1, I2, end = fs._interval(u, d0, d1, visc, rate, ts)
+    J1, J2, _ = fs._integrals(u, d0, d1, visc, rate, ts)
+    assert np.all(np.sign(end[sure]) == np.sign(u[sure]))
+    assert np.array_equal(I1, J1) and np.array_equal(I2, J2)
