@@ -162,8 +162,8 @@ def link_mode(log: Log) -> tuple[float, float] | None:
     if log.q is None:
         return None
     fs = log.sample_rate_hz
-    x = log.q_ref if log.q_ref is not None else log.tau_m
-    f, H, w = _ratio(x, log.q_m, log.q, fs, _nperseg(len(log), fs))
+    x = "q_ref" if log.q_ref is not None else "tau_m"
+    f, H, w = _ratio(Spectra(log), x, "q_m", "q", slice(None), _nperseg(len(log), fs))
     return link_over_motor(f, H, w, 1.1 * excitation_top_hz(log))
 
 
