@@ -530,7 +530,7 @@ LAB_RIG_KP = 1.0        # V/rad, the proportional position loop u = Kp (r - thet
 def simulate_lab_rig(rig: LabRig = LAB_RIG, seed: int = 1, duration: float = 40.0,
                      closed_loop: bool = True, *, kp_volt: float = LAB_RIG_KP,
                      reference: Multisine | None = None, loop: PositionLoop | None = None,
-                     sample_rate_hz: float = LAB_RIG_RATE) -> Log:
+                     sample_rate_hz: float = LAB_RIG_RATE, effects=None) -> Log:
     """One run of the lab rig as a jointbench log (docs/log-format.md).
 
     Closed loop: u[k] = clip(Kp (r[k] - theta[k]), +-u_max) with Kp = `kp_volt` [V/rad] on
@@ -540,7 +540,9 @@ def simulate_lab_rig(rig: LabRig = LAB_RIG, seed: int = 1, duration: float = 40.
     command sent as u = tau / g_u) in place of the lab's. Open loop: u is the multisine itself (RMS 1 V), and
     the log has no q_ref nor controller. The voltage noise adds to the applied voltage, not to
     the logged command. The plant is eqs. (5)-(6) with the back-EMF in FVm (`LabRig`),
-    integrated by RK4 as `simulate`. Same arguments, the same log bit for bit."""
+    integrated by RK4 as `simulate`. `effects`: hidden effects as `simulate`'s (no `gravity`:
+    the rig's link has no mass), evaluated inside the RK4 stages on the joint-side torque
+    g_u (u + noise). Same arguments, the same log bit for bit."""
     family = rig.family
     T = 1.0 / sample_rate_hz
     g = rig.volt_to_torque
@@ -551,8 +553,14 @@ def simulate_lab_rig(rig: LabRig = LAB_RIG, seed: int = 1, duration: float = 40.
     rng = np.random.default_rng(seed)
     r = reference(t, rng)
     noise = rng.normal(0.0, rig.voltage_noise_std, n)
-    n_sub = default_substeps(family, sample_rate_hz)
-    step = make_stepper(family, 0.0, T, n_sub)
+    hidden = as_hidden(effects)
+    if hidden:
+        extra = plant(hidden, family.K, family.gear_ratio, False)
+        n_sub = default_substeps(family, sample_rate_hz, extra)
+        step = stepper_with_effects(family, 0.0, T, n_sub, extra, 0.0)
+    else:
+        n_sub = default_substeps(family, sample_rate_hz)
+        step = make_stepper(family, 0.0, T, n_sub)
     quant = _quantiser(rig.counts)
     x: State = (0.0, 0.0, 0.0, 0.0)
     if loop is None:
@@ -592,6 +600,8 @@ def simulate_lab_rig(rig: LabRig = LAB_RIG, seed: int = 1, duration: float = 40.
     meta["truth_MX"] = meta["truth_MY"] = "0"
     meta["truth_FVm_back_emf"] = _fmt(rig.back_emf_damping)
     meta["truth_link_mode_hz"] = _fmt(rig.link_mode_hz)
+    if hidden:
+        meta.update(truth_meta(hidden))
     return Log(t=t, q_m=theta, tau_m=g * u, q=theta - alpha,
                q_ref=r if closed_loop else None,
                extra={"theta": theta, "alpha": alpha, "u": u}, meta=meta)
