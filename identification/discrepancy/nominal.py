@@ -304,6 +304,27 @@ def transmitted_rms(W: np.ndarray, X: np.ndarray, block: np.ndarray) -> float:
     return float(np.sqrt(np.mean((W[link][:, both] @ X[both]) ** 2)))
 
 
+def with_link_law(nom: Nominal, design: Design) -> Nominal:
+    """`nom` with its link friction's law near zero speed (link_law) searched again on
+    `design` (the nominal extended by the causes named so far), its parameters refitted at
+    its block weights; `nom` itself when the law is the same. Searched on the nominal alone
+    the law also takes up what an unmodelled effect of the link's speed leaves (a spring
+    damping D (qm' - q'): tanh(q' / v0) is a viscous friction below v0); once that cause is
+    in the model, the law is the friction's again."""
+    if not nom.link_friction:
+        return nom
+    y, W, names = design
+    v0 = link_law(nom.sig, y, W, names, nom.weights)
+    if v0 == nom.link_v0:
+        return nom
+    W0 = nom.W.copy()
+    W0[:, nom.names.index("FS")] = stack(nom.sig, None, smooth_sign(nom.sig.qd, v0))
+    Xb = solve(_with_bias(nom.sig, W0), nom.y, nom.weights)[0]
+    r = (nom.y - W0 @ Xb[:-1]) * nom.weights
+    return dataclasses.replace(nom, W=W0, X=Xb[:-1], bias=float(Xb[-1]), rss=float(r @ r),
+                               link_v0=v0)
+
+
 def with_parameters(nom: Nominal, X: np.ndarray) -> Nominal:
     """`nom`'s rows with another estimate X (same names): a model identified elsewhere."""
     return dataclasses.replace(nom, X=np.asarray(X, float))

@@ -45,3 +45,20 @@ def test_a_hardening_beside_the_ripple_is_named():
     inv = diagnose_inverse(log, diagnosis_settings(log)[0])
     assert {c.effect for c in inv.causes} == {"torque_ripple", "hardening"}
 
+
+
+def test_the_law_searched_again_beside_a_spring_damping():
+    """Searched on the nominal alone, the law also takes up part of a spring damping (below
+    v0, tanh(q' / v0) is a viscous friction): on the pendulum family with a spring damping
+    and a weak hardening (ratio 0.05 beyond 20 mrad) it comes out at 14 mrad/s. Searched
+    again once the damping is named (nominal.with_link_law), the second round names the
+    hardening, not a dead band in its place."""
+    from jointbench.testing import INDEP_PLACES, IndepRunner
+
+    place = next(p for p in INDEP_PLACES if p.model == "pendulum")
+    effects = (("hardening", 0.05024598348638031, {"deflection": 0.020302871649587703}),
+               ("spring_damping", 5.937965932013555, {}))
+    log = IndepRunner(40.0).log(place, effects, 1910183176, True, False)
+    inv = diagnose_inverse(log, diagnosis_settings(log)[0])
+    assert inv.nominal.link_v0 > 5 * SOFT.v_s
+    assert [c.effect for c in inv.causes] == ["spring_damping", "hardening"]
