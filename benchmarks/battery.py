@@ -6,9 +6,10 @@ visibility, not by the detector's thresholds.
         [--clean 24] [--pairs 28] [--seed 2026] [--duration 40] [--figure docs/figures/detection.png]
     .venv/bin/python benchmarks/battery.py --from battery_out/cases.json   # summary, figure again
 
-Every case runs at the paper's rate (350.87 Hz), cycling over the places (bench prototype,
-arm6 axis2 and axis4; independent families balanced, soft, wrist, pendulum) and over velocity
-feedforward on/off x torque noise on/off. Writes OUT/cases.json and OUT/cases.csv (model,
+Every case runs at the paper's rate (350.87 Hz), the lab rig at its own, cycling over the places (bench prototype,
+arm6 axis2 and axis4; independent families balanced, soft, wrist, pendulum; and the
+independent simulator's lab rig, a voltage drive under a P loop at its own 500 Hz) and over
+velocity feedforward on/off x torque noise on/off. Writes OUT/cases.json and OUT/cases.csv (model,
 joint, seed, effects, strengths, visibilities, named; the distinguishing visibility of every
 effect that reduces to another: bench.campaign.detection.distinguishing_visibility; the share
 of torque samples at the limit, identification.saturation.clipped_samples),
@@ -39,15 +40,16 @@ from jointbench.identification.effects import EFFECTS, NONE
 from jointbench.identification.log.write import atomic_write_text
 from jointbench.identification.output_values import finite_json
 from jointbench.identification.saturation import clipped_samples
-from jointbench.testing import INDEP_PLACES, IndepRunner
+from jointbench.testing import INDEP_PLACES, LAB_PLACES, IndepRunner, LabRigRunner
 
-PLACES = (*BENCH_PLACES, *INDEP_PLACES)
+PLACES = (*BENCH_PLACES, *INDEP_PLACES, *LAB_PLACES)
 _RUNNERS: dict = {}
 _CACHE: dict = {}
 
 
 def _init(duration: float) -> None:
-    _RUNNERS.update(bench=BenchRunner(duration), indep=IndepRunner(duration))
+    _RUNNERS.update(bench=BenchRunner(duration), indep=IndepRunner(duration),
+                    lab=LabRigRunner(duration))
 
 
 def named_causes(d) -> list[str]:
@@ -172,7 +174,7 @@ def figure(records: list[dict], path: Path) -> None:
     ax.set_xlabel("in-band visibility of the hidden effect [%] (bin centres)")
     ax.set_ylabel("named right [%]")
     ax.set_ylim(-5, 105)
-    ax.set_title("diagnose: detection curve per effect (single-effect cases, 350.87 Hz)")
+    ax.set_title("diagnose: detection curve per effect (single-effect cases)")
     ax.legend(fontsize=7, ncol=2)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)

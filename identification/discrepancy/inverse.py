@@ -57,7 +57,7 @@ from jointbench.identification.discrepancy.candidates import (Candidate, HeldOut
 from jointbench.identification.discrepancy.heldout import (ALPHA, MATERIAL, segment_log_ratios,
                                                            segment_t, t_bar)
 from jointbench.identification.discrepancy.lag_band import LagBand, second_view
-from jointbench.identification.discrepancy.nominal import Nominal, nominal
+from jointbench.identification.discrepancy.nominal import Nominal, nominal, with_link_law
 from jointbench.identification.effects import EFFECTS, NONE
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.log import Log
@@ -188,6 +188,9 @@ def _round(nom: Nominal, names: list[str], causes: tuple[Candidate, ...],
     m = len(names)
     model = _model(causes)
     ref = reference(nom, model, m=m)
+    if model:   # the link friction's law with the causes in the model (nominal.with_link_law)
+        nom = with_link_law(nom, ref.base.design())
+        ref = reference(nom, model, m=m)
     cands = [replace(second_view(band, candidate(nom, name, ref), model), round=k)
              for name in names]
     return _simplest_first(_rank(cands), nom, m)
