@@ -90,6 +90,7 @@ def distinguishing(spec: Spec, outcome) -> list[float | None]:
 def run_one(spec: Spec) -> dict:
     """One case: strengths by visibility, the log, its diagnosis; a JSON-ready record."""
     from jointbench.bench.analysis.diagnose import diagnose
+    from jointbench.bench.analysis.diagnose.claims import failing_claims
 
     p = spec.place
     rec = {"index": spec.index, "kind": spec.kind, "source": p.source, "model": p.model,
@@ -97,7 +98,7 @@ def run_one(spec: Spec) -> dict:
            "feedforward": spec.feedforward, "noise": spec.noise, "effects": list(spec.effects),
            "targets": list(spec.targets), "strengths": [], "options": [], "visibilities": [],
            "combined": 0.0, "clipped_pct": 0.0, "simulations": 0, "distinguishing": [],
-           "named": [], "ambiguity": [], "verdict": "", "error": ""}
+           "named": [], "ambiguity": [], "verdict": "", "failing_claims": [], "error": ""}
     t0 = time.perf_counter()
     try:
         out = run_spec(spec, _RUNNERS[p.source], _CACHE)
@@ -110,7 +111,8 @@ def run_one(spec: Spec) -> dict:
         t1 = time.perf_counter()
         d = diagnose(out.log)
         rec.update(named=named_causes(d), ambiguity=list(d.ambiguities), verdict=d.verdict,
-                   diagnose_s=time.perf_counter() - t1)
+                   diagnose_s=time.perf_counter() - t1,
+                   failing_claims=failing_claims(finite_json(d.to_json())))
     except Exception as err:  # a failed case is reported, never hidden
         rec["error"] = f"{type(err).__name__}: {err}"
     rec["seconds"] = time.perf_counter() - t0
