@@ -22,6 +22,7 @@ import numpy as np
 from scipy import signal
 
 from jointbench.identification.log import Log
+from jointbench.identification.spectra import Spectra
 
 COHERENCE_MIN = 0.5     # bins kept: coherence of the excitation with output and with torque
 SEGMENT_S = 8.0         # Welch segment length [s] (resolution 1 / 8 s = 0.125 Hz or finer)
@@ -59,18 +60,23 @@ class _Response:
     ok: np.ndarray      # bins where the excitation is coherent with output and torque
 
 
-def _response(x: np.ndarray, y: np.ndarray, tau: np.ndarray, fs: float, nperseg: int,
-              noverlap: int | None, indirect: bool) -> _Response:
-    """The flattened response out / tau_m and the bins where it is measured."""
-    kw = dict(fs=fs, nperseg=nperseg, noverlap=noverlap)
-    f, s_xy = signal.csd(x, y, **kw)
-    _, s_xt = signal.csd(x, tau, **kw)
+def _response(spectra: Spectra, x: str, y: str, sl: slice, nperseg: int,
+              noverlap: int | None, indirect: bool, same: bool = False) -> _Response:
+    """The flattened response y / tau_m through the instrument x (log column names) on the
+    samples `sl`, and the bins where it is measured. `same`: x is the torque array itself
+    (H1 on the whole record), whose cross spectrum with the torque is its real Welch
+    spectrum."""
+    kw = dict(nperseg=nperseg, noverlap=noverlap, sl=sl)
+    f = spectra.frequencies(nperseg)
+    fs = spectra.fs
+    s_xy = spectra.csd(x, y, **kw)
+    s_xt = spectra.welch(x, **kw) if same else spectra.csd(x, "tau_m", **kw)
     with np.errstate(divide="ignore", invalid="ignore"):   # constant signals: 0 / 0
-        _, c_xy = signal.coherence(x, y, **kw)
-        c_xt = signal.coherence(x, tau, **kw)[1] if indirect else np.ones_like(f)
+        c_xy = spectra.coherence(x, y, **kw)
+        c_xt = spectra.coherence(x, "tau_m", **kw) if indirect else np.ones_like(f)
     c_xy, c_xt = np.nan_to_num(c_xy), np.nan_to_num(c_xt)
     step = nperseg - (noverlap if noverlap is not None else nperseg // 2)
-    n_avg = max(1, (len(x) - nperseg) // step + 1)
+    n_avg = max(1, (len(spectra.log.t[sl]) - nperseg) // step + 1)
     with np.errstate(divide="ignore", invalid="ignore"):
         # the torque is held over each period (ZOH): it acts half a sample late on average
         G = -(s_xy / s_xt) * (2 * np.pi * f) ** 2 * np.exp(1j * np.pi * f / fs)
@@ -209,15 +215,16 @@ def measure_first_mode(log: Log) -> FirstMode:
     the reason in `note`, when no resonance stands out of the coherent band (a rigid axis, too
     little excitation). With `q`, a link mode is cross-checked against the motor response's
     (`_cross_checked`): when the two disagree, `sigma_hz` covers both."""
-    mode = _measure(log, motor=log.q is None)
+    spectra = Spectra(log)
+    mode = _measure(log, motor=log.q is None, spectra=spectra)
     if log.q is None:
-        return _excitation_checked(log, mode)
-    mode = _cross_checked(mode, _measure(log, motor=True)) if mode.found else \
-        _from_motor(log, mode)
-    return _excitation_checked(log, _with_link_mode(log, mode))
+        return _excitation_checked(log, mode, spectra)
+    mode = _cross_checked(mode, _measure(log, motor=True, spectra=spectra)) if mode.found \
+        else _from_motor(log, mode, spectra)
+    return _excitation_checked(log, _with_link_mode(log, mode, spectra), spectra)
 
 
-def _with_link_mode(log: Log, mode: FirstMode) -> FirstMode:
+def _with_link_mode(log: Log, mode: FirstMode, spectra: Spectra | None = None) -> FirstMode:
     """`mode`, or the first mode from the link-over-motor response q / q_m
     (identification.link_mode) where that one decides: when the peak responses give none,
     when the link and motor peaks disagree (`_cross_checked`: one is biased and nothing else
@@ -231,8 +238,8 @@ def _with_link_mode(log: Log, mode: FirstMode) -> FirstMode:
     from jointbench.identification.link_mode import excitation_top_hz, link_mode_first_mode
 
     disagree = "DISAGREES" in mode.note
-    beyond = mode.found and excitation_top_hz(log) < mode.f1_hz
-    alt = link_mode_first_mode(log)
+    beyond = mode.found and excitation_top_hz(log, spectra) < mode.f1_hz
+    alt = link_mode_first_mode(log, spectra)
     if alt is None:
         return mode
     f1, sigma, method, note = alt
@@ -253,14 +260,15 @@ def _with_link_mode(log: Log, mode: FirstMode) -> FirstMode:
     return FirstMode(f1, sigma, f"{method} (decided: {why})", True, f"{note}; {other}")
 
 
-def _excitation_checked(log: Log, mode: FirstMode) -> FirstMode:
+def _excitation_checked(log: Log, mode: FirstMode, spectra: Spectra | None = None
+                        ) -> FirstMode:
     """`mode` with a note when the excitation stops under EXCITATION_MARGIN times f1 (the
     band of section 3.2 reaches about 1.4 f1: its top then holds little excitation)."""
     from jointbench.identification.link_mode import EXCITATION_MARGIN, excitation_top_hz
 
     if not mode.found:
         return mode
-    top = excitation_top_hz(log)
+    top = excitation_top_hz(log, spectra)
     if not top < EXCITATION_MARGIN * mode.f1_hz:
         return mode
     return replace(mode, note=f"{mode.note}; the excitation stops near f1: 99 % of its "
@@ -286,26 +294,27 @@ def _cross_checked(link: FirstMode, motor: FirstMode) -> FirstMode:
         f"{sigma:.2g} Hz to cover both"))
 
 
-def _from_motor(log: Log, link: FirstMode) -> FirstMode:
+def _from_motor(log: Log, link: FirstMode, spectra: Spectra | None = None) -> FirstMode:
     """The motor response's first mode when the link's (`link`, not found) shows none: a
     mode damped by the friction flattens |q / tau_m| f^2 to a bump (the independent
     simulator without velocity feed-forward: 1.3-1.8 times its median level, the 2 it needs),
     while q_m / tau_m still has its antiresonance dip under it, whose depth the motor test
     measures. Not found by either: the
     link's reason and the motor's."""
-    motor = _measure(log, motor=True)
+    motor = _measure(log, motor=True, spectra=spectra)
     if not motor.found:
         return replace(link, note=f"{link.note}; the motor response: {motor.note}")
     return replace(motor, method=f"{motor.method} (the link response shows no resonance)",
                    note=f"{motor.note}; the link response q/tau_m: {link.note}")
 
 
-def _measure(log: Log, motor: bool) -> FirstMode:
+def _measure(log: Log, motor: bool, spectra: Spectra | None = None) -> FirstMode:
     """`measure_first_mode` on one response: the motor's (`motor`) or the link's."""
+    spectra = spectra or Spectra(log)
     fs = log.sample_rate_hz
     indirect = log.q_ref is not None
-    out = log.q_m if motor else log.q
-    x = log.q_ref if indirect else log.tau_m
+    out = "q_m" if motor else "q"
+    x = "q_ref" if indirect else "tau_m"
     method = ("motor q_m/tau_m" if motor else "link q/tau_m") + \
         (", indirect via q_ref" if indirect else ", H1 (no q_ref)")
     n = len(log)
@@ -313,13 +322,13 @@ def _measure(log: Log, motor: bool) -> FirstMode:
     if nperseg < 64:
         return FirstMode(math.nan, math.nan, method, False, f"{n} samples are too few")
     df = fs / nperseg
-    f1, sd_fit, why = _fit(_response(x, out, log.tau_m, fs, nperseg, None, indirect), motor)
+    f1, sd_fit, why = _fit(_response(spectra, x, out, slice(None), nperseg, None, indirect,
+                                     same=not indirect), motor)
     if why:
         return FirstMode(math.nan, math.nan, method, False, why)
     half = nperseg // 2
-    parts = [_fit(_response(v[sl], o[sl], t[sl], fs, nperseg // 2, 0, indirect), motor, False)[0]
-             for sl in (slice(0, n - half), slice(half, n))
-             for v, o, t in [(x, out, log.tau_m)]]
+    parts = [_fit(_response(spectra, x, out, sl, nperseg // 2, 0, indirect), motor, False)[0]
+             for sl in (slice(0, n - half), slice(half, n))]
     spread = abs(parts[0] - parts[1]) / 2 if all(np.isfinite(parts)) else math.nan
     terms = [sd_fit, df / math.sqrt(12)] + ([spread] if np.isfinite(spread) else [])
     sigma = float(math.sqrt(sum(v ** 2 for v in terms if np.isfinite(v))))

@@ -30,6 +30,7 @@ import numpy as np
 from scipy import signal
 
 from jointbench.identification.log import Log
+from jointbench.identification.spectra import Spectra
 
 COHERENCE_MIN = 0.5     # bins kept: coherence of the instrument with input and output
 SEGMENT_S = 8.0         # Welch segment length [s] of q / q_m, as identification.first_mode
@@ -45,20 +46,22 @@ def _nperseg(n: int, fs: float, seconds: float = SEGMENT_S) -> int:
     return int(min(2 ** math.ceil(math.log2(seconds * fs)), 2 ** math.floor(math.log2(n / 2))))
 
 
-def _ratio(x: np.ndarray, inp: np.ndarray, out: np.ndarray, fs: float, nperseg: int,
+def _ratio(spectra: Spectra, x: str, inp: str, out: str, sl: slice, nperseg: int,
            noverlap: int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(f, out / inp through the instrument x, weight): the weight is the inverse relative
-    variance of the ratio, 2 n g^2 / (1 - g^2) summed over both coherences g (Bendat & Piersol),
-    zero where either coherence is under COHERENCE_MIN."""
-    kw = dict(fs=fs, nperseg=nperseg, noverlap=noverlap)
-    f, s_xo = signal.csd(x, out, **kw)
-    _, s_xi = signal.csd(x, inp, **kw)
+    """(f, out / inp through the instrument x (log column names) on the samples `sl`,
+    weight): the weight is the inverse relative variance of the ratio, 2 n g^2 / (1 - g^2)
+    summed over both coherences g (Bendat & Piersol), zero where either coherence is under
+    COHERENCE_MIN."""
+    kw = dict(nperseg=nperseg, noverlap=noverlap, sl=sl)
+    f = spectra.frequencies(nperseg)
+    s_xo = spectra.csd(x, out, **kw)
+    s_xi = spectra.csd(x, inp, **kw)
     with np.errstate(divide="ignore", invalid="ignore"):
-        c_o = np.nan_to_num(signal.coherence(x, out, **kw)[1])
-        c_i = np.nan_to_num(signal.coherence(x, inp, **kw)[1])
+        c_o = np.nan_to_num(spectra.coherence(x, out, **kw))
+        c_i = np.nan_to_num(spectra.coherence(x, inp, **kw))
         H = s_xo / s_xi
     step = nperseg - (noverlap if noverlap is not None else nperseg // 2)
-    n_avg = max(1, (len(x) - nperseg) // step + 1)
+    n_avg = max(1, (len(spectra.log.t[sl]) - nperseg) // step + 1)
     ok = (c_o >= COHERENCE_MIN) & (c_i >= COHERENCE_MIN) & np.isfinite(H) & (f > 0)
     with np.errstate(divide="ignore", invalid="ignore"):
         var = sum((1 - c) / (2 * n_avg * c) for c in (c_o, c_i))
@@ -124,22 +127,22 @@ def inertia_ratio(f: np.ndarray, Hq: np.ndarray, w: np.ndarray, wa2: float, b: f
     return Jm, FVm, JL
 
 
-def _estimate(log: Log, sl: slice, nperseg: int, noverlap: int | None, top_hz: float
-              ) -> tuple[float, float, float] | None:
+def _estimate(log: Log, sl: slice, nperseg: int, noverlap: int | None, top_hz: float,
+              spectra: Spectra) -> tuple[float, float, float] | None:
     """(fa, f1, JL / Jm) [Hz, Hz, -] on the samples `sl`, or None."""
     fs = log.sample_rate_hz
-    x = log.q_ref if log.q_ref is not None else log.tau_m
-    f, H, w = _ratio(x[sl], log.q_m[sl], log.q[sl], fs, nperseg, noverlap)
+    x = "q_ref" if log.q_ref is not None else "tau_m"
+    f, H, w = _ratio(spectra, x, "q_m", "q", sl, nperseg, noverlap)
     ab = link_over_motor(f, H, w, top_hz)
     if ab is None:
         return None
     nperseg = min(nperseg, _nperseg(len(log.t[sl]), fs, INERTIA_SEGMENT_S))
-    f2, Hq, w2 = _ratio(x[sl], log.tau_m[sl], log.q[sl], fs, nperseg, noverlap)
+    f2, Hq, w2 = _ratio(spectra, x, "tau_m", "q", sl, nperseg, noverlap)
     if log.q_ref is None:
         # tau_m is its own instrument: H1 = S(tau, q) / S(tau, tau), no coherence on the input
-        f2, s_tq = signal.csd(log.tau_m[sl], log.q[sl], fs=fs, nperseg=nperseg,
-                              noverlap=noverlap)
-        _, s_tt = signal.welch(log.tau_m[sl], fs=fs, nperseg=nperseg, noverlap=noverlap)
+        f2 = spectra.frequencies(nperseg)
+        s_tq = spectra.csd("tau_m", "q", nperseg, noverlap, sl)
+        s_tt = spectra.welch("tau_m", nperseg, noverlap, sl)
         with np.errstate(divide="ignore", invalid="ignore"):
             Hq = s_tq / s_tt
     fit = inertia_ratio(f2, Hq, w2, *ab, top_hz, fs)
@@ -159,15 +162,17 @@ def link_mode(log: Log) -> tuple[float, float] | None:
     if log.q is None:
         return None
     fs = log.sample_rate_hz
-    x = log.q_ref if log.q_ref is not None else log.tau_m
-    f, H, w = _ratio(x, log.q_m, log.q, fs, _nperseg(len(log), fs))
+    x = "q_ref" if log.q_ref is not None else "tau_m"
+    f, H, w = _ratio(Spectra(log), x, "q_m", "q", slice(None), _nperseg(len(log), fs))
     return link_over_motor(f, H, w, 1.1 * excitation_top_hz(log))
 
 
-def excitation_top_hz(log: Log) -> float:
+def excitation_top_hz(log: Log, spectra: Spectra | None = None) -> float:
     """The top of the excited band [Hz]: the highest frequency under which 99 % of the power
     of the excitation's (q_ref's, else tau_m's) time derivative lies (the derivative weighs
-    the top, which the band of section 3.2 needs)."""
+    the top, which the band of section 3.2 needs). Computed once per `spectra`."""
+    if spectra is not None:
+        return spectra.memo("link_mode.excitation_top_hz", lambda: excitation_top_hz(log))
     x = log.q_ref if log.q_ref is not None else log.tau_m
     fs = log.sample_rate_hz
     f, p = signal.welch(np.diff(x) * fs, fs=fs, nperseg=_nperseg(len(x) - 1, fs))
@@ -175,7 +180,8 @@ def excitation_top_hz(log: Log) -> float:
     return float(f[np.searchsorted(c, 0.99 * c[-1])]) if c[-1] > 0 else math.nan
 
 
-def link_mode_first_mode(log: Log) -> tuple[float, float, str, str] | None:
+def link_mode_first_mode(log: Log, spectra: Spectra | None = None
+                         ) -> tuple[float, float, str, str] | None:
     """(f1, sigma, method, note) from q / q_m and the inertia fit (module docstring), or None
     when the log has no q, the link response shows no mode, or either half of the record
     (analysed with half-length segments) gives none or an f1 more than SPREAD_MAX apart.
@@ -186,13 +192,14 @@ def link_mode_first_mode(log: Log) -> tuple[float, float, str, str] | None:
     nperseg = _nperseg(n, fs)
     if nperseg < 64:
         return None
-    top = 1.1 * excitation_top_hz(log)
-    whole = _estimate(log, slice(None), nperseg, None, top)
+    spectra = spectra or Spectra(log)
+    top = 1.1 * excitation_top_hz(log, spectra)
+    whole = _estimate(log, slice(None), nperseg, None, top, spectra)
     if whole is None:
         return None
     fa, f1, ratio = whole
     half = n // 2
-    parts = [_estimate(log, sl, max(64, nperseg // 2), None, top)
+    parts = [_estimate(log, sl, max(64, nperseg // 2), None, top, spectra)
              for sl in (slice(0, half), slice(half, n))]
     if any(p is None for p in parts) or abs(parts[0][1] - parts[1][1]) > SPREAD_MAX * f1:
         return None     # a shape the record's halves do not both show is no estimate
