@@ -17,13 +17,18 @@ $(STAMP): $(BIN)/python pyproject.toml
 demo: $(STAMP)
 	$(BIN)/jointbench demo --out demo_out
 
-# The edit loop: tests/unit and tests/cli without the tests marked slow (about half a minute).
+# Test processes (pytest-xdist): one per core by default; `make test JOBS=0` runs in one process.
+# Each test file stays in one process (--dist loadfile), so its module fixtures run once.
+JOBS ?= auto
+XDIST = -n $(JOBS) --dist loadfile
+
+# The edit loop: tests/unit and tests/cli without the tests marked slow (under a minute).
 check: $(STAMP)
-	$(BIN)/python -m pytest -q tests/unit tests/cli -m 'not slow'
+	$(BIN)/python -m pytest -q $(XDIST) tests/unit tests/cli -m 'not slow'
 
 # Everything: unit, cli, sim and validation (what CI runs).
 test: $(STAMP)
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q $(XDIST)
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py

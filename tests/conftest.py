@@ -1,4 +1,7 @@
-"""Shared, session-scoped experiments: each virtual run is simulated once per test session.
+"""Shared, session-scoped experiments: each virtual run is simulated once per test process.
+`make test` and `make check` run one process per core (pytest-xdist, `--dist loadfile`): every
+test file stays in one process, so its module fixtures run once, and two files that ask
+bench_log or indep_log for the same run share it when they land in the same process.
 
 The folder a test lives in is its layer, and its marker (pyproject.toml declares them):
 
@@ -8,6 +11,8 @@ The folder a test lives in is its layer, and its marker (pyproject.toml declares
     tests/validation  validation   accuracy bars against the truth, the paper and EMPS
 
 `make check` runs unit and cli without the tests marked slow; `make test` runs everything.
+A test may not rely on another's side effects, on the working folder (monkeypatch.chdir into
+its tmp_path) or on files outside its tmp_path: the processes run side by side.
 """
 
 from __future__ import annotations

@@ -27,10 +27,12 @@ def _run(args, **kw) -> subprocess.CompletedProcess:
 
 @pytest.mark.slow
 def test_wheel_installs_and_runs(tmp_path):
-    # a copy of the sources: setuptools' build/ folder stays out of the checkout
+    # a copy of the sources: setuptools' build/ folder stays out of the checkout; the caches
+    # stay out of the copy (another test process may be writing into .hypothesis meanwhile)
     src = tmp_path / "src"
     shutil.copytree(ROOT, src, ignore=shutil.ignore_patterns(
-        ".git", ".venv", "build", "*.egg-info", ".pytest_cache", "__pycache__", "*_out"))
+        ".git", ".venv", "build", "*.egg-info", ".pytest_cache", ".hypothesis", "__pycache__",
+        "*_out"))
     wheels = tmp_path / "wheels"
     built = _run([sys.executable, "-m", "pip", "wheel", str(src), "--no-deps",
                   "-w", str(wheels), "-q"])

@@ -37,9 +37,9 @@ def z(value: float, truth: float, sigma: float) -> float:
 
 
 @pytest.fixture(scope="module")
-def seed5():
+def seed5(bench_log):
     """The prototype at seed 5 (60 s): least squares missed K and Jm by 3 sigma or more."""
-    log = run_experiment("prototype", seed=5).log
+    log = bench_log("prototype", seed=5)
     ident = identify(log, "joint-motor")
     return log, ident, debias(log, ident, replicas=8)
 
@@ -97,7 +97,9 @@ def test_debias_removes_the_least_squares_bias(seed5):
 
 
 def test_debias_is_deterministic_and_seeded():
-    log = run_experiment("prototype", seed=2, duration=10.0).log
+    # determinism and seeding, not the plant's fidelity: one physics step a sample (the
+    # replicas follow the log's substeps, a third of the default's cost)
+    log = run_experiment("prototype", seed=2, duration=10.0, substeps=1).log
     ident = identify(log, "joint-motor")
     a = debias(log, ident, replicas=3, seed=7)
     b = debias(log, ident, replicas=3, seed=7)
@@ -107,12 +109,12 @@ def test_debias_is_deterministic_and_seeded():
     assert len({replica_seed(0, i) for i in range(100)}) == 100
 
 
-def test_debias_motor_only():
+def test_debias_motor_only(bench_log):
     """The motor-only model through the replicas: on seed 5 the estimate (the link
     reconstructed from q_m: K -0.25, Jm +0.18, JL -0.24 %; eqs. 18-20 alone had about 1 %) has
     little bias left, and the correction keeps K, Jm, JL within 0.5 % (measured: within
     0.26 %) and moves them by less than 0.3 %."""
-    log = run_experiment("prototype", seed=5).log
+    log = bench_log("prototype", seed=5)
     ident = identify(log, "motor-only")
     d = debias(log, ident, replicas=4)
     truth = log.truth()
@@ -122,7 +124,8 @@ def test_debias_motor_only():
 
 
 def test_debias_errors():
-    log = run_experiment("prototype", seed=1, duration=10.0).log
+    # the refusals, not the plant's fidelity: one physics step a sample
+    log = run_experiment("prototype", seed=1, duration=10.0, substeps=1).log
     ident = identify(log, "joint-motor")
     with pytest.raises(ValueError, match="at least 2"):
         debias(log, ident, replicas=1)
@@ -146,8 +149,10 @@ def _model_axis(model, joint):
 
 
 def test_cli_identify_debias(tmp_path, capsys):
+    # the command's output and refusals, not the plant's fidelity: one physics step a sample
+    # (the replicas follow the log's substeps)
     path = tmp_path / "p.csv"
-    write_log(run_experiment("prototype", seed=4, duration=20.0).log, path)
+    write_log(run_experiment("prototype", seed=4, duration=20.0, substeps=1).log, path)
     assert main(["identify", str(path), "--debias", "3", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     d = out["debiased"]

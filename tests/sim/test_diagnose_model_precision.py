@@ -40,14 +40,14 @@ def test_needed_duration_is_the_inverse_square_law():
     assert describe({}) == "precision: every error known within 2 points (95 %)"
 
 
-def test_sigma_shrinks_as_one_over_sqrt_duration():
+def test_sigma_shrinks_as_one_over_sqrt_duration(bench_log):
     # the premise of needed_duration, on the identification itself: the same default chirp
     # experiment of the prototype, 30 s and 120 s (seed 1). The paper's (white) sigma of
     # every parameter shrinks by sqrt(4) = 2 (measured 1.87-2.12: the chirp is not exactly
     # the same experiment stretched; 15 %). The corrected sigma is itself estimated from the
     # residual's autocorrelation and follows less closely (1.37-3.26 here); FVm's, the
     # one the 60 s logs leave coarse, is held to 25 % (2.32 measured)
-    short = identify(run_experiment("prototype", duration=30.0, seed=1).log, "joint-motor")
+    short = identify(bench_log("prototype", duration=30.0, seed=1), "joint-motor")
     long = identify(run_experiment("prototype", duration=120.0, seed=1).log, "joint-motor")
     for n in ("K", "Jm", "FVm", "FSm", "JL", "FV", "FS", "MX", "MY"):
         ratio = short.physical_sigma[n] / long.physical_sigma[n]

@@ -9,7 +9,6 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from jointbench.bench.sim.experiment import run_experiment
 from jointbench.identification.filter_choice import choose_filter
 from jointbench.identification.first_mode import measure_first_mode
 from jointbench.identification.identify import identify
@@ -28,8 +27,8 @@ MOTOR_ONLY_Z_OVER: dict[str, str] = {}
 
 
 @pytest.fixture(scope="session")
-def arm_logs():
-    return {j: run_experiment("arm6", j, duration=60.0, seed=1).log for j in ARM}
+def arm_logs(bench_log):
+    return {j: bench_log("arm6", j, duration=60.0, seed=1) for j in ARM}
 
 
 def err(value: float, truth: float) -> float:

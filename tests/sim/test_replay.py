@@ -169,14 +169,14 @@ def test_replay_refuses_logs_it_cannot_replay(ideal_run):
         replay(model, axis, dataclasses.replace(log, meta=meta))
 
 
-def test_auto_on_logs_without_q():
+def test_auto_on_logs_without_q(bench_log):
     """The prototype's mode (3.7 Hz) lies in the paper's band: motor-only. arm6 axis1
     (14.7 Hz) did not identify a stiffness at the paper's settings (rigid); with the band
     designed from the mode measured on the motor response it is motor-only, K, Jm and JL
     within 3 % (issue 17's bound; -0.38, +0.33, -0.37 % seen), with eq. (29)'s rate warning."""
-    proto = dataclasses.replace(run_experiment("prototype", duration=30, seed=1).log, q=None)
+    proto = dataclasses.replace(bench_log("prototype", duration=30.0, seed=1), q=None)
     assert identify(proto).model == "motor-only"
-    arm = dataclasses.replace(run_experiment("arm6", "axis1", duration=30, seed=1).log, q=None)
+    arm = dataclasses.replace(bench_log("arm6", "axis1", duration=30.0, seed=1), q=None)
     result = identify(arm)
     truth = arm.truth()
     assert result.model == "motor-only" and result.first_mode.found

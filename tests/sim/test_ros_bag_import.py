@@ -278,12 +278,12 @@ GAP_S = 3.0
 
 
 @pytest.fixture(scope="module")
-def survey_bag(tmp_path_factory):
+def survey_bag(tmp_path_factory, bench_log):
     """arm6's axes 4-6, each moved in turn for 60 s (seed 1, as `survey --seed 1`) while the
     other two are held at their experiment's angle, 3 s of hold between the moves; the
     controller's references on /reference."""
     folder = tmp_path_factory.mktemp("survey")
-    logs = {j: run_experiment("arm6", j, duration=SURVEY_DURATION, seed=1).log for j in SURVEY}
+    logs = {j: bench_log("arm6", j, duration=SURVEY_DURATION, seed=1) for j in SURVEY}
     period = logs[SURVEY[0]].ts
     gap = int(GAP_S / period)
     held = {j: (logs[j].q[0], logs[j].q_m[0], logs[j].tau_m[0]) for j in SURVEY}

@@ -38,9 +38,9 @@ def _config(log) -> dict[str, float]:
 
 
 @pytest.fixture(scope="module")
-def prototype(tmp_path_factory):
+def prototype(tmp_path_factory, bench_log):
     folder = tmp_path_factory.mktemp("proto")
-    log = run_experiment("prototype", duration=DURATION, seed=1).log
+    log = bench_log("prototype", duration=DURATION, seed=1)
     write_log(log, folder / "log.csv")
     other = run_experiment("prototype", duration=DURATION, seed=2).log
     write_log(other, folder / "other.csv")
