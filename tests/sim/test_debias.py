@@ -97,9 +97,7 @@ def test_debias_removes_the_least_squares_bias(seed5):
 
 
 def test_debias_is_deterministic_and_seeded():
-    # determinism and seeding, not the plant's fidelity: one physics step a sample (the
-    # replicas follow the log's substeps, a third of the default's cost)
-    log = run_experiment("prototype", seed=2, duration=10.0, substeps=1).log
+    log = run_experiment("prototype", seed=2, duration=10.0).log
     ident = identify(log, "joint-motor")
     a = debias(log, ident, replicas=3, seed=7)
     b = debias(log, ident, replicas=3, seed=7)
@@ -124,8 +122,7 @@ def test_debias_motor_only(bench_log):
 
 
 def test_debias_errors():
-    # the refusals, not the plant's fidelity: one physics step a sample
-    log = run_experiment("prototype", seed=1, duration=10.0, substeps=1).log
+    log = run_experiment("prototype", seed=1, duration=10.0).log
     ident = identify(log, "joint-motor")
     with pytest.raises(ValueError, match="at least 2"):
         debias(log, ident, replicas=1)
@@ -149,10 +146,8 @@ def _model_axis(model, joint):
 
 
 def test_cli_identify_debias(tmp_path, capsys):
-    # the command's output and refusals, not the plant's fidelity: one physics step a sample
-    # (the replicas follow the log's substeps)
     path = tmp_path / "p.csv"
-    write_log(run_experiment("prototype", seed=4, duration=20.0, substeps=1).log, path)
+    write_log(run_experiment("prototype", seed=4, duration=20.0).log, path)
     assert main(["identify", str(path), "--debias", "3", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     d = out["debiased"]
