@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from jointbench.bench.campaign.battery import (BENCH_PLACES, BenchRunner, Spec,
+from jointbench.bench.campaign.battery import (BENCH_PLACES, BenchRunner, Spec, clean_key,
                                                draw_strength, plan, run_spec)
 from jointbench.bench.campaign.detection import (BINS, curve,
                                                  distinguishing_visibility, found_above, right,
@@ -69,7 +69,7 @@ def distinguishing(spec: Spec, outcome) -> list[float | None]:
     p = spec.place
     runner = _RUNNERS[p.source]
     tau_max, f1, K = runner.scales(p)
-    clean = _CACHE[(p, spec.feedforward)]   # run_spec's noise-free clean command
+    clean = _CACHE[clean_key(spec, runner)]   # run_spec's noise-free clean command
 
     def tau(effect: tuple) -> np.ndarray:
         return runner.log(p, (effect,), spec.seed, spec.feedforward, False).tau_m

@@ -63,6 +63,7 @@ class LabRigRunner:
     is the rig without its voltage noise."""
 
     rate_hz = LAB_RIG_RATE
+    seeded_excitation = True   # the multisine's phases are the seed's
 
     def __init__(self, duration: float = 40.0, rig: LabRig = LAB_RIG):
         self.duration, self.rig = duration, rig

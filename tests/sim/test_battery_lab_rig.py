@@ -84,3 +84,19 @@ def test_lab_rig_ripple_case_hits_its_target_and_is_named(runner):
     assert out.log.meta["truth_effect"] == "torque_ripple"
     inv = diagnose_inverse(out.log, diagnosis_settings(out.log)[0])
     assert [c.effect for c in inv.causes][:1] == ["torque_ripple"]
+
+
+def test_a_shared_cache_keeps_each_seeds_multisine():
+    """The battery shares one cache of clean commands across cases: the lab rig's reference
+    is the seed's multisine, so a case of another seed must not take an earlier seed's clean
+    command (its search would then see the other multisine as a visibility over 100 % at any
+    strength)."""
+    runner = LabRigRunner(duration=4.0)
+    place = LAB_PLACES[0]
+    cache: dict = {}
+    first = Spec(0, place, 11, False, False)
+    run_spec(first, runner, cache)
+    other = Spec(1, place, 12, False, False, ("torque_ripple",), (0.10,))
+    out = run_spec(other, runner, cache)
+    assert abs(out.visibilities[0] - 0.10) <= SEARCH_TOLERANCE * 0.10 + 0.01, out.visibilities
+    assert len(cache) == 2
