@@ -375,8 +375,10 @@ def position_quantum(x: np.ndarray) -> float | None:
     is a whole number of steps (the 99th percentile of the distance to the nearest multiple
     under 2 % of q), fitted by least squares over all differences; None when x is not
     quantised that way or moves less than 50 times."""
-    d = np.abs(np.diff(np.asarray(x, dtype=float)))
-    d = d[np.isfinite(d) & (d > 0)]
+    x = np.asarray(x, dtype=float)
+    d = np.abs(np.diff(x))
+    # differences under the text's precision (12 digits) are rounding, not a step
+    d = d[np.isfinite(d) & (d > 1e-9 * max(1.0, float(np.nanmax(np.abs(x)))))]
     if len(d) < 50:
         return None
     k = np.round(d / d.min())
