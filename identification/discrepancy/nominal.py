@@ -177,8 +177,10 @@ class Nominal:
         return float(np.sqrt(np.mean(residual[rows] ** 2))) if rows.any() else float("nan")
 
     def relative_error_pct(self, residual: np.ndarray, b: int) -> float:
-        """100 ||residual|| / ||reference|| on block b: the inverse view's error metric."""
-        return 100.0 * self.block_rms(residual, b) / self.reference_rms[b]
+        """100 ||residual|| / ||reference|| on block b: the inverse view's error metric (NaN
+        where the block predicts nothing: an axis whose spring the data cannot tell from rigid)."""
+        ref = self.reference_rms[b]
+        return 100.0 * self.block_rms(residual, b) / ref if ref > 0 else float("nan")
 
     def extend(self, *columns: Column) -> Design:
         """y, W and names with raw-rate (name, motor, link) columns added (an effect)."""
