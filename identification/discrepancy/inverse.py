@@ -349,13 +349,13 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
     ValueError when the log has q and the deflection q_m - q never changes (to the text's
     precision, 12 digits): the link then moves with the motor as one body, and nothing acting
     between them (eq. 5) is testable."""
+    nom = nominal(log, settings, link_friction)
     if log.q is not None and (np.ptp(log.q_m - log.q)
                               <= 1e-9 * max(1.0, float(np.max(np.abs(log.q_m))))):
         raise ValueError(f"{log.path or 'the log'}: the deflection q_m - q never changes: "
                          "the link moves with the motor as one rigid body, so nothing between "
                          "them (the spring of eq. 5) can be tested; diagnose the log without "
                          "its column q (a rigid axis)")
-    nom = nominal(log, settings, link_friction)
     first: list[Candidate] = []
     names: list[str] = []
     for name in effects or tuple(EFFECTS):
