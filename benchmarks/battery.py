@@ -6,9 +6,10 @@ visibility, not by the detector's thresholds.
         [--clean 24] [--pairs 28] [--seed 2026] [--duration 40] [--figure docs/figures/detection.png]
     .venv/bin/python benchmarks/battery.py --from battery_out/cases.json   # summary, figure again
 
-Every case runs at the paper's rate (350.87 Hz), cycling over the places (bench prototype,
-arm6 axis2 and axis4; independent families balanced, soft, wrist, pendulum) and over velocity
-feedforward on/off x torque noise on/off. Writes OUT/cases.json and OUT/cases.csv (model,
+Every case runs at the paper's rate (350.87 Hz), the lab rig at its own, cycling over the places (bench prototype,
+arm6 axis2 and axis4; independent families balanced, soft, wrist, pendulum; and the
+independent simulator's lab rig, a voltage drive under a P loop at its own 500 Hz) and over
+velocity feedforward on/off x torque noise on/off. Writes OUT/cases.json and OUT/cases.csv (model,
 joint, seed, effects, strengths, visibilities, named; the distinguishing visibility of every
 effect that reduces to another: bench.campaign.detection.distinguishing_visibility; the share
 of torque samples at the limit, identification.saturation.clipped_samples),
@@ -30,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from jointbench.bench.campaign.battery import (BENCH_PLACES, BenchRunner, Spec,
+from jointbench.bench.campaign.battery import (BENCH_PLACES, BenchRunner, Spec, clean_key,
                                                draw_strength, plan, run_spec)
 from jointbench.bench.campaign.detection import (BINS, curve,
                                                  distinguishing_visibility, found_above, right,
@@ -39,15 +40,16 @@ from jointbench.identification.effects import EFFECTS, NONE
 from jointbench.identification.log.write import atomic_write_text
 from jointbench.identification.output_values import finite_json
 from jointbench.identification.saturation import clipped_samples
-from jointbench.testing import INDEP_PLACES, IndepRunner
+from jointbench.testing import INDEP_PLACES, LAB_PLACES, IndepRunner, LabRigRunner
 
-PLACES = (*BENCH_PLACES, *INDEP_PLACES)
+PLACES = (*BENCH_PLACES, *INDEP_PLACES, *LAB_PLACES)
 _RUNNERS: dict = {}
 _CACHE: dict = {}
 
 
 def _init(duration: float) -> None:
-    _RUNNERS.update(bench=BenchRunner(duration), indep=IndepRunner(duration))
+    _RUNNERS.update(bench=BenchRunner(duration), indep=IndepRunner(duration),
+                    lab=LabRigRunner(duration))
 
 
 def named_causes(d) -> list[str]:
@@ -67,7 +69,7 @@ def distinguishing(spec: Spec, outcome) -> list[float | None]:
     p = spec.place
     runner = _RUNNERS[p.source]
     tau_max, f1, K = runner.scales(p)
-    clean = _CACHE[(p, spec.feedforward)]   # run_spec's noise-free clean command
+    clean = _CACHE[clean_key(spec, runner)]   # run_spec's noise-free clean command
 
     def tau(effect: tuple) -> np.ndarray:
         return runner.log(p, (effect,), spec.seed, spec.feedforward, False).tau_m
@@ -88,6 +90,7 @@ def distinguishing(spec: Spec, outcome) -> list[float | None]:
 def run_one(spec: Spec) -> dict:
     """One case: strengths by visibility, the log, its diagnosis; a JSON-ready record."""
     from jointbench.bench.analysis.diagnose import diagnose
+    from jointbench.bench.analysis.diagnose.claims import failing_claims
 
     p = spec.place
     rec = {"index": spec.index, "kind": spec.kind, "source": p.source, "model": p.model,
@@ -95,7 +98,7 @@ def run_one(spec: Spec) -> dict:
            "feedforward": spec.feedforward, "noise": spec.noise, "effects": list(spec.effects),
            "targets": list(spec.targets), "strengths": [], "options": [], "visibilities": [],
            "combined": 0.0, "clipped_pct": 0.0, "simulations": 0, "distinguishing": [],
-           "named": [], "ambiguity": [], "verdict": "", "error": ""}
+           "named": [], "ambiguity": [], "verdict": "", "failing_claims": [], "error": ""}
     t0 = time.perf_counter()
     try:
         out = run_spec(spec, _RUNNERS[p.source], _CACHE)
@@ -108,7 +111,8 @@ def run_one(spec: Spec) -> dict:
         t1 = time.perf_counter()
         d = diagnose(out.log)
         rec.update(named=named_causes(d), ambiguity=list(d.ambiguities), verdict=d.verdict,
-                   diagnose_s=time.perf_counter() - t1)
+                   diagnose_s=time.perf_counter() - t1,
+                   failing_claims=failing_claims(finite_json(d.to_json())))
     except Exception as err:  # a failed case is reported, never hidden
         rec["error"] = f"{type(err).__name__}: {err}"
     rec["seconds"] = time.perf_counter() - t0
@@ -172,7 +176,7 @@ def figure(records: list[dict], path: Path) -> None:
     ax.set_xlabel("in-band visibility of the hidden effect [%] (bin centres)")
     ax.set_ylabel("named right [%]")
     ax.set_ylim(-5, 105)
-    ax.set_title("diagnose: detection curve per effect (single-effect cases, 350.87 Hz)")
+    ax.set_title("diagnose: detection curve per effect (single-effect cases)")
     ax.legend(fontsize=7, ncol=2)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -286,6 +286,14 @@ class Outcome:
     log: Log = field(repr=False)
 
 
+def clean_key(spec: Spec, runner: Runner) -> tuple:
+    """The key of a case's clean noise-free command in run_spec's cache: its place and
+    feed-forward, and its seed where the runner's excitation depends on it (a random-phase
+    multisine: `seeded_excitation`); a chirp is the same for every seed."""
+    seeded = getattr(runner, "seeded_excitation", False)
+    return (spec.place, spec.feedforward, spec.seed if seeded else None)
+
+
 def run_spec(spec: Spec, runner: Runner, cache: dict | None = None) -> Outcome:
     """Search each effect's strength for its target visibility (noise off, same seed), then
     run the case's log with all of them (its own noise setting). `cache` keeps the clean
@@ -293,7 +301,7 @@ def run_spec(spec: Spec, runner: Runner, cache: dict | None = None) -> Outcome:
     place = spec.place
     tau_max, f1, K = runner.scales(place)
     cache = {} if cache is None else cache
-    key = (place, spec.feedforward)
+    key = clean_key(spec, runner)
     if key not in cache:
         cache[key] = runner.log(place, (), spec.seed, spec.feedforward, False).tau_m
     clean = cache[key]

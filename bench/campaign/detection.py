@@ -165,6 +165,16 @@ def summary_lines(records: list[dict]) -> list[str]:
             lines.append("  of these, logs with torque at its limit (clipped samples): "
                          + ", ".join(f"#{r['index']} {r['clipped_pct']:.2g} % "
                                      f"({'right' if right(r) else 'missed'})" for r in clipped))
+    extra = [len(set(r["named"]) - set(r["effects"])) for r in records if not r.get("error")]
+    if extra:
+        lines.append(f"logs naming a cause not hidden in them: {sum(k > 0 for k in extra)}/"
+                     f"{len(extra)} ({100 * sum(k > 0 for k in extra) / len(extra):.1f} %); "
+                     f"more than one such cause: {sum(k > 1 for k in extra)}")
+    failing = [r for r in records if r.get("failing_claims")]
+    lines.append(f"named causes without a passing test (claims.failing_claims over each "
+                 f"case's JSON): {sum(len(r['failing_claims']) for r in failing)} in "
+                 f"{len(failing)} logs")
+    lines.append(f"axis families: {len({r.get('family') for r in records})}")
     pairs = [r for r in records if r["kind"] == "pair"]
     if pairs:
         one = sum(bool(set(r["effects"]) & set(r["named"])) for r in pairs)

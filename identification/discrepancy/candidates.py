@@ -271,7 +271,9 @@ def _evaluate(nom: Nominal, ref: Reference, e: Effect, fixed: dict,
     res_before = y0 - W0 @ ref.scores.X
     rows = nom.block == block
     pred_change = (res_before - res_after)[rows]
-    size = 100 * float(np.sqrt(np.mean(pred_change ** 2))) / nom.reference_rms[block]
+    scale = nom.reference_rms[block]
+    size = (100 * float(np.sqrt(np.mean(pred_change ** 2))) / scale if scale > 0
+            else float("nan"))
     errors = held_out(records, ref.folds)
     acts = acts_in(nom, (y0, W0, names0), (y, W, names))
     ev = evidence(ref.scores.errors, errors, len(nom.sig.index), acts)

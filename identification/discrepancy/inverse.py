@@ -57,7 +57,7 @@ from jointbench.identification.discrepancy.candidates import (Candidate, HeldOut
 from jointbench.identification.discrepancy.heldout import (ALPHA, MATERIAL, segment_log_ratios,
                                                            segment_t, t_bar)
 from jointbench.identification.discrepancy.lag_band import LagBand, second_view
-from jointbench.identification.discrepancy.nominal import Nominal, nominal
+from jointbench.identification.discrepancy.nominal import Nominal, nominal, with_link_law
 from jointbench.identification.effects import EFFECTS, NONE
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.log import Log
@@ -188,6 +188,9 @@ def _round(nom: Nominal, names: list[str], causes: tuple[Candidate, ...],
     m = len(names)
     model = _model(causes)
     ref = reference(nom, model, m=m)
+    if model:   # the link friction's law with the causes in the model (nominal.with_link_law)
+        nom = with_link_law(nom, ref.base.design())
+        ref = reference(nom, model, m=m)
     cands = [replace(second_view(band, candidate(nom, name, ref), model), round=k)
              for name in names]
     return _simplest_first(_rank(cands), nom, m)
@@ -341,8 +344,18 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
     """Evaluate every effect of docs/effects.md against the nominal model of `log` (with the
     link Coulomb friction FS unless `link_friction` is False) and rank them; name the best
     significant one, then test the others on top of it, and so on (module docstring: the
-    stopping rule, the leave-one-out test of more than two causes, one of A or B)."""
+    stopping rule, the leave-one-out test of more than two causes, one of A or B).
+
+    ValueError when the log has q and the deflection q_m - q never changes (to the text's
+    precision, 12 digits): the link then moves with the motor as one body, and nothing acting
+    between them (eq. 5) is testable."""
     nom = nominal(log, settings, link_friction)
+    if log.q is not None and (np.ptp(log.q_m - log.q)
+                              <= 1e-9 * max(1.0, float(np.max(np.abs(log.q_m))))):
+        raise ValueError(f"{log.path or 'the log'}: the deflection q_m - q never changes: "
+                         "the link moves with the motor as one rigid body, so nothing between "
+                         "them (the spring of eq. 5) can be tested; diagnose the log without "
+                         "its column q (a rigid axis)")
     first: list[Candidate] = []
     names: list[str] = []
     for name in effects or tuple(EFFECTS):

@@ -370,11 +370,49 @@ def read_log(path: str | os.PathLike, max_bytes: int | None = None) -> Log:
     return read_lines(path, _parse_lines, max_bytes)
 
 
+def position_quantum(x: np.ndarray) -> float | None:
+    """The step of an encoder's position x: the q such that every nonzero sample difference
+    is a whole number of steps (the 99th percentile of the distance to the nearest multiple
+    under 2 % of q), fitted by least squares over all differences; None when x is not
+    quantised that way or moves less than 50 times."""
+    x = np.asarray(x, dtype=float)
+    d = np.abs(np.diff(x))
+    # differences under the text's precision (12 digits) are rounding, not a step
+    d = d[np.isfinite(d) & (d > 1e-9 * max(1.0, float(np.nanmax(np.abs(x)))))]
+    if len(d) < 50:
+        return None
+    k = np.round(d / d.min())
+    if np.quantile(np.abs(d / d.min() - k), 0.99) > 0.02:
+        return None
+    return float(np.sum(d * k) / np.sum(k * k))
+
+
+def _whole(c: float) -> bool:
+    # a whole number of steps a turn, to the text's precision (12 digits, docs/log-format.md)
+    return abs(c - round(c)) < 1e-3 + 1e-6 * c
+
+
+def steps_per_turn(x: np.ndarray) -> tuple[str, float] | None:
+    """("rad" or "deg", steps a turn) when the position's encoder step divides a turn in
+    exactly one of the two units (2 pi / q or 360 / q whole, not both), else None: what the
+    encoder says of the unit, whatever the position spans."""
+    q = position_quantum(x)
+    if q is None:
+        return None
+    rad, deg = _whole(2 * math.pi / q), _whole(360.0 / q)
+    if rad == deg:
+        return None
+    return ("rad", 2 * math.pi / q) if rad else ("deg", 360.0 / q)
+
+
 def unit_warnings(log: Log) -> list[str]:
     """Warnings (not errors) about units: a metadata rate that differs from the rate of `t`
-    (`rate_warnings`), revolute measured positions (q_m, q; not q_ref, which a low-gain
-    position loop makes large by design) that look like degrees, i.e. that span more than a
-    turn or lie more than two turns from zero (docs/log-format.md: radians)."""
+    (`rate_warnings`), and revolute measured positions (q_m, q; not q_ref, which a low-gain
+    position loop makes large by design) that look like degrees. The encoder decides first:
+    a step that divides a turn in radians (4096 counts: 2 pi / 4096) is radians however far
+    the axis turns, one that divides it in degrees only is degrees (`steps_per_turn`);
+    otherwise a position that spans more than a turn or lies more than two turns from zero
+    looks like degrees (docs/log-format.md: radians)."""
     if log.prismatic:
         return rate_warnings(log)
     odd = []
@@ -382,8 +420,14 @@ def unit_warnings(log: Log) -> list[str]:
         x = getattr(log, name)
         if x is None:
             continue
+        steps = steps_per_turn(x)
+        if steps is not None and steps[0] == "rad":
+            continue
         span, peak = float(np.ptp(x)), float(np.max(np.abs(x)))
-        if span > DEGREES_SPAN_RAD or peak > 2 * DEGREES_SPAN_RAD:
+        if steps is not None:
+            odd.append(f"'{name}' moves in steps of {360.0 / steps[1]:.6g}, 360 / "
+                       f"{steps[1]:.6g}: an encoder's counts in degrees")
+        elif span > DEGREES_SPAN_RAD or peak > 2 * DEGREES_SPAN_RAD:
             odd.append(f"'{name}' spans {span:.4g} ({span / (2 * math.pi):.3g} turns in rad) "
                        f"and reaches {peak:.4g}")
     if not odd:

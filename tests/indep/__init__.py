@@ -5,17 +5,20 @@ figure of MuJoCo alone.
 
     simulator        the axis families, the controller of docs/controller.md, `simulate`
     hidden_effects   the hidden effects' terms inside the RK4 stages (`Hidden`, `parse_hidden`)
-    battery_runner   `IndepRunner` and `INDEP_PLACES` for bench.campaign.battery
+    battery_runner   `IndepRunner`, `INDEP_PLACES`, `LabRigRunner` and `LAB_PLACES` for
+                     bench.campaign.battery
 """
 
-from jointbench.testing.battery_runner import BATTERY_FAMILIES, INDEP_PLACES, IndepRunner
+from jointbench.testing.battery_runner import (BATTERY_FAMILIES, INDEP_PLACES, LAB_PLACES,
+                                               IndepRunner, LabRigRunner)
 from jointbench.testing.hidden_effects import Hidden, parse_hidden
 from jointbench.testing.simulator import (FAMILIES, LAB_RIG, AxisFamily, LabRig, PositionLoop,
                                           Reference, default_reference, simulate_lab_rig,
                                           default_substeps, energy, frictionless, open_loop,
                                           simulate)
 
-__all__ = ["BATTERY_FAMILIES", "FAMILIES", "INDEP_PLACES", "AxisFamily", "Hidden", "IndepRunner",
+__all__ = ["BATTERY_FAMILIES", "FAMILIES", "INDEP_PLACES", "LAB_PLACES", "AxisFamily", "Hidden",
+           "IndepRunner", "LabRigRunner",
            "Reference", "default_reference", "default_substeps", "energy", "frictionless",
            "open_loop", "parse_hidden", "simulate", "LAB_RIG", "LabRig", "PositionLoop",
            "simulate_lab_rig"]

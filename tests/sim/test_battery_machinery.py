@@ -248,3 +248,21 @@ def test_two_hidden_effects_on_the_bench(tmp_path, capsys):
         parse_hidden("offset=1,offset=2")
     with pytest.raises(ValueError, match="lie in"):
         Hidden("asymmetric_friction", 1.0)
+
+
+def test_summary_counts_extra_causes_and_failing_claims():
+    """The must-show lines: a log naming a cause it does not hide is counted, one naming two
+    such causes is counted apart, and a case's failing claims are summed."""
+    from jointbench.bench.campaign.detection import summary_lines
+
+    base = {"kind": "clean", "effects": [], "visibilities": [], "family": "soft", "error": ""}
+    recs = [dict(base, named=[]), dict(base, named=["offset"]),
+            dict(base, named=["offset", "gravity"], failing_claims=["offset: p 0.2 >= alpha"]),
+            dict(base, kind="single", effects=["offset"], visibilities=[0.1],
+                 named=["offset"], family="wrist")]
+    text = "\n".join(summary_lines(recs))
+    assert "logs naming a cause not hidden in them: 2/4 (50.0 %); more than one such cause: 1" \
+        in text
+    assert "named causes without a passing test (claims.failing_claims over each case's " \
+        "JSON): 1 in 1 logs" in text
+    assert "axis families: 2" in text

@@ -48,7 +48,9 @@ def test_a_large_spring_damping_beside_a_backlash_is_named_with_it(damped_with_b
     assert (first.effect, second.effect) == ("spring_damping", "backlash")
     assert first.parameters["D"] == pytest.approx(D_TRUE, rel=0.15)
     assert second.parameters["backlash_rad"] == pytest.approx(WIDTH, rel=0.05)
-    # each improves the link equation, and the second starts where the first ends
+    # each improves the link equation, and the second starts where the first ends, or
+    # lower: its reference searches the link friction's law near zero speed again with the
+    # first cause in the model (nominal.with_link_law)
     assert first.after_pct < first.before_pct / 10
     assert second.after_pct < second.before_pct
-    assert second.before_pct == pytest.approx(first.after_pct, rel=1e-9)
+    assert second.before_pct <= first.after_pct * (1 + 1e-9)

@@ -63,8 +63,8 @@ def test_demo_discrepancy_rows_survive_machine_level_differences(backlash_log):
     refinement starts from. The flips are told apart at
     BRANCH (1 %): a quantised closed loop simulated on another CPU (another SIMD path in
     MuJoCo, another BLAS kernel) flips encoder counts as the flips below do, and those move
-    this fit by a few 1e-3 (measured 4e-3); the other branch is a factor of 2 away in the
-    ratio and of 5 in K, with the opposite sign."""
+    this fit by a few 1e-3 (measured 4e-3); the other branch is over a factor of 10 away
+    in the ratio and in K, with the opposite sign."""
     rows = _candidates(backlash_log)
     hardening = rows["hardening"]
     assert hardening["K"] < 0 and hardening["hardening_ratio"] < 0, hardening
@@ -77,6 +77,6 @@ def test_demo_discrepancy_rows_survive_machine_level_differences(backlash_log):
     flipped = _candidates(dataclasses.replace(backlash_log, q=q, q_m=qm))
     # Since issue 14's nominal (FS, the chain's column q(4)) the unphysical hardening fit sits
     # on a flatter branch: the flips move it by 4e-3 (measured), still far from another branch
-    # (the older one is a factor of 5 away in K).
+    # (the older one is over a factor of 10 away in K).
     for effect, rel in (("hardening", BRANCH), ("backlash", 1e-4)):
         assert flipped[effect] == pytest.approx(rows[effect], rel=rel), effect

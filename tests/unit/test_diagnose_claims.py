@@ -164,3 +164,19 @@ def test_more_than_two_causes_each_pass_against_all_the_others(monkeypatch, weak
     assert tuple(c.effect for c in out) == kept
     assert [d.effect for d in dropped] == [e for e in ("backlash",) if weak]
     assert all(d.kind == "left_out" and "all the others" in d.why for d in dropped)
+
+
+def test_a_deflection_that_never_changes_is_refused_with_the_reason():
+    """A link that moves with its motor as one body (q_m - q constant, e.g. a spring damped
+    stiff) leaves eq. (5)'s effects untestable: a clear ValueError, not a division by zero."""
+    import numpy as np
+
+    from jointbench.identification.discrepancy.inverse import diagnose_inverse
+    from jointbench.identification.filtering import FilterSettings
+    from jointbench.identification.log import Log
+
+    t = np.arange(4000) / 500.0
+    qm = np.sin(2 * np.pi * 0.5 * t)
+    log = Log(t=t, q_m=qm, q=qm - 0.01, tau_m=np.cos(2 * np.pi * 0.5 * t), path="rigid.csv")
+    with pytest.raises(ValueError, match="rigid.csv: the deflection q_m - q never changes"):
+        diagnose_inverse(log, FilterSettings(wn=100.0, m=4, Nd=10, ts=t[1]))

@@ -232,3 +232,27 @@ def test_atomic_write_interrupted_leaves_old_content_and_no_temporary(tmp_path, 
     with pytest.raises(KeyboardInterrupt):
         atomic_write_text(tmp_path / "fresh.csv", "new\n")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out.csv"]
+
+
+def test_the_encoder_step_decides_the_unit():
+    """A 4096-count encoder in radians (steps of 2 pi / 4096) is radians however many turns an
+    open-loop run drifts; the same counts in degrees (360 / 4096) warn even over a small
+    span; an unquantised position falls back to the span."""
+    from jointbench.identification.log.read import steps_per_turn
+
+    t = np.arange(4000) / 500.0
+    rng = np.random.default_rng(0)
+    turns = 1.5 * 2 * np.pi * t / t[-1] + 0.2 * np.sin(2 * np.pi * 3 * t)   # 1.5 turns
+    counts = np.round(turns / (2 * np.pi / 4096))
+    rad = counts * (2 * np.pi / 4096)
+    assert steps_per_turn(rad)[0] == "rad" and abs(steps_per_turn(rad)[1] - 4096) < 1e-3
+    drift = Log(t=t, q_m=rad, tau_m=t, q=rad - np.round(rng.normal(0, 3, len(t))) * 2 * np.pi
+                / 4096, path="open.csv")
+    assert unit_warnings(drift) == []
+    small = np.round(0.1 * np.sin(2 * np.pi * t) / (2 * np.pi / 4096))
+    deg = Log(t=t, q_m=small * 360 / 4096, tau_m=t, path="deg.csv")
+    assert steps_per_turn(deg.q_m)[0] == "deg"
+    (text,) = unit_warnings(deg)
+    assert "'q_m' moves in steps of 0.0878906, 360 / 4096" in text
+    smooth = Log(t=t, q_m=turns, tau_m=t, path="smooth.csv")   # no encoder step: the span
+    assert "'q_m' spans" in unit_warnings(smooth)[0]
