@@ -13,11 +13,11 @@ MAX_REDUCTIONS = 6         # automatic reductions at most
 # (docs/design-notes.md, "Simulator-free estimator"). The shipped models' Coulomb friction is
 # dead-beat at the physics step h (semi-implicit Euler, the constraint's time constant 2 h,
 # bench/sim/friction.py), an ideal Coulomb friction at the step whose stick and slip switch
-# to within a step; the held torque is placed on the step's leapfrog grid
-# (bench/sim/loop.py). What is left is first order in h: arm6 axis2 at 350.87 Hz, one
-# log: Jm -0.18 / -0.39 / -0.47 % at 8 / 29 / 116 steps a period (sigma 0.24 %). The physics step
-# is therefore at most PHYSICS_STEP, whatever the rate; DEFAULT_SUBSTEPS is the count at the
-# paper's rate.
+# to within a step; the held torque is placed on the step's leapfrog grid and each
+# slip-through's switch at the crossing (bench/sim/loop.py). What is left is first order in
+# h: arm6 axis2 at 350.87 Hz, one log, torque blended: Jm -0.18 / -0.39 / -0.47 % at
+# 8 / 29 / 116 steps a period (sigma 0.24 %). The physics step is therefore at most
+# PHYSICS_STEP, whatever the rate; DEFAULT_SUBSTEPS is the count at the paper's rate.
 PHYSICS_STEP = 1e-4        # the longest physics step [s] of a default run
 MIN_SUBSTEPS = 4           # at least this many steps a period at any rate
 

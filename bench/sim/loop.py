@@ -16,7 +16,10 @@ Per control tick k (period T, docs/controller.md):
      The first step of each tick therefore takes the mean of the held and the new torque
      (and link disturbance), the impulse of the zero-order hold over that half-open step;
      the others take the new one. An actuator with dynamics (a filter's state, continuous)
-     takes the new torque at once.
+     takes the new torque at once;
+  5. a tick in which the motor or the link velocity changes sign is stepped again one physics
+     step at a time, and the Coulomb friction of the step where the velocity slips through
+     zero is switched at the crossing (`CoulombSwitch`).
 The fault checks (`LoopChecks`) compare the state with limits each tick and stop the run
 through their handlers; the callers (`bench.sim.experiment`, `bench.sim.replay`) own the
 starting state, the limits and the messages.
@@ -97,6 +100,81 @@ class LoopChecks:
         """MuJoCo flagged a bad qpos, qvel or qacc during the steps before tick k."""
 
 
+SATURATED = 1e-6   # a friction force within this share of FS is saturated (a slip-through)
+
+
+class CoulombSwitch:
+    """The reversal of a dead-beat Coulomb friction placed at the velocity's crossing.
+
+    With semi-implicit Euler and the friction constraint's time constant at refsafe's floor
+    (2 h, impedance near 1, models/prototype_axis.xml) the constraint stops a velocity within
+    one physics step h when FS can: an ideal Coulomb friction at the step (stick included).
+    In a step where the drive carries the velocity v_n through zero, the constraint saturates
+    at the new direction's friction for the whole step, while the exact law keeps the old
+    direction's until the crossing t*: the friction switches t* early, about h / 2 at every
+    slip-through reversal, a bias of Jm and the frictions first order in h. The impulse the
+    step misses is P = -2 FS sign(v_n) t*, with t* = -v_n / a1 (at most h) and a1 the dof's
+    acceleration under the old direction's friction, a1 = (v_{n+1} - v_n) / h
+    - 2 FS sign(v_n) (M^-1)_dd; adding M^-1 e_d P to the velocities places the switch at the
+    crossing (the position then lags by a term of order P h, second order). A creep inside a
+    stick (the constraint's impedance leaves |v| near 1e-2 h |a|) may flip sign, and a step
+    that stops the velocity (the constraint's force under FS: a stick begins) is not a
+    slip-through; neither is corrected. Other integrators (RK4's stages blend the
+    constraint) and a friction slower than two steps (a ramp, not saturated through the
+    step) are left as MuJoCo steps them."""
+
+    def __init__(self, model: mujoco.MjModel, dofs: Sequence[int]):
+        h = model.opt.timestep
+        refsafe = not model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_REFSAFE
+        euler = model.opt.integrator == mujoco.mjtIntegrator.mjINT_EULER
+        self.dofs: tuple[int, ...] = tuple(
+            d for d in dict.fromkeys(dofs)
+            if euler and model.dof_frictionloss[d] > 0 and 0 < model.dof_solref[d][0]
+            and (max(model.dof_solref[d][0], 2 * h) if refsafe else model.dof_solref[d][0])
+            <= 2 * h * (1 + 1e-9))
+        self._spec = mujoco.mjtState.mjSTATE_INTEGRATION
+        self._state = np.empty(mujoco.mj_stateSize(model, self._spec))
+        self._unit = np.zeros((1, model.nv))
+        self._column = np.empty((1, model.nv))
+
+    def step(self, model: mujoco.MjModel, data: mujoco.MjData, substeps: int) -> None:
+        """`substeps` physics steps, a velocity's sign change among them stepped again one
+        step at a time with its switch placed (class docstring)."""
+        if not self.dofs:
+            mujoco.mj_step(model, data, substeps)
+            return
+        qvel = data.qvel
+        before = [qvel[d] for d in self.dofs]
+        mujoco.mj_getState(model, data, self._state, self._spec)
+        mujoco.mj_step(model, data, substeps)
+        if all(v * qvel[d] >= 0 for v, d in zip(before, self.dofs)):
+            return
+        mujoco.mj_setState(model, data, self._state, self._spec)
+        h = model.opt.timestep
+        for _ in range(substeps):
+            vn = [qvel[d] for d in self.dofs]
+            mujoco.mj_step(model, data)
+            for v, d in zip(vn, self.dofs):
+                if v * qvel[d] < 0:
+                    self._switch(model, data, d, v, h)
+
+    def _switch(self, model: mujoco.MjModel, data: mujoco.MjData, d: int, v: float,
+                h: float) -> None:
+        fs = float(model.dof_frictionloss[d])
+        s = 1.0 if v > 0 else -1.0
+        n = data.nefc
+        row = np.flatnonzero((data.efc_type[:n] == mujoco.mjtConstraint.mjCNSTR_FRICTION_DOF)
+                             & (data.efc_id[:n] == d))
+        if not len(row) or data.efc_force[row[0]] * s < fs * (1 - SATURATED):
+            return   # the constraint stopped the velocity (a stick): no slip-through
+        self._unit[0, d] = 1.0
+        mujoco.mj_solveM(model, data, self._column, self._unit)   # M(q_n)^-1 e_d
+        self._unit[0, d] = 0.0
+        a1 = (data.qvel[d] - v) / h - 2 * fs * s * self._column[0, d]
+        t_cross = min(h, -v / a1) if a1 * s < 0 else 0.0
+        data.qvel[:] += self._column[0] * (-2 * fs * s * t_cross)
+
+
 def first_warning(data: mujoco.MjData) -> tuple[str, int] | None:
     """The first MuJoCo warning raised on `data` as (name, count), None when there is none."""
     for w in range(len(data.warning)):
@@ -129,7 +207,7 @@ def run_loop(model: mujoco.MjModel, data: mujoco.MjData, axis: Axis,
     qpos, qvel, ctrl_arr, qfrc = data.qpos, data.qvel, data.ctrl, data.qfrc_applied
     im, il, dm, dl, act = (axis.motor_qpos, axis.link_qpos, axis.motor_dof, axis.link_dof,
                            axis.actuator)
-    step = mujoco.mj_step
+    step = CoulombSwitch(model, (axis.motor_dof, axis.link_dof)).step
     leapfrog = int(model.opt.integrator) != int(mujoco.mjtIntegrator.mjINT_RK4)
     # an actuator with dynamics (torque_lag's filter) applies its continuous state: no switch
     blend = leapfrog and int(model.actuator_dyntype[act]) == int(mujoco.mjtDyn.mjDYN_NONE)
@@ -173,7 +251,7 @@ def run_loop(model: mujoco.MjModel, data: mujoco.MjData, axis: Axis,
         if leapfrog:
             ctrl_arr[act] = 0.5 * (held + applied) if blend else applied
             qfrc[dl] = 0.5 * (held_link + link_force)
-            step(model, data)
+            step(model, data, 1)
             if substeps > 1:
                 ctrl_arr[act] = applied
                 qfrc[dl] = link_force

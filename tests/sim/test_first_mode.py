@@ -16,12 +16,14 @@ from jointbench.identification.log import Log
 from jointbench.identification.paper_tables import to_json
 
 ARM = tuple(f"axis{j}" for j in range(1, 7))
-# joint-motor K, Jm, JL at 350.87 Hz with defaults (seed 1, 60 s), over 0.5 %: measured
-# (axis2's Jm was +0.56 % before the Coulomb reversals were placed by the identified friction,
-# identify._place_reversals: now -0.01 %)
+# joint-motor K, Jm, JL at 350.87 Hz with defaults (seed 1, 60 s), over 0.5 %: none measured.
+# axis2's Jm is the closest, -0.39 % (sigma 0.24 %) at the default physics step; an ideal
+# Coulomb plant (the step -> 0) gives about -0.49 %, so this bar is about 2 sigma there
+# (docs/design-notes.md, "The held torque on the leapfrog grid")
 JOINT_MOTOR_OVER: dict[str, str] = {}
 # motor-only (the link reconstructed from q_m) beyond 3 corrected sigma, seed 1: none (the bench
-# steps its physics 4 times a sample, and the link is reconstructed as a continuous plant's)
+# steps its physics inside the sample interval, and the link is reconstructed as a continuous
+# plant's)
 MOTOR_ONLY_Z_OVER: dict[str, str] = {}
 
 
