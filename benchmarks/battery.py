@@ -52,6 +52,12 @@ def _init(duration: float) -> None:
                     lab=LabRigRunner(duration))
 
 
+# the part of each case's `diagnose --json` answer that its claims are checked on
+# (claims.failing_claims), kept in cases.json so the check can be redone on the record
+ANSWER_KEYS = ("named_cause", "named_causes", "verdict", "causes", "alternatives", "ambiguity",
+               "not_named", "stopped", "floor_pct")
+
+
 def named_causes(d) -> list[str]:
     """The causes a Diagnosis names, in order: its `causes` (Candidates, issue 15 item 2)
     when the detector names several, else its one `named_cause`."""
@@ -98,7 +104,8 @@ def run_one(spec: Spec) -> dict:
            "feedforward": spec.feedforward, "noise": spec.noise, "effects": list(spec.effects),
            "targets": list(spec.targets), "strengths": [], "options": [], "visibilities": [],
            "combined": 0.0, "clipped_pct": 0.0, "simulations": 0, "distinguishing": [],
-           "named": [], "ambiguity": [], "verdict": "", "failing_claims": [], "error": ""}
+           "named": [], "ambiguity": [], "verdict": "", "failing_claims": [], "answer": {},
+           "error": ""}
     t0 = time.perf_counter()
     try:
         out = run_spec(spec, _RUNNERS[p.source], _CACHE)
@@ -110,9 +117,10 @@ def run_one(spec: Spec) -> dict:
         rec["clipped_pct"] = 100 * clipped_samples(out.log).share
         t1 = time.perf_counter()
         d = diagnose(out.log)
+        doc = finite_json(d.to_json())
         rec.update(named=named_causes(d), ambiguity=list(d.ambiguities), verdict=d.verdict,
-                   diagnose_s=time.perf_counter() - t1,
-                   failing_claims=failing_claims(finite_json(d.to_json())))
+                   diagnose_s=time.perf_counter() - t1, failing_claims=failing_claims(doc),
+                   answer={k: doc[k] for k in ANSWER_KEYS if k in doc})
     except Exception as err:  # a failed case is reported, never hidden
         rec["error"] = f"{type(err).__name__}: {err}"
     rec["seconds"] = time.perf_counter() - t0
