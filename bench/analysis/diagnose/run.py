@@ -17,6 +17,7 @@ import math
 from pathlib import Path
 from typing import Callable
 
+from jointbench.bench.analysis.diagnose.clipped import clipped_inverse
 from jointbench.bench.analysis.diagnose.forward import add_forward_view
 from jointbench.bench.analysis.diagnose.report import write
 from jointbench.bench.analysis.diagnose.types import Diagnosis, ForwardView
@@ -30,7 +31,7 @@ from jointbench.identification.discrepancy.inverse import NotNamed
 from jointbench.identification.effects import EFFECTS
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.log import Log, unit_warnings
-from jointbench.identification.saturation import clipping_warnings
+from jointbench.identification.saturation import clipped_samples, clipping_warnings
 
 
 def diagnosis_settings(log: Log) -> tuple[FilterSettings, str]:
@@ -84,11 +85,16 @@ def diagnose(log: Log, out_dir: Path | None = None, forward: bool = True,
     say = progress or (lambda msg: None)
     settings, how = diagnosis_settings(log)
     say(f"nominal model and {len(EFFECTS)} effects, inverse view ({how})")
-    inv = diagnose_inverse(log, settings)
+    inv, clipped = clipped_inverse(log, settings, diagnose_inverse(log, settings))
     nom_p = nominal_parameters(inv.nominal)
+    clip_note = clipping_warnings(log, refuse=False)
+    if clipped is not None and clipped.named_by:
+        clip_note = [clipped_samples(log).message(log.path) + ": the answer rests on every "
+                     "row, the torque at tau_max taken as the one applied (the controller's "
+                     "own clip)"]
     d = Diagnosis(log=log, settings=settings, settings_note=how, inverse=inv,
                   nominal_parameters=nom_p, extended_parameters={},
-                  warnings=tuple(unit_warnings(log) + clipping_warnings(log)))
+                  warnings=tuple(unit_warnings(log) + clip_note), clipped=clipped)
     judged = _judged(d, forward, say)
     left_out: list[str] = []
     # Several causes whose extended model the forward view rejects: the later ones are left

@@ -26,20 +26,22 @@ answer is then "inconclusive", with the reason.
 - **"None" from a small part of the experiment.** Rows within reach of a clipped torque sample
   are left out (identification.saturation). When no effect passes and the rows left are under
   half of the experiment's, "none" would speak for the whole experiment from the minority of
-  it (a torque lag that drives the loop into its limit leaves 60 of a 40 s log's 820 rows):
-  the answer is "inconclusive", with the share.
+  it (a torque lag that drives the loop into its limit leaves a few percent of the rows):
+  the inverse view is run again on every row when the clip is the controller's own
+  (bench.analysis.diagnose.clipped), and when that names nothing either the answer is
+  "inconclusive", with the share of clipped samples and each candidate's held-out share in
+  each view.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from jointbench.bench.analysis.diagnose.clipped import USABLE_MIN, undecided
 from jointbench.bench.analysis.diagnose.forward import forward_scope
 from jointbench.bench.analysis.diagnose.types import Diagnosis
 from jointbench.identification.discrepancy.heldout import ALPHA, segment_sums, segment_t
 from jointbench.identification.checks.plausibility import mislabel_reason
-
-USABLE_MIN = 0.5   # "none" needs at least half of the experiment's rows (a majority of it)
 
 
 def _unphysical(p: dict[str, float]) -> str:
@@ -127,9 +129,11 @@ def forward_worse(tau: np.ndarray, nominal: np.ndarray, extended: np.ndarray,
 def clipped_reason(d: Diagnosis) -> str:
     """Why "none" cannot be said of this log ("" when it can, or when a cause is named): the
     rows left after the clipped torque's are under USABLE_MIN of the experiment's."""
-    keep = d.inverse.nominal.sig.keep
-    if d.inverse.causes or keep is None or not len(keep) or keep.mean() >= USABLE_MIN:
+    if not undecided(d.inverse):
         return ""
-    return (f"only {int(keep.sum())} of {len(keep)} regression rows "
-            f"({100 * keep.mean():.3g} %) are out of reach of the clipped torque samples: no "
-            f"effect passes on them, which does not say that the experiment has none")
+    keep = d.inverse.nominal.sig.keep
+    why = (f"only {int(keep.sum())} of {len(keep)} regression rows "
+           f"({100 * keep.mean():.3g} %) are out of reach of the clipped torque samples: no "
+           f"effect passes on them, which does not say that the experiment has none")
+    views = getattr(d, "clipped", None)
+    return why if views is None else f"{why}; {views.text()}"
