@@ -277,6 +277,20 @@ def before_limit(log: Log, replays: list[np.ndarray]) -> np.ndarray | None:
     return np.arange(SEGMENTS) < int(np.argmax(hit))
 
 
+def limit_mismatch(log: Log, replayed: np.ndarray) -> float:
+    """How differently a replay reaches the controller's limit than the log [% of the
+    samples]: the sum over the SEGMENTS segments of |replayed - logged count of samples at
+    tau_max|, over the log's length (nan without tau_max). A limit cycle's clips fall at its
+    own phase, so they are counted per segment, not matched sample by sample."""
+    tau_max = _tau_max(log)
+    if tau_max is None:
+        return math.nan
+    bar = tau_max * (1 - CLIP_RELATIVE)
+    logged = segment_sums((np.abs(np.asarray(log.tau_m, float)) >= bar).astype(float))
+    replay_at = segment_sums((np.abs(np.asarray(replayed, float)) >= bar).astype(float))
+    return 100.0 * float(np.abs(replay_at - logged).sum()) / len(log.tau_m)
+
+
 def forward_scope(d: Diagnosis) -> ForwardScope:
     """The segments where the forward view can judge the named causes: those before the loop
     first reaches its torque limit (before_limit), and, when a cause is periodic in the motor

@@ -21,8 +21,9 @@ from jointbench.bench.analysis.diagnose.clipped import clipped_inverse
 from jointbench.bench.analysis.diagnose.forward import add_forward_view
 from jointbench.bench.analysis.diagnose.report import write
 from jointbench.bench.analysis.diagnose.types import Diagnosis, ForwardView
-from jointbench.bench.analysis.diagnose.verdict import (clipped_reason, gain_reason,
-                                                        nominal_reason)
+from jointbench.bench.analysis.diagnose.verdict import (clipped_reason, every_row_reason,
+                                                        gain_reason, nominal_reason,
+                                                        with_clipping)
 from jointbench.identification.filter_choice import choose_filter
 from jointbench.identification.discrepancy import (NUMERICS, Candidate, InverseDiagnosis, Nominal,
                                                    diagnose_inverse)
@@ -104,7 +105,7 @@ def diagnose(log: Log, out_dir: Path | None = None, forward: bool = True,
         left_out.append(f"{judged.inverse.causes[-1].effect} left out: {judged.overruled}")
         judged = _judged(replace(d, inverse=_without_last(judged.inverse, judged.overruled)),
                          forward, say, judged.forward_nominal)
-    d = judged
+    d = replace(judged, overruled=with_clipping(judged))
     if left_out and not d.overruled:
         d = replace(d, forward_note="; ".join(n for n in (d.forward_note, *left_out) if n))
     if out_dir is not None:
@@ -125,7 +126,7 @@ def _judged(d: Diagnosis, forward: bool, say: Callable[[str], None],
     if forward:
         d = add_forward_view(d, say, nominal_view)
     if not d.overruled:
-        d = replace(d, overruled=gain_reason(d) or clipped_reason(d))
+        d = replace(d, overruled=gain_reason(d) or every_row_reason(d) or clipped_reason(d))
     if d.overruled:   # nothing named: no extended model
         d = replace(d, extended_parameters={})
     return d
