@@ -22,15 +22,14 @@ def _log(tau, tau_max=10.0):
 
 def test_before_limit_stops_at_the_first_segment_at_the_limit():
     tau = np.ones(N)
-    assert before_limit(_log(tau), [tau]) is None
+    assert before_limit(_log(tau)) is None
     hit = tau.copy()
     hit[12 * 50 + 7] = -10.0          # segment 12 of the log
-    keep = before_limit(_log(hit), [tau])
+    hit[30 * 50] = 10.0
+    keep = before_limit(_log(hit))
     assert keep.tolist() == [k < 12 for k in range(SEGMENTS)]
-    replayed = tau.copy()
-    replayed[5 * 50] = 10.0           # a replay reaches it first, in segment 5
-    assert before_limit(_log(hit), [tau, replayed]).sum() == 5
-    assert before_limit(SimpleNamespace(tau_m=hit, meta={}), [tau]) is None   # no tau_max
+    assert before_limit(_log(hit, tau_max=10.5)) is None
+    assert before_limit(SimpleNamespace(tau_m=hit, meta={})) is None   # no tau_max
 
 
 def test_limit_mismatch_counts_per_segment_not_per_sample():

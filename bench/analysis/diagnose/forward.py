@@ -257,20 +257,19 @@ def _tau_max(log: Log) -> float | None:
     return value if value > 0 else None
 
 
-def before_limit(log: Log, replays: list[np.ndarray]) -> np.ndarray | None:
-    """The segments before the first one where the logged torque or a replayed one reaches
-    the controller's limit tau_max (None when none does). Once the loop is clipped it is no
-    longer linear: the integrator winds up at the limit, and a replay that reaches it a
-    sample earlier or later than the log leaves it in another state; near the loop's
-    stability limit (a torque lag) that difference grows instead of decaying. Past that
-    point the replays follow the clip's history, not the model's, and their torque error
-    judges neither model."""
+def before_limit(log: Log) -> np.ndarray | None:
+    """The segments before the first one where the logged torque reaches the controller's
+    limit tau_max (None when it never does). Once the loop is clipped it is no longer
+    linear: the integrator winds up at the limit, and a replay that reaches it a sample
+    earlier or later than the log is left in another state; near the loop's stability limit
+    (a torque lag) that difference grows instead of decaying. Past that point the replays
+    follow the clip's history, not the model's, and their torque error judges neither model.
+    A replay that reaches the limit where the log does not is the model's own doing and
+    stays judged."""
     tau_max = _tau_max(log)
     if tau_max is None:
         return None
     at = np.abs(np.asarray(log.tau_m, float)) >= tau_max * (1 - CLIP_RELATIVE)
-    for r in replays:
-        at |= np.abs(np.asarray(r, float)) >= tau_max * (1 - CLIP_RELATIVE)
     hit = segment_sums(at.astype(float)) > 0
     if not hit.any():
         return None
@@ -300,13 +299,13 @@ def forward_scope(d: Diagnosis) -> ForwardScope:
     a, b = d.forward_nominal, d.forward_extended
     if not scope.judged or a is None or b is None:
         return scope
-    before = before_limit(d.log, [a.tau_m, b.tau_m])
+    before = before_limit(d.log)
     if before is None:
         return scope
     keep = before if scope.keep is None else before & scope.keep
     how = (f"the loop reaches its torque limit tau_max = {_tau_max(d.log):g} in segment "
-           f"{int(np.argmin(before)) + 1} of {SEGMENTS} (the log or a replay): the replays are "
-           f"judged before it, in {int(keep.sum())} segments")
+           f"{int(np.argmin(before)) + 1} of {SEGMENTS}: the replays are judged before it, "
+           f"in {int(keep.sum())} segments")
     how = f"{how}; {scope.note}" if scope.note else how
     if keep.sum() < MIN_JUDGED:
         return ForwardScope(None, False, f"the forward view cannot judge the named causes on "
