@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from jointbench.bench.analysis.diagnose.clipped import USABLE_MIN, undecided
+from jointbench.bench.analysis.diagnose.clipped import USABLE_MIN, undecided  # noqa: F401
 from jointbench.bench.analysis.diagnose.forward import forward_scope, limit_mismatch
 from jointbench.bench.analysis.diagnose.types import Diagnosis
 from jointbench.identification.discrepancy.heldout import ALPHA, segment_sums, segment_t
