@@ -340,7 +340,7 @@ def _apart(simpler: Candidate, richer: Candidate, t: float, alpha: float,
 
 
 def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...] | None = None,
-                     link_friction: bool = True) -> InverseDiagnosis:
+                     link_friction: bool = True, limit_applied: bool = False) -> InverseDiagnosis:
     """Evaluate every effect of docs/effects.md against the nominal model of `log` (with the
     link Coulomb friction FS unless `link_friction` is False) and rank them; name the best
     significant one, then test the others on top of it, and so on (module docstring: the
@@ -349,7 +349,7 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
     ValueError when the log has q and the deflection q_m - q never changes (to the text's
     precision, 12 digits): the link then moves with the motor as one body, and nothing acting
     between them (eq. 5) is testable."""
-    nom = nominal(log, settings, link_friction)
+    nom = nominal(log, settings, link_friction, limit_applied)
     if log.q is not None and (np.ptp(log.q_m - log.q)
                               <= 1e-9 * max(1.0, float(np.max(np.abs(log.q_m))))):
         raise ValueError(f"{log.path or 'the log'}: the deflection q_m - q never changes: "
@@ -365,7 +365,7 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
             first.append(Candidate(effect=name, testable=False, reason=WHY_IN_NOMINAL))
         else:
             names.append(name)
-    band = LagBand(log, settings, link_friction)
+    band = LagBand(log, settings, link_friction, limit_applied)
     ranked, note = _round(nom, names, (), band, 1)
     causes: tuple[Candidate, ...] = ()
     notes: tuple[tuple[str, str], ...] = ()   # (the cause it is about, the note)

@@ -71,18 +71,20 @@ class LagBand:
     """The wide band of one log (None when the chooser's band already reaches the
     excitation's top, or no top is found) and its nominal, identified on first use."""
 
-    def __init__(self, log: Log, settings: FilterSettings, link_friction: bool = True):
+    def __init__(self, log: Log, settings: FilterSettings, link_friction: bool = True,
+                 limit_applied: bool = False):
         wide, _, why = wide_settings(log, settings)
         self.settings = None if wide is None else replace(wide, stencil=settings.stencil)
         self.label = "" if wide is None else (
             f"wide band (Nd {wide.Nd}, decimated cutoff {wide.decimated_cutoff_hz:.3g} Hz: "
             f"{why})")
-        self._log, self._link_friction = log, link_friction
+        self._log, self._link_friction, self._limit = log, link_friction, limit_applied
         self._nominal: Nominal | None = None
 
     def nominal(self) -> Nominal:
         if self._nominal is None:
-            self._nominal = nominal(self._log, self.settings, self._link_friction)
+            self._nominal = nominal(self._log, self.settings, self._link_friction,
+                                    self._limit)
         return self._nominal
 
 

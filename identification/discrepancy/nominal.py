@@ -223,12 +223,14 @@ class Nominal:
 COLLAPSED = 1e-3
 
 
-def nominal(log: Log, settings: FilterSettings, link_friction: bool = True) -> Nominal:
+def nominal(log: Log, settings: FilterSettings, link_friction: bool = True,
+            limit_applied: bool = False) -> Nominal:
     """Identify the nominal model (block-weighted least squares, as for eq. 13);
     `link_friction` False leaves the link Coulomb friction FS out (then a candidate). Its
     parameters and block weights are estimated with a constant in the motor equation beside
-    them (_with_bias), which the model itself leaves out."""
-    sig = signals(log, settings)
+    them (_with_bias), which the model itself leaves out. `limit_applied`: the rows at the
+    metadata's tau_max are kept (signals)."""
+    sig = signals(log, settings, limit_applied)
     link_friction = link_friction and sig.has_link
     y, W, names = nominal_columns(sig, link_friction=link_friction)
     n = len(sig.index)

@@ -77,6 +77,8 @@ def report_markdown(d: Diagnosis, figures: dict[str, str],
         L += [f"The rounds stopped at {d.inverse.stopped}.", ""]
     if d.reason:
         L += [f"Why: {d.reason}.", ""]
+    if d.clipped is not None and d.clipped.text() not in d.reason:
+        L += [f"Clipped torque: {d.clipped.text()}.", ""]
     L += [f"Warning: {w}" for w in d.warnings] + ([""] if d.warnings else [])
     c = d.named
     if c is not None:
@@ -249,6 +251,8 @@ def summary_text(d: Diagnosis) -> str:
         L.append(f"rounds stopped: {d.inverse.stopped}")
     if d.reason:
         L.append(f"why: {d.reason}")
+    if d.clipped is not None and d.clipped.text() not in d.reason:
+        L.append(f"clipped torque: {d.clipped.text()}")
     if d.named is not None:
         info = EFFECTS[d.named_cause]
         before, after = d.inverse_before_after

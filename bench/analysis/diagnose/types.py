@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from jointbench.bench.analysis.diagnose.clipped import ClippedViews
 from jointbench.bench.effects import axis_keys
 from jointbench.identification.discrepancy import Candidate, InverseDiagnosis
 from jointbench.identification.discrepancy.inverse import FLOOR, NotNamed
@@ -52,6 +53,8 @@ class Diagnosis:
     # an unphysical nominal, or an extended model that is worse; "" when nothing overrules
     overruled: str = ""
     warnings: tuple[str, ...] = ()   # units, clipped torque (stderr and JSON "warnings")
+    # a clipped log's inverse views (bench.analysis.diagnose.clipped; None when none clipped)
+    clipped: ClippedViews | None = None
 
     @property
     def named(self) -> Candidate | None:
@@ -144,6 +147,8 @@ class Diagnosis:
         if self.overruled and self.inverse.named is not None:
             out["rejected_cause"] = self.inverse.named.effect
         out["warnings"] = list(self.warnings)
+        if self.clipped is not None:
+            out["clipped"] = self.clipped.to_json()
         untested = {c.effect: c.reason for c in self.inverse.candidates if not c.testable}
         if untested:
             out["untested"] = untested
