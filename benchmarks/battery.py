@@ -98,7 +98,7 @@ def run_one(spec: Spec) -> dict:
            "feedforward": spec.feedforward, "noise": spec.noise, "effects": list(spec.effects),
            "targets": list(spec.targets), "strengths": [], "options": [], "visibilities": [],
            "combined": 0.0, "clipped_pct": 0.0, "simulations": 0, "distinguishing": [],
-           "named": [], "ambiguity": [], "verdict": "", "failing_claims": [], "error": ""}
+           "named": [], "ambiguity": [], "alternatives": [], "verdict": "", "failing_claims": [], "error": ""}
     t0 = time.perf_counter()
     try:
         out = run_spec(spec, _RUNNERS[p.source], _CACHE)
@@ -111,6 +111,8 @@ def run_one(spec: Spec) -> dict:
         t1 = time.perf_counter()
         d = diagnose(out.log)
         rec.update(named=named_causes(d), ambiguity=list(d.ambiguities), verdict=d.verdict,
+                   alternatives=[[a.named, a.other] for c in d.causes
+                                 for a in d.alternatives_of(c.effect)],
                    diagnose_s=time.perf_counter() - t1,
                    failing_claims=failing_claims(finite_json(d.to_json())))
     except Exception as err:  # a failed case is reported, never hidden
