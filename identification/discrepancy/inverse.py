@@ -36,8 +36,10 @@ the encoder's resolution, a simulator's small damping, the first cause's residua
 
 **More than two causes** (_leave_one_out): each must pass on its own, against the model
 holding all the others (their values from the joint fit), at the level of the round it
-entered; the weakest that fails is dropped, the others fitted again in order (_chain), and
-again until all pass. The dropped are listed with their test.
+entered; the weakest that fails is dropped, the others fitted again in order (_chain: one
+that fails against the ones before it is tried again on top of the ones kept after it; a
+later cause that reduces to the dropped one takes its place, _in_place), and again until
+all pass. The dropped are listed with their test.
 
 **One of A or B** (_alternatives): a significant candidate of a round that is not named,
 whose held-out errors the segment test without margin cannot separate from the named
@@ -493,17 +495,29 @@ def _why_fails(c: Candidate) -> str:
 def _chain(nom: Nominal, causes: tuple[Candidate, ...],
            band: LagBand) -> tuple[tuple[Candidate, ...], list[NotNamed]]:
     """`causes` fitted again in order, each against the ones kept before it at its own
-    level; one whose test no longer passes is not named (with why)."""
+    level; one whose test does not pass there is tried again once the others are kept, on
+    top of them, until no more pass; one that never passes is not named (with why). A cause
+    named on top of the one left out (a spring damping named on top of an offset that was
+    an asymmetric friction's Coulomb part) is then tested against the causes that hold what
+    that one held, not against a model that misses it."""
     chain: tuple[Candidate, ...] = ()
-    out: list[NotNamed] = []
-    for o in causes:
-        again = _against(nom, o, _model(chain), band)
-        if _passes(again):
-            chain += (again,)
-        else:
-            out.append(NotNamed(o.effect, "left_out",
-                                "fitted again once a cause before it was left out, it no "
-                                f"longer passes: {_why_fails(again)}", again.test, o.round))
+    pending = list(causes)
+    failed: dict[str, Candidate] = {}
+    while pending:
+        kept = []
+        for o in pending:
+            again = _against(nom, o, _model(chain), band)
+            if _passes(again):
+                chain += (again,)
+                kept.append(o)
+            else:
+                failed[o.effect] = again
+        if not kept:
+            break
+        pending = [o for o in pending if all(o is not k for k in kept)]
+    out = [NotNamed(o.effect, "left_out", "fitted again once a cause before it was left out, "
+                    f"it no longer passes: {_why_fails(failed[o.effect])}",
+                    failed[o.effect].test, o.round) for o in pending]
     return chain, out
 
 
@@ -529,9 +543,21 @@ def _leave_one_out(nom: Nominal, causes: tuple[Candidate, ...],
         out.append(NotNamed(causes[i].effect, "left_out",
                             f"against the model holding all the others ({others}) it does "
                             f"not pass: {_why_fails(again)}", again.test, causes[i].round))
-        causes, lost = _chain(nom, causes[:i] + causes[i + 1:], band)
+        causes, lost = _chain(nom, _in_place(causes, i), band)
         out += lost
     return causes, out
+
+
+def _in_place(causes: tuple[Candidate, ...], i: int) -> tuple[Candidate, ...]:
+    """`causes` without causes[i], a later cause that reduces to it (registry `reduces_to`:
+    an asymmetric friction beside an offset) moved to its place in the order: the one left
+    out was a part of it (the asymmetry's Coulomb part), and the causes named on top of that
+    part are fitted again on top of it (_chain)."""
+    rest = causes[:i] + causes[i + 1:]
+    j = next((k for k in range(i, len(rest))
+              if EFFECTS[rest[k].effect].reduces_to == causes[i].effect), None)
+    return rest if j is None else rest[:i] + (rest[j],) + rest[i:j] + rest[j + 1:]
+
 
 
 def _alternatives(rounds: list[list[Candidate]], causes: tuple[Candidate, ...],
@@ -648,7 +674,7 @@ def _pruned(nom: Nominal, causes: tuple[Candidate, ...],
                             HeldOutTest("on top of all the others, no margin",
                                         again.heldout_pct, t, p, c.alpha,
                                         acts_pct=again.acts_pct), c.round))
-        causes, lost = _chain(nom, others, band)
+        causes, lost = _chain(nom, _in_place(causes, i), band)
         out += lost
         kept = {o.effect for o in causes}
         notes, i = tuple(x for x in notes if x[0] in kept), 0
