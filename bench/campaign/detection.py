@@ -192,6 +192,8 @@ def summary_lines(records: list[dict]) -> list[str]:
     """The battery's findings as text lines: counts, confusion table, detection curve and
     95 % visibility per effect, clean and two-effect results."""
     lines = []
+    # the counts of what the data proves need the distinguishing visibilities recorded
+    proves = any("distinguishing" in r for r in records)
     labels, M = confusion(records)
     lines.append("confusion (rows: hidden, columns: first named; clean and single-effect cases)")
     short = [lab[:8] for lab in labels]
@@ -233,10 +235,12 @@ def summary_lines(records: list[dict]) -> list[str]:
                          f"stated ambiguity between two effects the log cannot separate "
                          f"(distinguishing visibility < {100 * SEPARABLE:g} %), of {len(at5)} "
                          f"({100 * (k + apart) / len(at5):.0f} % together)")
-        k2 = sum(found_or_inseparable(r) for r in at5)
-        lines.append(f"  counting what the data proves (named, or stated as the alternative "
-                     f"of the named cause where the distinguishing visibility is < "
-                     f"{100 * SEPARABLE:g} %): {k2}/{len(at5)} ({100 * k2 / len(at5):.0f} %)")
+        if proves:
+            k2 = sum(found_or_inseparable(r) for r in at5)
+            lines.append(f"  counting what the data proves (named, or stated as the "
+                         f"alternative of the named cause where the distinguishing visibility "
+                         f"is < {100 * SEPARABLE:g} %): {k2}/{len(at5)} "
+                         f"({100 * k2 / len(at5):.0f} %)")
         clipped = [r for r in at5 if r.get("clipped_pct", 0.0) > 0]
         if clipped:
             lines.append("  of these, logs with torque at its limit (clipped samples): "
@@ -248,12 +252,13 @@ def summary_lines(records: list[dict]) -> list[str]:
         lines.append(f"logs naming a cause not hidden in them: {sum(k > 0 for k in extra)}/"
                      f"{len(extra)} ({100 * sum(k > 0 for k in extra) / len(extra):.1f} %); "
                      f"more than one such cause: {sum(k > 1 for k in extra)}")
-        apart = [len(extra_causes(r, provable=True)) for r in ok]
-        lines.append(f"  counting what the data proves (a named cause whose stated alternative "
-                     f"is a hidden effect the log cannot separate from it is not extra): "
-                     f"{sum(k > 0 for k in apart)}/{len(apart)} "
-                     f"({100 * sum(k > 0 for k in apart) / len(apart):.1f} %); more than one "
-                     f"such cause: {sum(k > 1 for k in apart)}")
+        if proves:
+            apart = [len(extra_causes(r, provable=True)) for r in ok]
+            lines.append(f"  counting what the data proves (a named cause whose stated "
+                         f"alternative is a hidden effect the log cannot separate from it is "
+                         f"not extra): {sum(k > 0 for k in apart)}/{len(apart)} "
+                         f"({100 * sum(k > 0 for k in apart) / len(apart):.1f} %); more than "
+                         f"one such cause: {sum(k > 1 for k in apart)}")
     failing = [r for r in records if r.get("failing_claims")]
     lines.append(f"named causes without a passing test (claims.failing_claims over each "
                  f"case's JSON): {sum(len(r['failing_claims']) for r in failing)} in "
@@ -268,7 +273,7 @@ def summary_lines(records: list[dict]) -> list[str]:
         lines.append(f"two-effect cases with both visibilities >= {100 * PAIR_VISIBLE:g} %: "
                      f"{len(visible)}, both named in {k}, over "
                      f"{len({r['family'] for r in visible})} axis families")
-        if visible:
+        if visible and proves:
             k2 = sum(found_or_inseparable(r) for r in visible)
             lines.append(f"  counting what the data proves (each named, or stated as the "
                          f"alternative of a named cause where the distinguishing visibility "
