@@ -104,8 +104,8 @@ def run_one(spec: Spec) -> dict:
            "feedforward": spec.feedforward, "noise": spec.noise, "effects": list(spec.effects),
            "targets": list(spec.targets), "strengths": [], "options": [], "visibilities": [],
            "combined": 0.0, "clipped_pct": 0.0, "simulations": 0, "distinguishing": [],
-           "named": [], "ambiguity": [], "verdict": "", "failing_claims": [], "answer": {},
-           "error": ""}
+           "named": [], "ambiguity": [], "alternatives": [], "verdict": "", "failing_claims": [],
+           "answer": {}, "error": ""}
     t0 = time.perf_counter()
     try:
         out = run_spec(spec, _RUNNERS[p.source], _CACHE)
@@ -119,6 +119,8 @@ def run_one(spec: Spec) -> dict:
         d = diagnose(out.log)
         doc = finite_json(d.to_json())
         rec.update(named=named_causes(d), ambiguity=list(d.ambiguities), verdict=d.verdict,
+                   alternatives=[[a.named, a.other] for c in d.causes
+                                 for a in d.alternatives_of(c.effect)],
                    diagnose_s=time.perf_counter() - t1, failing_claims=failing_claims(doc),
                    answer={k: doc[k] for k in ANSWER_KEYS if k in doc})
     except Exception as err:  # a failed case is reported, never hidden

@@ -333,6 +333,19 @@ def _coupled(e: Effect, base: tuple[tuple[str, dict], ...]) -> list[int]:
             if EFFECTS[name].search and EFFECTS[name].block == 1]
 
 
+def _reducing(e: Effect, base: tuple[tuple[str, dict], ...]) -> list[int]:
+    """The named causes that reduce to e (registry `reduces_to`: an asymmetric friction
+    beside an offset candidate) and have a searched value (the asymmetry's viscous-to-Coulomb
+    split). That value was read before the causes named after it were in place, or beside
+    the very offset being tested (where the split is arbitrary: the offset takes the
+    constant); searched again on the causes alone, the constant its Coulomb part takes under
+    them is its own, not the candidate's (a prototype asymmetry whose split, read before a
+    torque ripple was named, has no Coulomb part: an offset then took that part up as a
+    third cause)."""
+    return [i for i, (name, _) in enumerate(base)
+            if EFFECTS[name].reduces_to == e.name and EFFECTS[name].search]
+
+
 def _refitted(nom: Nominal, ref: Reference, coupled: list[int]) -> Reference:
     """`ref` with the searched values of its causes `coupled` searched again, in turn, on the
     causes alone: what a coupled candidate is credited with is then what it adds, not what
@@ -365,14 +378,16 @@ def candidate(nom: Nominal, effect: str, ref: Reference | None = None) -> Candid
     nominal model). A named cause that shapes the same law (_coupled) has its searched value
     searched again beside it, and the effect's once more: the candidate is the effect with
     the causes refitted beside it, against the causes refitted alone (_refitted) where a
-    cause was named after the coupled one."""
+    cause was named after the coupled one; a named cause that reduces to the effect has its
+    searched value searched again on the causes alone (_reducing)."""
     ref = ref or reference(nom)
     e = _effect(effect)
     coupled = _coupled(e, ref.base.effects)
     # a cause searched with every cause after it already in place needs no refit alone
     last = len(ref.base.effects) - 1
-    if any(i < last for i in coupled):
-        ref = _refitted(nom, ref, [i for i in coupled if i < last])
+    refit = [i for i in coupled if i < last] + _reducing(e, ref.base.effects)
+    if refit:
+        ref = _refitted(nom, ref, refit)
     fixed = e.reference(nom) if e.reference else {}
     records: list[Scores] = []
     trials: list[tuple[float | None, Stacked]] = []

@@ -28,7 +28,7 @@ from jointbench.identification.filter_choice import choose_filter
 from jointbench.identification.discrepancy import (NUMERICS, Candidate, InverseDiagnosis, Nominal,
                                                    diagnose_inverse)
 from jointbench.identification.discrepancy.candidates import joint_parameters
-from jointbench.identification.discrepancy.inverse import NotNamed
+from jointbench.identification.discrepancy.inverse import NotNamed, one_of
 from jointbench.identification.effects import EFFECTS
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.log import Log, unit_warnings
@@ -142,11 +142,11 @@ def _replay_rejects(d: Diagnosis) -> bool:
 
 def _without_last(inv: InverseDiagnosis, why: str = "") -> InverseDiagnosis:
     """`inv` without its last named cause, and without the ambiguity notes about it (a
-    note's head "A or B:" names the cause it is about); the cause listed as not named, left
+    note's head "A or B:" or "one of A or B:" names the cause it is about: inverse.one_of); the cause listed as not named, left
     out for `why` (the forward view rejects its extended model)."""
     causes = inv.causes[:-1]
     kept = {c.effect for c in causes}
-    notes = tuple(n for n in inv.notes if kept & set(n.split(":", 1)[0].split(" or ")))
+    notes = tuple(n for n in inv.notes if kept & one_of(n))
     last = inv.causes[-1]
     out = NotNamed(last.effect, "left_out", f"the forward view rejects it: {why}", last.test,
                    last.round)
