@@ -128,6 +128,8 @@ class Candidate:
     residual: np.ndarray | None = field(default=None, repr=False, compare=False)
     # each row's weighted held-out error (its fold's fit): comparisons between candidates
     heldout_errors: np.ndarray | None = field(default=None, repr=False, compare=False)
+    # the reference's held-out errors it was weighed against (a coupled cause refitted)
+    reference_errors: np.ndarray | None = field(default=None, repr=False, compare=False)
     fixed: dict = field(default_factory=dict)   # values the effect's columns are built with
     base: tuple[tuple[str, dict], ...] = ()     # causes named before it, as its fit has them
     acts: tuple[int, ...] = ()   # the equation blocks its columns change (acts_in); () all
@@ -282,6 +284,7 @@ def _evaluate(nom: Nominal, ref: Reference, e: Effect, fixed: dict,
     return Candidate(effect=e.name, testable=True, parameters=e.params(values, fixed, nom),
                      k=k, rss=rss, unphysical=why,
                      residual=res_after, heldout_errors=errors,
+                     reference_errors=ref.scores.errors,
                      explained_pct=100 * (rss0 - rss) / rss0,
                      heldout_pct=ev.explained_pct, acts_pct=ev.acts_pct, t_stat=ev.t,
                      p_heldout=ev.p,

@@ -182,15 +182,22 @@ class Evidence:
 
 
 def evidence(e0: np.ndarray, e1: np.ndarray, n_times: int,
-             blocks: tuple[int, ...] = ()) -> Evidence:
+             blocks: tuple[int, ...] = (), within: np.ndarray | None = None) -> Evidence:
     """Segment test of e1 removing more than MATERIAL of e0's squared error (module
     docstring); rows are stacked by block, `n_times` instants each. The share is over every
-    row; the test over the rows of `blocks` (the equations the effect acts in; () all)."""
+    row; the test over the rows of `blocks` (the equations the effect acts in; () all).
+    `within` (a mask over the SEGMENTS segments, None for all) keeps the test and both
+    shares to those segments: a band of the log chosen without its residual (lag_band's
+    large deflections)."""
     a0, a1 = (e ** 2 for e in (e0, e1))
+    if within is not None:
+        inside = np.tile(np.asarray(within, bool)[segment_of_rows(n_times)], len(a0) // n_times)
+        a0, a1 = a0 * inside, a1 * inside
     share = _share(a0, a1)
     rows = list(blocks) if blocks else slice(None)
     acts = _share(a0.reshape(-1, n_times)[rows], a1.reshape(-1, n_times)[rows])
-    t, p = segment_t(segment_log_ratios(e0, e1, n_times, blocks) + np.log(1 - MATERIAL))
+    t, p = segment_t(segment_log_ratios(e0, e1, n_times, blocks, within)
+                     + np.log(1 - MATERIAL))
     return Evidence(explained_pct=share, t=t, p=p, acts_pct=acts)
 
 
@@ -201,15 +208,19 @@ def _share(a0: np.ndarray, a1: np.ndarray) -> float:
 
 
 def segment_log_ratios(e0: np.ndarray, e1: np.ndarray, n_times: int,
-                       blocks: tuple[int, ...] = ()) -> np.ndarray:
-    """log(sum e0^2 / sum e1^2) in each segment (where both are positive), over the rows of
-    `blocks` (every block for ()). An effect that acts in one equation is measured there:
+                       blocks: tuple[int, ...] = (),
+                       within: np.ndarray | None = None) -> np.ndarray:
+    """log(sum e0^2 / sum e1^2) in each segment (where both are positive; of the segments
+    `within` only, a mask over the SEGMENTS, when given), over the rows of `blocks` (every
+    block for ()), in time order. An effect that acts in one equation is measured there:
     the other equation's errors, which it leaves as they were, would add the same amount to
     both sums and pull every ratio towards 1."""
     sq0, sq1 = ((e ** 2).reshape(-1, n_times) for e in (e0, e1))
     rows = list(blocks) if blocks else slice(None)
     h0, h1 = segment_sums(sq0[rows].sum(axis=0)), segment_sums(sq1[rows].sum(axis=0))
     ok = (h0 > 0) & (h1 > 0)
+    if within is not None:
+        ok &= np.asarray(within, bool)
     return np.log(h0[ok] / h1[ok])
 
 

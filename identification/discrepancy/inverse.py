@@ -10,7 +10,8 @@ until one of them is named, so the round where that would first happen tests eac
 or less, m at least their number. (A bar of ALPHA / (every test run so far), 15 tests in the
 second round of a log with q, 7 of one without, asked EMPS's offset for t > 4.18 where it has
 3.93; Holm asks 3.86.) A torque lag's hypothesis is tested in two bands on a log with a wide
-band, each test at half its level (identification.discrepancy.lag_band). The named cause of a
+band, each test at half its level, and so is a hardening's, its second view at large
+deflections (identification.discrepancy.lag_band). The named cause of a
 round is, among the significant ones, the one that explains the most of the held-out
 residual, unless a simpler significant
 one explains it as well: the richer is then named only if what it adds to the simpler is
@@ -191,7 +192,7 @@ def _round(nom: Nominal, names: list[str], causes: tuple[Candidate, ...],
     if model:   # the link friction's law with the causes in the model (nominal.with_link_law)
         nom = with_link_law(nom, ref.base.design())
         ref = reference(nom, model, m=m)
-    cands = [replace(second_view(band, candidate(nom, name, ref), model), round=k)
+    cands = [replace(second_view(band, candidate(nom, name, ref), model, nom), round=k)
              for name in names]
     return _simplest_first(_rank(cands), nom, m)
 
@@ -417,7 +418,8 @@ def _against(nom: Nominal, c: Candidate, others: tuple[tuple[str, dict], ...],
     """`c`'s effect fitted and tested again on top of `others` (name, values), at the level
     of the round it entered, with the lag's second band: its own test there."""
     ref = reference(nom, others, m=_level_m(c))
-    return replace(second_view(band, candidate(nom, c.effect, ref), others), round=c.round)
+    return replace(second_view(band, candidate(nom, c.effect, ref), others, nom),
+                   round=c.round)
 
 
 def _passes(c: Candidate) -> bool:
