@@ -39,6 +39,9 @@ class SecondView:
     detail: str            # the two values and their spreads, for the report
     unphysical: str = ""
     acts_pct: float = float("nan")   # its held-out share over the equations it acts in
+    # the first band's share over every row need not be positive (lag_band: a hardening's
+    # view at large deflections, its share in the first band lost to a cause beside it)
+    diluted: bool = False
 
     def confirms(self, alpha: float) -> bool:
         return (not self.unphysical and self.agree and self.heldout_pct > 0
@@ -146,13 +149,16 @@ class Candidate:
 
     @property
     def confirmed(self) -> bool:
-        """Significant in the second band's view (SecondView.confirms) at its level."""
-        return self.second is not None and self.second.confirms(self.level)
+        """Significant in the second band's view (SecondView.confirms) at its level, with a
+        positive share in the first band unless the view says that share is diluted."""
+        v = self.second
+        return (v is not None and v.confirms(self.level)
+                and (self.heldout_pct > 0 or v.diluted))
 
     @property
     def significant(self) -> bool:
-        return (self.testable and not self.unphysical and self.heldout_pct > 0
-                and (self.p_heldout < self.level or self.confirmed))
+        return (self.testable and not self.unphysical
+                and (self.heldout_pct > 0 and self.p_heldout < self.level or self.confirmed))
 
     @property
     def own_test(self) -> HeldOutTest:

@@ -192,7 +192,7 @@ def _round(nom: Nominal, names: list[str], causes: tuple[Candidate, ...],
     if model:   # the link friction's law with the causes in the model (nominal.with_link_law)
         nom = with_link_law(nom, ref.base.design())
         ref = reference(nom, model, m=m)
-    cands = [replace(second_view(band, candidate(nom, name, ref), model, nom), round=k)
+    cands = [replace(second_view(band, candidate(nom, name, ref), model), round=k)
              for name in names]
     return _simplest_first(_rank(cands), nom, m)
 
@@ -418,8 +418,7 @@ def _against(nom: Nominal, c: Candidate, others: tuple[tuple[str, dict], ...],
     """`c`'s effect fitted and tested again on top of `others` (name, values), at the level
     of the round it entered, with the lag's second band: its own test there."""
     ref = reference(nom, others, m=_level_m(c))
-    return replace(second_view(band, candidate(nom, c.effect, ref), others, nom),
-                   round=c.round)
+    return replace(second_view(band, candidate(nom, c.effect, ref), others), round=c.round)
 
 
 def _passes(c: Candidate) -> bool:

@@ -66,20 +66,22 @@ the other folds, never from the held-out residual it is tested on. Under the nul
 the kept segments' log-ratios have a negative mean as every segment's do (the column adds
 only estimation variance), and the segment test counts their number in its degrees of freedom
 (heldout.dof): a view over few segments asks for a larger t. Its level is split with the
-chooser's band's test as the lag's is (t > 4.50 in either view in a first round of 8), and the
-guard is the lag's: the wide view confirms only a hardening that the chooser's band fits
-physically with a positive held-out share, whose wide fit is physical too, and whose two
-engagements agree within CONSISTENCY_Z of their jackknife spreads' root-sum-square plus the
-search grid's step at the engagement (`grid_step`), what a search on a geometric grid can
-tell apart (the fold values are the search's trials, and every fold may prefer the same one).
-Since the chooser's band's share over every segment is diluted as its t is, the guard also
-asks the chooser's band to see it where it acts: a positive held-out share over its own
-segments of large deflection. The wide band holds what the nominal misses above the chooser's
-band, and a hardening engaged near the bottom of its grid is a stiffness and a sign of the
-deflection, which can take up some of it beside another cause (a spring damping whose
-chooser's-band value the wide band's refit does not quite follow): such a hardening explains
-nothing in the chooser's band at the same deflections, a true one explains there what it
-explains in the wide band.
+chooser's band's test as the lag's is (t > 4.50 in either view in a first round of 8).
+
+The guard differs from the lag's. The wide view confirms only a hardening that the chooser's
+band fits physically (its overall share there need not be positive: beside a backlash the
+chooser's band, without the harmonics, lets a wider dead band and a stiffer K take the
+hardening's part, and the share it adds is lost in the refit), whose wide fit is physical too,
+and whose two engagements agree within CONSISTENCY_Z of their jackknife spreads' root-sum-
+square plus the search grid's step at the engagement (`grid_step`), what a search on a
+geometric grid can tell apart (the fold values are the search's trials, and every fold may
+prefer the same one). And the wide fit's engagement must lie beyond the first step of its
+grid (hardening.grid: from 2 % of the 99th percentile of |qm - q|): engaged there, Kh dz(d, d0)
+is Kh d - Kh d0 sign(d) on nearly every row, a stiffness and a sign of the deflection, not a
+spring that engages at large deflections, and in the wide band such a column takes up what the
+nominal and a named cause miss above the chooser's band (beside a spring damping whose value
+the wide band refits, it explained a fifth of the residual of the segments it covered, most of
+them). Such a fit is not a physical instance of the effect: SecondView.unphysical says why.
 """
 
 from __future__ import annotations
@@ -160,19 +162,20 @@ def grid_step(nom: Nominal, value: float) -> float:
     return abs(value) * (float(g[1] / g[0]) - 1.0) if len(g) > 1 and g[0] > 0 else 0.0
 
 
-def second_view(band: LagBand, c: Candidate, causes: tuple[tuple[str, dict], ...],
-                chooser: Nominal | None = None) -> Candidate:
+def second_view(band: LagBand, c: Candidate,
+                causes: tuple[tuple[str, dict], ...]) -> Candidate:
     """`c` itself unless it is a torque lag or a hardening and the log has a wide band; then
     `c` with its level split over its two views (Candidate.views = 2) and, when the chooser's
     band fits it physically with a positive held-out share but does not find it significant
     at that level, the wide band's view (Candidate.second): the lag's over every segment, the
     hardening's over its large deflections (module docstring). `causes`: the named causes
-    with their values (the round's reference); `chooser`: the chooser's band's nominal `c`
-    was fitted on (the hardening's guard; without it the hardening gets no second view)."""
+    with their values (the round's reference)."""
     if c.effect not in SECOND or band.settings is None or not c.testable:
         return c
     c = replace(c, views=2)
-    if c.unphysical or not c.heldout_pct > 0 or c.significant:
+    # a lag must show a positive share in the chooser's band; a hardening's share there may
+    # be lost to a cause beside it (module docstring: the guard)
+    if c.unphysical or c.significant or not (c.heldout_pct > 0 or c.effect == HARDENING):
         return c
     try:
         nom = band.nominal()
@@ -180,9 +183,7 @@ def second_view(band: LagBand, c: Candidate, causes: tuple[tuple[str, dict], ...
     except (ValueError, ArithmeticError, np.linalg.LinAlgError):
         return c   # no second view (LogError is a ValueError: too short for the band)
     if c.effect == HARDENING:
-        if chooser is None:
-            return c
-        return replace(c, second=_deflection_view(nom, chooser, c, w, band.label))
+        return replace(c, second=_deflection_view(nom, c, w, band.label))
     tc, tw = c.fixed["lag_s"], w.fixed["lag_s"]
     sc, sw = jackknife(c.fold_values), jackknife(w.fold_values)
     allowed = CONSISTENCY_Z * math.hypot(sc, sw) + discretisation(band.settings, tc)
@@ -196,28 +197,29 @@ def second_view(band: LagBand, c: Candidate, causes: tuple[tuple[str, dict], ...
         value=tw, agree=agree, detail=detail, unphysical=w.unphysical, acts_pct=w.acts_pct))
 
 
-def _deflection_view(nom: Nominal, chooser: Nominal, c: Candidate, w: Candidate,
-                     label: str) -> SecondView:
+def _deflection_view(nom: Nominal, c: Candidate, w: Candidate, label: str) -> SecondView:
     """The hardening `w` fitted in the wide band (`nom`), its held-out errors tested against
     its reference's over the segments of large deflection only (large_deflections), its
-    engagement against the chooser's band's `c` (fitted on `chooser`), and the chooser's
-    band's own share over its segments of large deflection (module docstring)."""
+    engagement against the chooser's band's `c`, and not a physical hardening at large
+    deflections when that engagement is in the first step of its search grid (module
+    docstring: the guard)."""
     within = large_deflections(nom, w.fold_values)
     ev = evidence(w.reference_errors, w.heldout_errors, len(nom.sig.index), w.acts, within)
-    there = large_deflections(chooser, c.fold_values)
-    seen = evidence(c.reference_errors, c.heldout_errors, len(chooser.sig.index), c.acts,
-                    there).explained_pct
     dc, dw = c.fixed["deflection_rad"], w.fixed["deflection_rad"]
     sc, sw = jackknife(c.fold_values), jackknife(w.fold_values)
     allowed = CONSISTENCY_Z * math.hypot(sc, sw) + grid_step(nom, max(dc, dw))
-    agree = abs(dw - dc) <= allowed and seen > 0
-    detail = (f"in the chooser's band it explains {seen:.3g} % at large deflections "
-              f"({int(there.sum())} segments); engagement {1e3 * dw:.3g} +- {1e3 * sw:.2g} mrad against {1e3 * dc:.3g} +- "
+    agree = abs(dw - dc) <= allowed
+    g = EFFECTS[HARDENING].grid(nom)
+    edge = (f"engagement {1e3 * dw:.3g} mrad in the first step of its search grid "
+            f"({1e3 * g[0]:.3g} to {1e3 * g[1]:.3g} mrad): a stiffness and a sign of the "
+            "deflection, not a spring engaging at large deflections") if dw < g[1] else ""
+    detail = (f"engagement {1e3 * dw:.3g} +- {1e3 * sw:.2g} mrad against {1e3 * dc:.3g} +- "
               f"{1e3 * sc:.2g} mrad in the chooser's band, "
               + ("within" if agree else "more than") + f" the {1e3 * allowed:.2g} mrad allowed "
               f"({CONSISTENCY_Z:g} sigma and the search grid's step)")
     label = (f"{label}, at large deflections ({int(within.sum())} of {SEGMENTS} segments "
              "reach the engagement)")
     return SecondView(band=label, heldout_pct=ev.explained_pct, t_stat=ev.t, p_heldout=ev.p,
-                      value=dw, agree=agree, detail=detail, unphysical=w.unphysical,
-                      acts_pct=ev.acts_pct)
+                      value=dw, agree=agree, detail=detail,
+                      unphysical="; ".join(x for x in (w.unphysical, edge) if x),
+                      acts_pct=ev.acts_pct, diluted=True)

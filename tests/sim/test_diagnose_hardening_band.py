@@ -86,3 +86,24 @@ def test_the_hardening_and_the_lag_split_their_level():
     assert {c.alpha for c in tested.values()} == {ALPHA / 8}
     assert {e for e, c in tested.items() if c.views == 2} == {"torque_lag", "hardening"}
     assert all(c.level == c.alpha / c.views for c in tested.values())
+
+
+def test_a_hardening_view_confirms_only_at_large_deflections():
+    """The guard: a view at its level, physical and agreeing confirms a hardening whose
+    chooser's-band share over every row is lost to a cause beside it (a diluted view); a
+    lag's view still asks for a positive share there; an engagement in the first step of
+    its grid is a stiffness and a sign of the deflection, unphysical, never confirmed."""
+    from jointbench.identification.discrepancy.candidates import Candidate, SecondView
+    alpha = ALPHA / 7
+    seen = SecondView(band="wide, at large deflections", heldout_pct=30.0, t_stat=12.0,
+                      p_heldout=1e-6, value=0.02, agree=True, detail="", diluted=True)
+    h = Candidate(effect="hardening", testable=True, heldout_pct=-1.0, t_stat=-3.0,
+                  p_heldout=0.99, alpha=alpha, views=2)
+    assert not h.significant
+    named = Candidate(**{**h.__dict__, "second": seen})
+    assert named.significant and named.test.passes and named.test.heldout_pct == 30.0
+    edge = SecondView(**{**seen.__dict__, "unphysical": "engagement in the first step"})
+    assert not Candidate(**{**h.__dict__, "second": edge}).significant
+    lag = Candidate(**{**h.__dict__, "effect": "torque_lag",
+                       "second": SecondView(**{**seen.__dict__, "diluted": False})})
+    assert not lag.significant
