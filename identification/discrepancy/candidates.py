@@ -12,9 +12,10 @@ from typing import Callable, Sequence
 import numpy as np
 from scipy import optimize, stats
 
-from jointbench.identification.discrepancy.heldout import (FOLDS, MATERIAL, Scores, bar,
-                                                           evidence, fitted_rss, fold_of_rows,
-                                                           held_out, preferred, scores, t_bar)
+from jointbench.identification.discrepancy.heldout import (FOLDS, MATERIAL, SEGMENTS, Scores,
+                                                           bar, evidence, fitted_rss,
+                                                           fold_of_rows, held_out, preferred,
+                                                           scores, t_bar)
 from jointbench.identification.discrepancy.nominal import Nominal, transmitted_rms
 from jointbench.identification.discrepancy.stacked import Stacked, apply, design_many, stacked
 from jointbench.identification.effects import EFFECTS
@@ -42,6 +43,7 @@ class SecondView:
     # the first band's share over every row need not be positive (lag_band: a hardening's
     # view at large deflections, its share in the first band lost to a cause beside it)
     diluted: bool = False
+    segments: int = SEGMENTS   # the segments its test is over (heldout.dof)
 
     def confirms(self, alpha: float) -> bool:
         return (not self.unphysical and self.agree and self.heldout_pct > 0
@@ -69,6 +71,7 @@ class HeldOutTest:
     level: float
     explained_pct: float = float("nan")   # in sample (the chooser's band only)
     acts_pct: float = float("nan")   # the held-out share over the equations it acts in
+    segments: int = SEGMENTS   # the segments its t is over: a view over fewer asks more
 
     @property
     def own_share(self) -> float:
@@ -83,7 +86,7 @@ class HeldOutTest:
     @property
     def bar(self) -> float:
         """The t its level asks for (heldout.t_bar)."""
-        return t_bar(self.level) if self.level > 0 else float("inf")
+        return t_bar(self.level, self.segments) if self.level > 0 else float("inf")
 
     def describe(self) -> str:
         """"t = .. (p = ..) against the bar t > .. (level ..), held out .. %" with its view."""
@@ -175,7 +178,7 @@ class Candidate:
             return own
         v = self.second
         return HeldOutTest(v.band, v.heldout_pct, v.t_stat, v.p_heldout, self.level,
-                           acts_pct=v.acts_pct)
+                           acts_pct=v.acts_pct, segments=v.segments)
 
     @property
     def why_not(self) -> str:

@@ -179,6 +179,7 @@ class Evidence:
     t: float                 # t of the segments' log-ratios (MSSD spread), MATERIAL margin
     p: float                 # its one-sided p-value, dof(SEGMENTS) degrees of freedom
     acts_pct: float = float("nan")   # the share over the rows of the equations it acts in
+    segments: int = SEGMENTS          # the segments its t is over (its degrees of freedom)
 
 
 def evidence(e0: np.ndarray, e1: np.ndarray, n_times: int,
@@ -196,9 +197,9 @@ def evidence(e0: np.ndarray, e1: np.ndarray, n_times: int,
     share = _share(a0, a1)
     rows = list(blocks) if blocks else slice(None)
     acts = _share(a0.reshape(-1, n_times)[rows], a1.reshape(-1, n_times)[rows])
-    t, p = segment_t(segment_log_ratios(e0, e1, n_times, blocks, within)
-                     + np.log(1 - MATERIAL))
-    return Evidence(explained_pct=share, t=t, p=p, acts_pct=acts)
+    l = segment_log_ratios(e0, e1, n_times, blocks, within)
+    t, p = segment_t(l + np.log(1 - MATERIAL))
+    return Evidence(explained_pct=share, t=t, p=p, acts_pct=acts, segments=len(l))
 
 
 def _share(a0: np.ndarray, a1: np.ndarray) -> float:
@@ -254,6 +255,6 @@ def bar(m: int) -> float:
     return ALPHA / max(m, 1)
 
 
-def t_bar(alpha: float) -> float:
-    """The t value that p-value bar `alpha` corresponds to."""
-    return float(stats.t.isf(alpha, dof(SEGMENTS)))
+def t_bar(alpha: float, k: int = SEGMENTS) -> float:
+    """The t value that p-value bar `alpha` corresponds to, for a test over k segments."""
+    return float(stats.t.isf(alpha, dof(k)))

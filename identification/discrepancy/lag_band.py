@@ -222,4 +222,4 @@ def _deflection_view(nom: Nominal, c: Candidate, w: Candidate, label: str) -> Se
     return SecondView(band=label, heldout_pct=ev.explained_pct, t_stat=ev.t, p_heldout=ev.p,
                       value=dw, agree=agree, detail=detail,
                       unphysical="; ".join(x for x in (w.unphysical, edge) if x),
-                      acts_pct=ev.acts_pct, diluted=True)
+                      acts_pct=ev.acts_pct, diluted=True, segments=ev.segments)

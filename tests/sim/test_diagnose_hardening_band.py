@@ -36,6 +36,8 @@ def _named_at_large_deflections(inv, engaged: float):
     test = named.test
     assert test.passes and test.p < named.alpha / 2          # half the hypothesis' level
     assert test.view != CHOOSER and "large deflections" in test.view
+    # a test over the few engaged segments has fewer degrees of freedom: a higher bar
+    assert 3 <= test.segments < SEGMENTS and test.t > test.bar > t_bar(named.level)
     assert named.second.agree and not named.second.unphysical
     # the engagement found within a grid step or two of the true one (the filtered deflection
     # the columns see is the measured one's low-passed version)
