@@ -12,9 +12,10 @@ from typing import Callable, Sequence
 import numpy as np
 from scipy import optimize, stats
 
-from jointbench.identification.discrepancy.heldout import (FOLDS, MATERIAL, Scores, bar,
-                                                           evidence, fitted_rss, fold_of_rows,
-                                                           held_out, preferred, scores, t_bar)
+from jointbench.identification.discrepancy.heldout import (FOLDS, MATERIAL, SEGMENTS, Scores,
+                                                           bar, evidence, fitted_rss,
+                                                           fold_of_rows, held_out, preferred,
+                                                           scores, t_bar)
 from jointbench.identification.discrepancy.nominal import Nominal, transmitted_rms
 from jointbench.identification.discrepancy.stacked import Stacked, apply, design_many, stacked
 from jointbench.identification.effects import EFFECTS
@@ -39,6 +40,10 @@ class SecondView:
     detail: str            # the two values and their spreads, for the report
     unphysical: str = ""
     acts_pct: float = float("nan")   # its held-out share over the equations it acts in
+    # the first band's share over every row need not be positive (lag_band: a hardening's
+    # view at large deflections, its share in the first band lost to a cause beside it)
+    diluted: bool = False
+    segments: int = SEGMENTS   # the segments its test is over (heldout.dof)
 
     def confirms(self, alpha: float) -> bool:
         return (not self.unphysical and self.agree and self.heldout_pct > 0
@@ -66,6 +71,7 @@ class HeldOutTest:
     level: float
     explained_pct: float = float("nan")   # in sample (the chooser's band only)
     acts_pct: float = float("nan")   # the held-out share over the equations it acts in
+    segments: int = SEGMENTS   # the segments its t is over: a view over fewer asks more
 
     @property
     def own_share(self) -> float:
@@ -80,7 +86,7 @@ class HeldOutTest:
     @property
     def bar(self) -> float:
         """The t its level asks for (heldout.t_bar)."""
-        return t_bar(self.level) if self.level > 0 else float("inf")
+        return t_bar(self.level, self.segments) if self.level > 0 else float("inf")
 
     def describe(self) -> str:
         """"t = .. (p = ..) against the bar t > .. (level ..), held out .. %" with its view."""
@@ -128,6 +134,8 @@ class Candidate:
     residual: np.ndarray | None = field(default=None, repr=False, compare=False)
     # each row's weighted held-out error (its fold's fit): comparisons between candidates
     heldout_errors: np.ndarray | None = field(default=None, repr=False, compare=False)
+    # the reference's held-out errors it was weighed against (a coupled cause refitted)
+    reference_errors: np.ndarray | None = field(default=None, repr=False, compare=False)
     fixed: dict = field(default_factory=dict)   # values the effect's columns are built with
     base: tuple[tuple[str, dict], ...] = ()     # causes named before it, as its fit has them
     acts: tuple[int, ...] = ()   # the equation blocks its columns change (acts_in); () all
@@ -144,13 +152,16 @@ class Candidate:
 
     @property
     def confirmed(self) -> bool:
-        """Significant in the second band's view (SecondView.confirms) at its level."""
-        return self.second is not None and self.second.confirms(self.level)
+        """Significant in the second band's view (SecondView.confirms) at its level, with a
+        positive share in the first band unless the view says that share is diluted."""
+        v = self.second
+        return (v is not None and v.confirms(self.level)
+                and (self.heldout_pct > 0 or v.diluted))
 
     @property
     def significant(self) -> bool:
-        return (self.testable and not self.unphysical and self.heldout_pct > 0
-                and (self.p_heldout < self.level or self.confirmed))
+        return (self.testable and not self.unphysical
+                and (self.heldout_pct > 0 and self.p_heldout < self.level or self.confirmed))
 
     @property
     def own_test(self) -> HeldOutTest:
@@ -167,7 +178,7 @@ class Candidate:
             return own
         v = self.second
         return HeldOutTest(v.band, v.heldout_pct, v.t_stat, v.p_heldout, self.level,
-                           acts_pct=v.acts_pct)
+                           acts_pct=v.acts_pct, segments=v.segments)
 
     @property
     def why_not(self) -> str:
@@ -282,6 +293,7 @@ def _evaluate(nom: Nominal, ref: Reference, e: Effect, fixed: dict,
     return Candidate(effect=e.name, testable=True, parameters=e.params(values, fixed, nom),
                      k=k, rss=rss, unphysical=why,
                      residual=res_after, heldout_errors=errors,
+                     reference_errors=ref.scores.errors,
                      explained_pct=100 * (rss0 - rss) / rss0,
                      heldout_pct=ev.explained_pct, acts_pct=ev.acts_pct, t_stat=ev.t,
                      p_heldout=ev.p,
