@@ -176,11 +176,13 @@ CONDITIONS = ((True, True), (False, True), (True, False), (False, False))
 
 def condition_index(k: int, cycle: int, group: int) -> int:
     """The CONDITIONS index of the k-th case of a group (the clean cases, one effect's, the
-    pairs: `group` 0, 1, ...) that cycles over `cycle` places: (k + k // cycle + group)
-    mod 4. Within a group the cases walk the conditions; a place met again, a round of
-    `cycle` later or in the next group, gets the next one, so that every place, not only
-    every group, sees all four."""
-    return (k + k // cycle + group) % len(CONDITIONS)
+    pairs: `group` 0, 1, ...) that cycles over `cycle` places: (k + k // M + group) mod 4,
+    M = lcm(cycle, 4). Consecutive cases walk the conditions (each block of M cases takes
+    each one M / 4 times); a place met again `cycle` cases later moves on by cycle mod 4,
+    and after M cases, where that has brought it back, by one more; the next group starts
+    one further. So every place, every effect and every kind sees all four."""
+    n = len(CONDITIONS)
+    return (k + k // math.lcm(cycle, n) + group) % n
 
 
 def plan(places: tuple[Place, ...], per_effect: int = 8, clean: int = 24, pairs: int = 20,

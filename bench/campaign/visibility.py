@@ -142,6 +142,8 @@ def _next_magnitude(target: float, good: list[tuple[float, float]], failed: floa
             slope = math.log(ref[1] / o[1]) / math.log(ref[0] / o[0])
             slope = min(max(slope, SLOPE_RANGE[0]), SLOPE_RANGE[1])
         m = ref[0] * (target / ref[1]) ** (1.0 / slope)
+    if m >= largest and not above and failed > largest:
+        return 0.999 * largest                    # beyond the bound: try the bound itself
     if not lo < m < hi:                           # stay inside the bracket
         m = math.sqrt(lo * hi) if lo > 0 and math.isfinite(hi) else \
             0.5 * hi if math.isfinite(hi) else 2.0 * lo
