@@ -32,6 +32,11 @@ SLOPE_RANGE = (0.25, 4.0)  # d log(visibility) / d log(strength) is clipped to t
 # hardening that acts as a stop), and a target above it is out of reach.
 SATURATION_SLOPE = 0.15
 SATURATION_STEP = 1.5
+# One step beyond every strength tried changes it by at most this factor: the clipped slope
+# would otherwise extrapolate a small growth by (target / visibility)^4, to strengths whose
+# simulation (its step set by the stiffest term) takes many minutes, before the saturation
+# shows.
+MAX_STEP = 30.0
 
 
 def visibility(tau_clean: np.ndarray, tau_effect: np.ndarray, f1_hz: float,
@@ -70,8 +75,10 @@ def strength_for(target: float, visibility_of: Callable[[float], float], start: 
                  evaluations: int = SEARCH_EVALUATIONS) -> Search:
     """The strength whose visibility is `target` (a ratio), searched on the magnitude with
     the sign of `start` (a strength the effect typically has): secant steps on
-    log(visibility) against log(strength), slope clipped to SLOPE_RANGE, kept inside the
-    bracket found so far and under |largest|. `visibility_of(strength)` runs the case (NaN
+    log(visibility) against log(strength), slope clipped to SLOPE_RANGE, at most MAX_STEP
+    beyond the strengths tried, kept inside the bracket found so far and under |largest|;
+    it stops where the visibility stops growing below the target (`stopped_growing`,
+    Search.saturated). `visibility_of(strength)` runs the case (NaN
     or an exception: the strength is too strong for the simulation). Returns the tried
     strength nearest the target (in log ratio); ValueError when none ran."""
     if not (target > 0 and start != 0 and math.isfinite(start)):
@@ -142,6 +149,8 @@ def _next_magnitude(target: float, good: list[tuple[float, float]], failed: floa
             slope = math.log(ref[1] / o[1]) / math.log(ref[0] / o[0])
             slope = min(max(slope, SLOPE_RANGE[0]), SLOPE_RANGE[1])
         m = ref[0] * (target / ref[1]) ** (1.0 / slope)
+        tried = [p[0] for p in good]
+        m = min(max(m, min(tried) / MAX_STEP), max(tried) * MAX_STEP)
     if m >= largest and not above and failed > largest:
         return 0.999 * largest                    # beyond the bound: try the bound itself
     if not lo < m < hi:                           # stay inside the bracket
