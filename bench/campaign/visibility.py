@@ -32,6 +32,11 @@ SLOPE_RANGE = (0.25, 4.0)  # d log(visibility) / d log(strength) is clipped to t
 # hardening that acts as a stop), and a target above it is out of reach.
 SATURATION_SLOPE = 0.15
 SATURATION_STEP = 1.5
+# A saturated search keeps the smallest strength tried whose visibility is at least
+# PLATEAU_SHARE of the largest reached: the start of the plateau, not the far end of it
+# (a damping that welds the link to the motor, a backlash wider than any deflection, where
+# the log degenerates and the effect shows no more).
+PLATEAU_SHARE = 0.8
 # One step beyond every strength tried changes it by at most this factor: the clipped slope
 # would otherwise extrapolate a small growth by (target / visibility)^4, to strengths whose
 # simulation (its step set by the stiffest term) takes many minutes, before the saturation
@@ -80,7 +85,8 @@ def strength_for(target: float, visibility_of: Callable[[float], float], start: 
     it stops where the visibility stops growing below the target (`stopped_growing`,
     Search.saturated). `visibility_of(strength)` runs the case (NaN
     or an exception: the strength is too strong for the simulation). Returns the tried
-    strength nearest the target (in log ratio); ValueError when none ran."""
+    strength nearest the target (in log ratio), or, saturated, the smallest whose
+    visibility is PLATEAU_SHARE of the largest reached; ValueError when none ran."""
     if not (target > 0 and start != 0 and math.isfinite(start)):
         raise ValueError(f"need target > 0 and a finite start != 0, got {target}, {start}")
     sign, m = math.copysign(1.0, start), min(abs(start), abs(largest))
@@ -112,6 +118,9 @@ def strength_for(target: float, visibility_of: Callable[[float], float], start: 
     if not good:
         raise ValueError(f"no strength near {start:g} ran: {tried}")
     best = min(good, key=lambda p: abs(math.log(max(p[1], 1e-300) / target)))
+    if saturated:
+        top = max(p[1] for p in good)
+        best = min(p for p in good if p[1] >= PLATEAU_SHARE * top)
     return Search(sign * best[0], best[1], tuple(tried), saturated)
 
 
