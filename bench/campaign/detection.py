@@ -163,7 +163,7 @@ def curve(records: list[dict], effect: str) -> list[tuple[float, float, int, int
     """The single-effect cases of `effect` by visibility bin: (low, high, named right, cases)
     per bin of BINS (high inf for the last)."""
     cases = [(r["visibilities"][0], right(r)) for r in records
-             if r["kind"] == "single" and r["effects"][0] == effect]
+             if r["kind"] == "single" and r["effects"][0] == effect and r["visibilities"]]
     edges = list(BINS) + [np.inf]
     out = []
     for lo, hi in zip(edges[:-1], edges[1:]):
@@ -180,7 +180,7 @@ def found_above(records: list[dict], effect: str) -> float | None:
     or above v are named right at least FOUND_SHARE of the time, with at least MIN_CASES of
     them; None when no such v ("not reached")."""
     cases = sorted((r["visibilities"][0], right(r)) for r in records
-                   if r["kind"] == "single" and r["effects"][0] == effect)
+                   if r["kind"] == "single" and r["effects"][0] == effect and r["visibilities"])
     for k, (v, _) in enumerate(cases):
         tail = [ok for _, ok in cases[k:]]
         if len(tail) >= MIN_CASES and sum(tail) >= FOUND_SHARE * len(tail):
@@ -221,7 +221,7 @@ def summary_lines(records: list[dict]) -> list[str]:
         if rs:
             k = sum(right(r) for r in rs)
             lines.append(f"{what}: {k}/{len(rs)} ({100 * k / len(rs):.0f} %)")
-    at5 = [r for r in singles if r["visibilities"][0] >= 0.05]
+    at5 = [r for r in singles if r["visibilities"] and r["visibilities"][0] >= 0.05]
     if at5:
         k = sum(right(r) for r in at5)
         lines.append(f"single-effect cases at visibility >= 5 % named right: {k}/{len(at5)} "
@@ -264,11 +264,20 @@ def summary_lines(records: list[dict]) -> list[str]:
                  f"case's JSON): {sum(len(r['failing_claims']) for r in failing)} in "
                  f"{len(failing)} logs")
     lines.append(f"axis families: {len({r.get('family') for r in records})}")
+    reached = [r for r in records if any(r.get("saturated", ()))]
+    if reached:
+        lines.append("cases whose target visibility is out of reach (the visibility stopped "
+                     "growing; counted at the visibility reached): " + ", ".join(
+                         f"#{r.get('index', '?')} " + ",".join(
+                             f"{e} {100 * v:.1f} % of {100 * t:.0f} %"
+                             for e, v, t, x in zip(r["effects"], r["visibilities"],
+                                                   r["targets"], r["saturated"]) if x)
+                         for r in reached))
     pairs = [r for r in records if r["kind"] == "pair"]
     if pairs:
         one = sum(bool(set(r["effects"]) & set(r["named"])) for r in pairs)
         lines.append(f"two-effect cases with at least one named: {one}/{len(pairs)}")
-        visible = [r for r in pairs if min(r["visibilities"]) >= PAIR_VISIBLE]
+        visible = [r for r in pairs if min(r["visibilities"], default=0.0) >= PAIR_VISIBLE]
         k = sum(right(r) for r in visible)
         lines.append(f"two-effect cases with both visibilities >= {100 * PAIR_VISIBLE:g} %: "
                      f"{len(visible)}, both named in {k}, over "
