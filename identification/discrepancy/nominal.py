@@ -234,7 +234,7 @@ def nominal(log: Log, settings: FilterSettings, link_friction: bool = True,
     link_friction = link_friction and sig.has_link
     y, W, names = nominal_columns(sig, link_friction=link_friction)
     n = len(sig.index)
-    if n < 2 * (W.shape[1] + 1):
+    if n <= W.shape[1]:
         # the rows out of reach of a clipped torque cannot hold the fit (beside its constant)
         raise LogError(f"only {n} of the filtered rows are out of reach of the clipped torque "
                        f"samples, too few to fit the nominal model's {W.shape[1]} parameters; "
