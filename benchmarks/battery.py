@@ -228,6 +228,9 @@ def main(argv=None) -> int:
     ap.add_argument("--cases", type=case_indices, metavar="I,J,...",
                     help="run only these indices of the plan (each case drawn as in the whole "
                          "plan of these sizes and seed), e.g. to run its misses again")
+    ap.add_argument("--record", metavar="PREFIX",
+                    help="also write the cases as PREFIX.json (compact) and PREFIX.csv, e.g. "
+                         "docs/battery_cases for the record the docs and tests read")
     ap.add_argument("--from", dest="source", metavar="CASES.json",
                     help="run nothing: the summary and figure of an earlier cases.json")
     args = ap.parse_args(argv)
@@ -277,6 +280,10 @@ def main(argv=None) -> int:
         {"battery": meta, "cases": records}), indent=1, allow_nan=False) + "\n")
     atomic_write_text(out / "cases.csv", _csv(records))
     atomic_write_text(out / "summary.txt", text)
+    if args.record:
+        atomic_write_text(Path(args.record + ".json"), json.dumps(finite_json(
+            {"battery": meta, "cases": records}), separators=(",", ":"), allow_nan=False) + "\n")
+        atomic_write_text(Path(args.record + ".csv"), _csv(records))
     if figure_path:
         figure(records, Path(figure_path))
     print(f"wrote {out / 'cases.json'}, {out / 'cases.csv'}, {out / 'summary.txt'}"
