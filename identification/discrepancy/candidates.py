@@ -19,7 +19,7 @@ from jointbench.identification.discrepancy.heldout import (FOLDS, MATERIAL, SEGM
 from jointbench.identification.discrepancy.nominal import Nominal, transmitted_rms
 from jointbench.identification.discrepancy.stacked import Stacked, apply, design_many, stacked
 from jointbench.identification.effects import EFFECTS
-from jointbench.identification.effects.base import Design, Effect
+from jointbench.identification.effects.base import FOLD_FITS, Design, Effect
 
 BIC_MIN = 10.0          # "very strong" evidence on Kass and Raftery's scale (information only)
 
@@ -289,7 +289,11 @@ def _evaluate(nom: Nominal, ref: Reference, e: Effect, fixed: dict,
     acts = acts_in(nom, (y0, W0, names0), (y, W, names))
     ev = evidence(ref.scores.errors, errors, len(nom.sig.index), acts)
     values = dict(zip(names, X))
-    why = e.check({**fixed, **values}, nom) if e.check else ""   # fitted and searched values
+    best = min(records, key=lambda r: r.full)
+    folds = (() if best.fold_X is None
+             else tuple(dict(zip(names, x)) for x in best.fold_X))
+    # fitted and searched values, and each fold's training fit (the fit's own spread)
+    why = e.check({**fixed, **values, FOLD_FITS: folds}, nom) if e.check else ""
     return Candidate(effect=e.name, testable=True, parameters=e.params(values, fixed, nom),
                      k=k, rss=rss, unphysical=why,
                      residual=res_after, heldout_errors=errors,
