@@ -284,8 +284,11 @@ def _simplest_first(ranked: list[Candidate], nom: Nominal,
     alpha = best.alpha
     first, note, alt = best, "", None
     # a richer effect that reduces to the best, significant or not (while the motor moves a
-    # Coulomb-dominated asymmetric friction is an offset, and may explain a hair less)
-    richer = next((c for c in ranked if c.testable and not c.unphysical
+    # Coulomb-dominated asymmetric friction is an offset, and may explain a hair less), its
+    # own fit physical or not: an asymmetry whose Coulomb part overshoots the fitted Coulomb
+    # friction is never named (_which names only a significant one), but where the log cannot
+    # tell the two apart it is the alternative of the offset named
+    richer = next((c for c in ranked if c.testable
                    and EFFECTS[c.effect].reduces_to == best.effect), None)
     if richer is not None:
         named, note, alt = _which(nom, best, richer, m)
@@ -363,6 +366,8 @@ def _which(nom: Nominal, simpler: Candidate, richer: Candidate,
         return False, "", None
     both = p < DECIDE and p2 < DECIDE
     note = _apart(simpler, richer, t, DECIDE, t2, unphysical=not physical, both=both)
+    if richer.unphysical:   # what keeps it from being named where its part adds
+        note += f"; {richer.effect}'s own fit is unphysical ({richer.unphysical})"
     return False, note, None if both else _nested(simpler, richer, t, t2, note)
 
 
