@@ -131,6 +131,9 @@ class Candidate:
     X: tuple[float, ...] = ()
     names: tuple[str, ...] = ()
     unphysical: str = ""             # why the best fit is not a physical instance of it
+    # standard errors by which that fit lies beyond its physical bound (Effect.beyond; inf
+    # where the effect gives none)
+    beyond_se: float = float("inf")
     residual: np.ndarray | None = field(default=None, repr=False, compare=False)
     # each row's weighted held-out error (its fold's fit): comparisons between candidates
     heldout_errors: np.ndarray | None = field(default=None, repr=False, compare=False)
@@ -293,9 +296,11 @@ def _evaluate(nom: Nominal, ref: Reference, e: Effect, fixed: dict,
     folds = (() if best.fold_X is None
              else tuple(dict(zip(names, x)) for x in best.fold_X))
     # fitted and searched values, and each fold's training fit (the fit's own spread)
-    why = e.check({**fixed, **values, FOLD_FITS: folds}, nom) if e.check else ""
+    v = {**fixed, **values, FOLD_FITS: folds}
+    why = e.check(v, nom) if e.check else ""
+    far = float(e.beyond(v, nom)) if e.beyond else float("inf")
     return Candidate(effect=e.name, testable=True, parameters=e.params(values, fixed, nom),
-                     k=k, rss=rss, unphysical=why,
+                     k=k, rss=rss, unphysical=why, beyond_se=far,
                      residual=res_after, heldout_errors=errors,
                      reference_errors=ref.scores.errors,
                      explained_pct=100 * (rss0 - rss) / rss0,

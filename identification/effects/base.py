@@ -63,6 +63,11 @@ class Effect:
     design: Callable[[Rows, dict], Design]
     params: Callable[[dict, dict, Rows], dict[str, float]]
     check: Callable[[dict, Rows], str] | None = None
+    # How many of its own standard errors an unphysical fit lies beyond the physical bound
+    # `check` tests (values as check's): where it is within the round's bar the fit is not
+    # named but not excluded either, and may be the alternative of the effect it reduces to
+    # (identification.discrepancy.inverse). None: an unphysical fit is excluded.
+    beyond: Callable[[dict, Rows], float] | None = None
     search: str = ""          # the nonlinear parameter searched, a key of `fixed`
     grid: Callable[[Rows], np.ndarray] | None = None
     reference: Callable[[Rows], dict] | None = None
