@@ -19,7 +19,7 @@ from jointbench.identification.discrepancy.heldout import (FOLDS, MATERIAL, SEGM
 from jointbench.identification.discrepancy.nominal import Nominal, transmitted_rms
 from jointbench.identification.discrepancy.stacked import Stacked, apply, design_many, stacked
 from jointbench.identification.effects import EFFECTS
-from jointbench.identification.effects.base import Design, Effect
+from jointbench.identification.effects.base import FOLD_FITS, Design, Effect
 
 BIC_MIN = 10.0          # "very strong" evidence on Kass and Raftery's scale (information only)
 
@@ -131,6 +131,9 @@ class Candidate:
     X: tuple[float, ...] = ()
     names: tuple[str, ...] = ()
     unphysical: str = ""             # why the best fit is not a physical instance of it
+    # standard errors by which that fit lies beyond its physical bound (Effect.beyond; inf
+    # where the effect gives none)
+    beyond_se: float = float("inf")
     residual: np.ndarray | None = field(default=None, repr=False, compare=False)
     # each row's weighted held-out error (its fold's fit): comparisons between candidates
     heldout_errors: np.ndarray | None = field(default=None, repr=False, compare=False)
@@ -289,9 +292,15 @@ def _evaluate(nom: Nominal, ref: Reference, e: Effect, fixed: dict,
     acts = acts_in(nom, (y0, W0, names0), (y, W, names))
     ev = evidence(ref.scores.errors, errors, len(nom.sig.index), acts)
     values = dict(zip(names, X))
-    why = e.check({**fixed, **values}, nom) if e.check else ""   # fitted and searched values
+    best = min(records, key=lambda r: r.full)
+    folds = (() if best.fold_X is None
+             else tuple(dict(zip(names, x)) for x in best.fold_X))
+    # fitted and searched values, and each fold's training fit (the fit's own spread)
+    v = {**fixed, **values, FOLD_FITS: folds}
+    why = e.check(v, nom) if e.check else ""
+    far = float(e.beyond(v, nom)) if e.beyond else float("inf")
     return Candidate(effect=e.name, testable=True, parameters=e.params(values, fixed, nom),
-                     k=k, rss=rss, unphysical=why,
+                     k=k, rss=rss, unphysical=why, beyond_se=far,
                      residual=res_after, heldout_errors=errors,
                      reference_errors=ref.scores.errors,
                      explained_pct=100 * (rss0 - rss) / rss0,

@@ -98,6 +98,7 @@ class Scores:
     train: np.ndarray
     held: np.ndarray
     errors: np.ndarray       # each row's weighted held-out error (its fold's fit)
+    fold_X: np.ndarray | None = None   # each fold's training fit, one row per fold
 
 
 def scores(nom: Nominal, folds: np.ndarray, y: np.ndarray, W: np.ndarray) -> Scores:
@@ -126,7 +127,8 @@ def scores(nom: Nominal, folds: np.ndarray, y: np.ndarray, W: np.ndarray) -> Sco
     # each row by its fold's fit, elementwise (no BLAS thread wake-up), all folds at once
     errors = b - (A * xs[folds]).sum(axis=1)
     held = np.array([float(errors[i] @ errors[i]) for i in parts])
-    return Scores(full=full, X=x / scale, train=train, held=held, errors=errors)
+    return Scores(full=full, X=x / scale, train=train, held=held, errors=errors,
+                  fold_X=xs / scale)
 
 
 def fitted_rss(nom: Nominal, y: np.ndarray, W: np.ndarray) -> float:

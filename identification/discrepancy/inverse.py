@@ -284,8 +284,11 @@ def _simplest_first(ranked: list[Candidate], nom: Nominal,
     alpha = best.alpha
     first, note, alt = best, "", None
     # a richer effect that reduces to the best, significant or not (while the motor moves a
-    # Coulomb-dominated asymmetric friction is an offset, and may explain a hair less)
-    richer = next((c for c in ranked if c.testable and not c.unphysical
+    # Coulomb-dominated asymmetric friction is an offset, and may explain a hair less), its
+    # own fit physical or beyond its bound by less than the round's bar (_near): such an
+    # asymmetry is never named (_which names only a significant one), but where the log
+    # cannot tell the two apart it is the alternative of the offset named
+    richer = next((c for c in ranked if c.testable and _near(c)
                    and EFFECTS[c.effect].reduces_to == best.effect), None)
     if richer is not None:
         named, note, alt = _which(nom, best, richer, m)
@@ -312,6 +315,14 @@ def _simplest_first(ranked: list[Candidate], nom: Nominal,
     if alt is not None and alt.named != first.effect:
         alt = None
     return [first] + [c for c in ranked if c is not first], note, alt
+
+
+def _near(c: Candidate) -> bool:
+    """Physical, or unphysical by less than the round's bar t_bar(alpha) of its own standard
+    errors (Candidate.beyond_se): an asymmetric friction at its bound (one direction's Coulomb
+    friction near zero) overshoots the bound by noise, and a log that excludes it as a
+    description must do so with the strength that naming a cause asks."""
+    return not c.unphysical or c.beyond_se <= t_bar(c.alpha)
 
 
 def _nested(simpler: Candidate, richer: Candidate, t: float, t_back: float,
@@ -363,6 +374,8 @@ def _which(nom: Nominal, simpler: Candidate, richer: Candidate,
         return False, "", None
     both = p < DECIDE and p2 < DECIDE
     note = _apart(simpler, richer, t, DECIDE, t2, unphysical=not physical, both=both)
+    if richer.unphysical:   # what keeps it from being named where its part adds
+        note += f"; {richer.effect}'s own fit is unphysical ({richer.unphysical})"
     return False, note, None if both else _nested(simpler, richer, t, t2, note)
 
 
