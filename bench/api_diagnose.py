@@ -105,7 +105,11 @@ def diagnose(log: LogLike | list[LogLike] | tuple[LogLike, ...], forward: bool =
     say = progress or (lambda msg: None)
     loaded = as_log(log)
     source = log_name(log, loaded)
-    clipping_warnings(loaded)   # LogError over a third, before any computation
+    if model is not None:
+        # against a model the parameters are identify's, which refuses over a third clipped
+        # (identification.saturation): before any computation. Without one, diagnose states
+        # itself what a clipped log can say (bench.analysis.diagnose.clipped).
+        clipping_warnings(loaded)
     folder = None if out is None else Path(out)
     if folder is not None:
         if model is not None:

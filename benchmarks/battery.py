@@ -4,6 +4,7 @@ visibility, not by the detector's thresholds.
 
     .venv/bin/python benchmarks/battery.py [--out battery_out] [--jobs 2] [--per-effect 8]
         [--clean 24] [--pairs 28] [--seed 2026] [--duration 40] [--figure docs/figures/detection.png]
+        [--cases 39,55,71]   # only these plan indices, drawn as in the whole plan
     .venv/bin/python benchmarks/battery.py --from battery_out/cases.json   # summary, figure again
 
 Every case runs at the paper's rate (350.87 Hz), the lab rig at its own, cycling over the places (bench prototype,
@@ -52,6 +53,12 @@ def _init(duration: float) -> None:
                     lab=LabRigRunner(duration))
 
 
+# the part of each case's `diagnose --json` answer that its claims are checked on
+# (claims.failing_claims), kept in cases.json so the check can be redone on the record
+ANSWER_KEYS = ("named_cause", "named_causes", "verdict", "causes", "alternatives", "ambiguity",
+               "not_named", "stopped", "floor_pct")
+
+
 def named_causes(d) -> list[str]:
     """The causes a Diagnosis names, in order: its `causes` (Candidates, issue 15 item 2)
     when the detector names several, else its one `named_cause`."""
@@ -98,21 +105,26 @@ def run_one(spec: Spec) -> dict:
            "feedforward": spec.feedforward, "noise": spec.noise, "effects": list(spec.effects),
            "targets": list(spec.targets), "strengths": [], "options": [], "visibilities": [],
            "combined": 0.0, "clipped_pct": 0.0, "simulations": 0, "distinguishing": [],
-           "named": [], "ambiguity": [], "verdict": "", "failing_claims": [], "error": ""}
+           "saturated": [], "named": [], "ambiguity": [], "alternatives": [], "verdict": "",
+           "failing_claims": [], "answer": {}, "error": ""}
     t0 = time.perf_counter()
     try:
         out = run_spec(spec, _RUNNERS[p.source], _CACHE)
         rec.update(strengths=list(out.strengths), options=[dict(o) for o in out.options],
                    visibilities=list(out.visibilities), combined=out.combined,
                    simulations=sum(len(s.tried) for s in out.searches) + 1,
+                   saturated=[s.saturated for s in out.searches],
                    distinguishing=distinguishing(spec, out))
         # reporting only: a hidden effect may drive the loop into its torque limit
         rec["clipped_pct"] = 100 * clipped_samples(out.log).share
         t1 = time.perf_counter()
         d = diagnose(out.log)
+        doc = finite_json(d.to_json())
         rec.update(named=named_causes(d), ambiguity=list(d.ambiguities), verdict=d.verdict,
-                   diagnose_s=time.perf_counter() - t1,
-                   failing_claims=failing_claims(finite_json(d.to_json())))
+                   alternatives=[[a.named, a.other] for c in d.causes
+                                 for a in d.alternatives_of(c.effect)],
+                   diagnose_s=time.perf_counter() - t1, failing_claims=failing_claims(doc),
+                   answer={k: doc[k] for k in ANSWER_KEYS if k in doc})
     except Exception as err:  # a failed case is reported, never hidden
         rec["error"] = f"{type(err).__name__}: {err}"
     rec["seconds"] = time.perf_counter() - t0
@@ -124,6 +136,7 @@ def _line(rec: dict) -> str:
     vis = ",".join(f"{100 * v:.1f}" for v in rec["visibilities"]) or "-"
     apart = [f"{100 * v:.1f}" for v in rec.get("distinguishing", ()) if v is not None]
     vis += f" (apart {','.join(apart)})" if apart else ""
+    vis += " (out of reach)" if any(rec.get("saturated", ())) else ""
     named = ",".join(rec["named"]) or NONE
     mark = "error: " + rec["error"] if rec["error"] else ("" if right(rec) else "<-- miss")
     cond = ("ff" if rec["feedforward"] else "no-ff") + (" noise" if rec["noise"] else " quiet")
@@ -137,7 +150,8 @@ def _csv(records: list[dict]) -> str:
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(["index", "kind", "source", "model", "joint", "seed", "feedforward", "noise",
                 "effects", "strengths", "targets_pct", "visibilities_pct", "combined_pct",
-                "named", "right", "ambiguity", "error", "distinguishing_pct", "clipped_pct"])
+                "named", "right", "ambiguity", "error", "distinguishing_pct", "clipped_pct",
+                "saturated"])
     for r in records:
         w.writerow([r["index"], r["kind"], r["source"], r["model"], r["joint"], r["seed"],
                     r["feedforward"], r["noise"], ";".join(r["effects"]),
@@ -148,7 +162,8 @@ def _csv(records: list[dict]) -> str:
                     " | ".join(r.get("ambiguity", [])), r["error"],
                     ";".join("" if v is None else f"{100 * v:.2f}"
                              for v in r.get("distinguishing", [])),
-                    f"{r.get('clipped_pct', 0.0):.3g}"])
+                    f"{r.get('clipped_pct', 0.0):.3g}",
+                    ";".join(str(bool(x)) for x in r.get("saturated", []))])
     return buf.getvalue()
 
 
@@ -184,6 +199,18 @@ def figure(records: list[dict], path: Path) -> None:
     plt.close(fig)
 
 
+def case_indices(text: str) -> list[int]:
+    """--cases' value: comma-separated plan indices (>= 0), in ascending order without
+    repeats; argparse.ArgumentTypeError (exit 2) naming the bad item."""
+    out = set()
+    for item in text.split(","):
+        item = item.strip()
+        if not item.isdigit():
+            raise argparse.ArgumentTypeError(f"{item!r} is not a case index (an integer >= 0)")
+        out.add(int(item))
+    return sorted(out)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default="battery_out", help="output folder (default battery_out)")
@@ -195,17 +222,32 @@ def main(argv=None) -> int:
     ap.add_argument("--pairs", type=int, default=28)
     ap.add_argument("--seed", type=int, default=2026)
     ap.add_argument("--duration", type=float, default=40.0, help="log length [s] (default 40)")
-    ap.add_argument("--figure", default="docs/figures/detection.png",
-                    help="detection-curve figure (default docs/figures/detection.png)")
+    ap.add_argument("--figure", default=None,
+                    help="detection-curve figure (default docs/figures/detection.png; with "
+                         "--cases none unless given)")
+    ap.add_argument("--cases", type=case_indices, metavar="I,J,...",
+                    help="run only these indices of the plan (each case drawn as in the whole "
+                         "plan of these sizes and seed), e.g. to run its misses again")
+    ap.add_argument("--record", metavar="PREFIX",
+                    help="also write the cases as PREFIX.json (compact) and PREFIX.csv, e.g. "
+                         "docs/battery_cases for the record the docs and tests read")
     ap.add_argument("--from", dest="source", metavar="CASES.json",
                     help="run nothing: the summary and figure of an earlier cases.json")
     args = ap.parse_args(argv)
+    figure_path = args.figure or (None if args.cases else "docs/figures/detection.png")
     if args.source:
         records = json.loads(Path(args.source).read_text())["cases"]
         print("\n".join(summary_lines(records)))
-        figure(records, Path(args.figure))
+        if figure_path:
+            figure(records, Path(figure_path))
         return 0
     specs = plan(PLACES, args.per_effect, args.clean, args.pairs, args.seed)
+    if args.cases:
+        beyond = [i for i in args.cases if i >= len(specs)]
+        if beyond:
+            ap.error(f"--cases: no case {', '.join(map(str, beyond))} in a plan of "
+                     f"{len(specs)} cases (0-{len(specs) - 1})")
+        specs = [specs[i] for i in args.cases]
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     print(f"{len(specs)} cases, {args.jobs} job(s), {args.duration:g} s logs", flush=True)
@@ -230,6 +272,7 @@ def main(argv=None) -> int:
     text = "\n".join(lines) + "\n"
     print("\n" + text)
     meta = {"seed": args.seed, "duration_s": args.duration, "jobs": args.jobs,
+            "cases": args.cases or "all",
             "run_time_s": wall, "found_95_above": {
                 e: found_above(records, e) for e in sorted({r["effects"][0] for r in records
                                                             if r["kind"] == "single"})}}
@@ -237,9 +280,14 @@ def main(argv=None) -> int:
         {"battery": meta, "cases": records}), indent=1, allow_nan=False) + "\n")
     atomic_write_text(out / "cases.csv", _csv(records))
     atomic_write_text(out / "summary.txt", text)
-    figure(records, Path(args.figure))
-    print(f"wrote {out / 'cases.json'}, {out / 'cases.csv'}, {out / 'summary.txt'}, "
-          f"{args.figure}")
+    if args.record:
+        atomic_write_text(Path(args.record + ".json"), json.dumps(finite_json(
+            {"battery": meta, "cases": records}), separators=(",", ":"), allow_nan=False) + "\n")
+        atomic_write_text(Path(args.record + ".csv"), _csv(records))
+    if figure_path:
+        figure(records, Path(figure_path))
+    print(f"wrote {out / 'cases.json'}, {out / 'cases.csv'}, {out / 'summary.txt'}"
+          + (f", {figure_path}" if figure_path else ""))
     return 0
 
 

@@ -136,8 +136,9 @@ SECTIONS: tuple[Section, ...] = (
     Section("diagnose-model", (_cmd("{py} {root}/benchmarks/diagnose_model.py"),), minutes=5),
     Section("diagnose-battery", (_cmd("{py} {root}/benchmarks/diagnose_battery.py --per-effect 5"),),
             minutes=5),
-    Section("battery", (_cmd("{py} {root}/benchmarks/battery.py --jobs 2 --seed 2612 --out battery_out "
-                             "--figure {root}/docs/figures/detection.png", tail=40),), minutes=10),
+    Section("battery", (_cmd("{py} {root}/benchmarks/battery.py --jobs 2 --seed 4711 --out battery_out "
+                             "--record {root}/docs/battery_cases "
+                             "--figure {root}/docs/figures/detection.png", tail=40),), minutes=20),
     Section("emps", (_cmd("{jb} identify " + EMPS + "/emps_estimation.csv --model rigid --fc 100 "
                           "--decimate 10 --skip 49 --no-zoh --no-torque-filter"),
                      _cmd("{jb} simulate --replay " + EMPS + "/emps_estimation.csv"),

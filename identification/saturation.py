@@ -8,7 +8,9 @@ the controller's law: every equation of eqs. (6), (13), (18)-(20) whose filtered
 touches it is biased (a third of the samples clipped gives K -94 %). `clipped_samples` finds
 them, `exclude_clipped` drops the regression rows within reach of one (the Butterworth's and
 the decimation filter's impulse responses), and a log with more than MAX_CLIPPED_SHARE of
-its samples clipped is refused (`LogError`): what is left says nothing reliable.
+its samples clipped is refused (`LogError`) by `identify`: what is left says nothing reliable
+about the parameters. `diagnose` does not refuse it: the clip can be the symptom it looks for
+(bench.analysis.diagnose.clipped).
 
 Pure numerics (numpy), no I/O.
 """
@@ -59,23 +61,33 @@ def _runs(mask: np.ndarray) -> int:
     return int(np.count_nonzero(np.diff(np.r_[0, mask.astype(np.int8)]) == 1))
 
 
-def clipped_samples(log: Log) -> Clipping:
+def at_limit(log: Log) -> np.ndarray:
+    """The samples whose torque is at the metadata's `tau_max` (all False without it)."""
+    tau = np.asarray(log.tau_m, dtype=float)
+    tau_max = log.meta_float("tau_max")
+    if tau_max is None:
+        return np.zeros(len(tau), dtype=bool)
+    return np.abs(tau) >= tau_max * (1 - CLIP_RELATIVE)
+
+
+def clipped_samples(log: Log, limit_applied: bool = False) -> Clipping:
     """The samples at the metadata's `tau_max` and on flat tops of the torque (module
-    docstring)."""
+    docstring). `limit_applied`: the torque at `tau_max` is taken as the one the axis
+    received (the controller's own clip, docs/controller.md, which the closed-loop replay
+    applies too): only flat tops elsewhere count."""
     tau = np.asarray(log.tau_m, dtype=float)
     mask = np.zeros(len(tau), dtype=bool)
     hows = []
     tau_max = log.meta_float("tau_max")
-    if tau_max is not None:
-        at = np.abs(tau) >= tau_max * (1 - CLIP_RELATIVE)
-        if at.any():
-            mask |= at
-            hows.append(f"at the metadata's tau_max = {tau_max:g}")
+    limit = at_limit(log)
+    if limit.any() and not limit_applied:
+        mask |= limit
+        hows.append(f"at the metadata's tau_max = {tau_max:g}")
     for extreme in (float(np.max(tau)), float(np.min(tau))):
         at = np.abs(tau - extreme) <= CLIP_RELATIVE * abs(extreme)
         if extreme != 0 and _runs(at) >= PLATEAU_RUNS and \
                 np.count_nonzero(at) >= max(5, PLATEAU_MIN_SHARE * len(tau)) and \
-                not (mask[at].all() and hows):
+                not (limit[at].all() and limit.any()):
             mask |= at
             hows.append(f"a flat top at {extreme:g} in {_runs(at)} runs")
     return Clipping(mask=mask, how="; ".join(hows) or "none")
@@ -93,10 +105,13 @@ def check_clipping(log: Log) -> Clipping:
     return clip
 
 
-def clipping_warnings(log: Log, excluded: bool = True) -> list[str]:
+def clipping_warnings(log: Log, excluded: bool = True, refuse: bool = True) -> list[str]:
     """The warning for a log with clipped torque samples ([] when none; LogError over
-    MAX_CLIPPED_SHARE): `excluded` says whether the analysis leaves their rows out."""
-    clip = check_clipping(log)
+    MAX_CLIPPED_SHARE unless `refuse` is False): `excluded` says whether the analysis leaves
+    their rows out. `refuse` False is for an analysis that states itself what the rows left
+    can say (diagnose: a torque lag that drives the loop into its limit clips a third of the
+    samples and more, and is what the log shows, not a reason to refuse it)."""
+    clip = check_clipping(log) if refuse else clipped_samples(log)
     if not clip.count:
         return []
     return [clip.message(log.path) + (

@@ -170,34 +170,52 @@ class Spec:
         return ("clean", "single", "pair")[min(len(self.effects), 2)]
 
 
+# (velocity feedforward, torque noise): the conditions a case runs under
+CONDITIONS = ((True, True), (False, True), (True, False), (False, False))
+
+
+def condition_index(k: int, cycle: int, group: int) -> int:
+    """The CONDITIONS index of the k-th case of a group (the clean cases, one effect's, the
+    pairs: `group` 0, 1, ...) that cycles over `cycle` places: (k + k // M + group) mod 4,
+    M = lcm(cycle, 4). Consecutive cases walk the conditions (each block of M cases takes
+    each one M / 4 times); a place met again `cycle` cases later moves on by cycle mod 4,
+    and after M cases, where that has brought it back, by one more; the next group starts
+    one further. So every place, every effect and every kind sees all four."""
+    n = len(CONDITIONS)
+    return (k + k // math.lcm(cycle, n) + group) % n
+
+
 def plan(places: tuple[Place, ...], per_effect: int = 8, clean: int = 24, pairs: int = 20,
          seed: int = 2026, effects: tuple[str, ...] = BATTERY_EFFECTS) -> list[Spec]:
     """The cases: `per_effect` for every effect, `clean` clean ones and `pairs` two-effect
     ones, cycling over `places` (gravity only where the link has a gravity torque) and over
-    the four (feedforward, noise) conditions; targets uniform in VISIBILITY_RANGE, pairs'
-    in PAIR_RANGE, two distinct effects each."""
+    the four (feedforward, noise) CONDITIONS; targets uniform in VISIBILITY_RANGE, pairs'
+    in PAIR_RANGE, two distinct effects each. A case's condition is `condition_index`'s:
+    every place and every effect sees each condition. The draw (seeds, targets, effects)
+    is the seed's alone: the conditions take nothing from it."""
     rng = np.random.default_rng(seed)
-    conditions = ((True, True), (False, True), (True, False), (False, False))
     out: list[Spec] = []
 
-    def add(pool: tuple[Place, ...], k: int, names: tuple[str, ...], targets: tuple) -> None:
-        ff, noise = conditions[len(out) % 4]
-        out.append(Spec(len(out), pool[k % len(pool)], int(rng.integers(1, 2**31 - 1)), ff,
-                        noise, names, tuple(float(t) for t in targets)))
+    def add(place: Place, condition: int, names: tuple[str, ...], targets: tuple) -> None:
+        ff, noise = CONDITIONS[condition]
+        out.append(Spec(len(out), place, int(rng.integers(1, 2**31 - 1)), ff, noise, names,
+                        tuple(float(t) for t in targets)))
 
     for k in range(clean):
-        add(places, k, (), ())
-    for name in effects:
+        add(places[k % len(places)], condition_index(k, len(places), 0), (), ())
+    for group, name in enumerate(effects, start=1):
         pool = tuple(p for p in places if p.gravity) if name == "gravity" else places
         for k in range(per_effect):
-            add(pool, k, (name,), (rng.uniform(*VISIBILITY_RANGE),))
+            add(pool[k % len(pool)], condition_index(k, len(pool), group), (name,),
+                (rng.uniform(*VISIBILITY_RANGE),))
     motor_side = [e for e in effects if e != "gravity"]
     for k in range(pairs):
         place = places[k % len(places)]
         names = [e for e in effects if e != "gravity" or place.gravity] if k % 3 == 0 \
             else motor_side
         a, b = rng.choice(len(names), 2, replace=False)
-        add((place,), 0, (names[a], names[b]), rng.uniform(*PAIR_RANGE, 2))
+        add(place, condition_index(k, len(places), len(effects) + 1), (names[a], names[b]),
+            rng.uniform(*PAIR_RANGE, 2))
     return out
 
 

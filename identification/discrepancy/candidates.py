@@ -12,13 +12,14 @@ from typing import Callable, Sequence
 import numpy as np
 from scipy import optimize, stats
 
-from jointbench.identification.discrepancy.heldout import (FOLDS, MATERIAL, Scores, bar,
-                                                           evidence, fitted_rss, fold_of_rows,
-                                                           held_out, preferred, scores, t_bar)
+from jointbench.identification.discrepancy.heldout import (FOLDS, MATERIAL, SEGMENTS, Scores,
+                                                           bar, evidence, fitted_rss,
+                                                           fold_of_rows, held_out, preferred,
+                                                           scores, t_bar)
 from jointbench.identification.discrepancy.nominal import Nominal, transmitted_rms
 from jointbench.identification.discrepancy.stacked import Stacked, apply, design_many, stacked
 from jointbench.identification.effects import EFFECTS
-from jointbench.identification.effects.base import Design, Effect
+from jointbench.identification.effects.base import FOLD_FITS, Design, Effect
 
 BIC_MIN = 10.0          # "very strong" evidence on Kass and Raftery's scale (information only)
 
@@ -39,6 +40,10 @@ class SecondView:
     detail: str            # the two values and their spreads, for the report
     unphysical: str = ""
     acts_pct: float = float("nan")   # its held-out share over the equations it acts in
+    # the first band's share over every row need not be positive (lag_band: a hardening's
+    # view at large deflections, its share in the first band lost to a cause beside it)
+    diluted: bool = False
+    segments: int = SEGMENTS   # the segments its test is over (heldout.dof)
 
     def confirms(self, alpha: float) -> bool:
         return (not self.unphysical and self.agree and self.heldout_pct > 0
@@ -66,6 +71,7 @@ class HeldOutTest:
     level: float
     explained_pct: float = float("nan")   # in sample (the chooser's band only)
     acts_pct: float = float("nan")   # the held-out share over the equations it acts in
+    segments: int = SEGMENTS   # the segments its t is over: a view over fewer asks more
 
     @property
     def own_share(self) -> float:
@@ -80,7 +86,7 @@ class HeldOutTest:
     @property
     def bar(self) -> float:
         """The t its level asks for (heldout.t_bar)."""
-        return t_bar(self.level) if self.level > 0 else float("inf")
+        return t_bar(self.level, self.segments) if self.level > 0 else float("inf")
 
     def describe(self) -> str:
         """"t = .. (p = ..) against the bar t > .. (level ..), held out .. %" with its view."""
@@ -125,9 +131,14 @@ class Candidate:
     X: tuple[float, ...] = ()
     names: tuple[str, ...] = ()
     unphysical: str = ""             # why the best fit is not a physical instance of it
+    # standard errors by which that fit lies beyond its physical bound (Effect.beyond; inf
+    # where the effect gives none)
+    beyond_se: float = float("inf")
     residual: np.ndarray | None = field(default=None, repr=False, compare=False)
     # each row's weighted held-out error (its fold's fit): comparisons between candidates
     heldout_errors: np.ndarray | None = field(default=None, repr=False, compare=False)
+    # the reference's held-out errors it was weighed against (a coupled cause refitted)
+    reference_errors: np.ndarray | None = field(default=None, repr=False, compare=False)
     fixed: dict = field(default_factory=dict)   # values the effect's columns are built with
     base: tuple[tuple[str, dict], ...] = ()     # causes named before it, as its fit has them
     acts: tuple[int, ...] = ()   # the equation blocks its columns change (acts_in); () all
@@ -144,13 +155,16 @@ class Candidate:
 
     @property
     def confirmed(self) -> bool:
-        """Significant in the second band's view (SecondView.confirms) at its level."""
-        return self.second is not None and self.second.confirms(self.level)
+        """Significant in the second band's view (SecondView.confirms) at its level, with a
+        positive share in the first band unless the view says that share is diluted."""
+        v = self.second
+        return (v is not None and v.confirms(self.level)
+                and (self.heldout_pct > 0 or v.diluted))
 
     @property
     def significant(self) -> bool:
-        return (self.testable and not self.unphysical and self.heldout_pct > 0
-                and (self.p_heldout < self.level or self.confirmed))
+        return (self.testable and not self.unphysical
+                and (self.heldout_pct > 0 and self.p_heldout < self.level or self.confirmed))
 
     @property
     def own_test(self) -> HeldOutTest:
@@ -167,7 +181,7 @@ class Candidate:
             return own
         v = self.second
         return HeldOutTest(v.band, v.heldout_pct, v.t_stat, v.p_heldout, self.level,
-                           acts_pct=v.acts_pct)
+                           acts_pct=v.acts_pct, segments=v.segments)
 
     @property
     def why_not(self) -> str:
@@ -278,10 +292,17 @@ def _evaluate(nom: Nominal, ref: Reference, e: Effect, fixed: dict,
     acts = acts_in(nom, (y0, W0, names0), (y, W, names))
     ev = evidence(ref.scores.errors, errors, len(nom.sig.index), acts)
     values = dict(zip(names, X))
-    why = e.check({**fixed, **values}, nom) if e.check else ""   # fitted and searched values
+    best = min(records, key=lambda r: r.full)
+    folds = (() if best.fold_X is None
+             else tuple(dict(zip(names, x)) for x in best.fold_X))
+    # fitted and searched values, and each fold's training fit (the fit's own spread)
+    v = {**fixed, **values, FOLD_FITS: folds}
+    why = e.check(v, nom) if e.check else ""
+    far = float(e.beyond(v, nom)) if e.beyond else float("inf")
     return Candidate(effect=e.name, testable=True, parameters=e.params(values, fixed, nom),
-                     k=k, rss=rss, unphysical=why,
+                     k=k, rss=rss, unphysical=why, beyond_se=far,
                      residual=res_after, heldout_errors=errors,
+                     reference_errors=ref.scores.errors,
                      explained_pct=100 * (rss0 - rss) / rss0,
                      heldout_pct=ev.explained_pct, acts_pct=ev.acts_pct, t_stat=ev.t,
                      p_heldout=ev.p,
@@ -333,6 +354,19 @@ def _coupled(e: Effect, base: tuple[tuple[str, dict], ...]) -> list[int]:
             if EFFECTS[name].search and EFFECTS[name].block == 1]
 
 
+def _reducing(e: Effect, base: tuple[tuple[str, dict], ...]) -> list[int]:
+    """The named causes that reduce to e (registry `reduces_to`: an asymmetric friction
+    beside an offset candidate) and have a searched value (the asymmetry's viscous-to-Coulomb
+    split). That value was read before the causes named after it were in place, or beside
+    the very offset being tested (where the split is arbitrary: the offset takes the
+    constant); searched again on the causes alone, the constant its Coulomb part takes under
+    them is its own, not the candidate's (a prototype asymmetry whose split, read before a
+    torque ripple was named, has no Coulomb part: an offset then took that part up as a
+    third cause)."""
+    return [i for i, (name, _) in enumerate(base)
+            if EFFECTS[name].reduces_to == e.name and EFFECTS[name].search]
+
+
 def _refitted(nom: Nominal, ref: Reference, coupled: list[int]) -> Reference:
     """`ref` with the searched values of its causes `coupled` searched again, in turn, on the
     causes alone: what a coupled candidate is credited with is then what it adds, not what
@@ -365,14 +399,16 @@ def candidate(nom: Nominal, effect: str, ref: Reference | None = None) -> Candid
     nominal model). A named cause that shapes the same law (_coupled) has its searched value
     searched again beside it, and the effect's once more: the candidate is the effect with
     the causes refitted beside it, against the causes refitted alone (_refitted) where a
-    cause was named after the coupled one."""
+    cause was named after the coupled one; a named cause that reduces to the effect has its
+    searched value searched again on the causes alone (_reducing)."""
     ref = ref or reference(nom)
     e = _effect(effect)
     coupled = _coupled(e, ref.base.effects)
     # a cause searched with every cause after it already in place needs no refit alone
     last = len(ref.base.effects) - 1
-    if any(i < last for i in coupled):
-        ref = _refitted(nom, ref, [i for i in coupled if i < last])
+    refit = [i for i in coupled if i < last] + _reducing(e, ref.base.effects)
+    if refit:
+        ref = _refitted(nom, ref, refit)
     fixed = e.reference(nom) if e.reference else {}
     records: list[Scores] = []
     trials: list[tuple[float | None, Stacked]] = []

@@ -55,7 +55,7 @@ from that rate alone. (With the 8 effects a log with q tests in the first round 
 t > 4.23, 7 in the second t > 4.18; 4 effects without q, t > 3.97.) A torque lag on a log
 whose excitation runs above the chooser's band is tested in that wider band too, each of its
 two tests at half its level (identification.discrepancy.lag_band: t > 4.50 in a first round
-of 8).
+of 8); so is a hardening, its second test there over the segments of large deflection only.
 
 Among the significant effects the named one explains the most of the held-out residual,
 100 (1 - sum e1^2 / sum e0^2).
@@ -98,6 +98,7 @@ class Scores:
     train: np.ndarray
     held: np.ndarray
     errors: np.ndarray       # each row's weighted held-out error (its fold's fit)
+    fold_X: np.ndarray | None = None   # each fold's training fit, one row per fold
 
 
 def scores(nom: Nominal, folds: np.ndarray, y: np.ndarray, W: np.ndarray) -> Scores:
@@ -126,7 +127,8 @@ def scores(nom: Nominal, folds: np.ndarray, y: np.ndarray, W: np.ndarray) -> Sco
     # each row by its fold's fit, elementwise (no BLAS thread wake-up), all folds at once
     errors = b - (A * xs[folds]).sum(axis=1)
     held = np.array([float(errors[i] @ errors[i]) for i in parts])
-    return Scores(full=full, X=x / scale, train=train, held=held, errors=errors)
+    return Scores(full=full, X=x / scale, train=train, held=held, errors=errors,
+                  fold_X=xs / scale)
 
 
 def fitted_rss(nom: Nominal, y: np.ndarray, W: np.ndarray) -> float:
@@ -179,19 +181,27 @@ class Evidence:
     t: float                 # t of the segments' log-ratios (MSSD spread), MATERIAL margin
     p: float                 # its one-sided p-value, dof(SEGMENTS) degrees of freedom
     acts_pct: float = float("nan")   # the share over the rows of the equations it acts in
+    segments: int = SEGMENTS          # the segments its t is over (its degrees of freedom)
 
 
 def evidence(e0: np.ndarray, e1: np.ndarray, n_times: int,
-             blocks: tuple[int, ...] = ()) -> Evidence:
+             blocks: tuple[int, ...] = (), within: np.ndarray | None = None) -> Evidence:
     """Segment test of e1 removing more than MATERIAL of e0's squared error (module
     docstring); rows are stacked by block, `n_times` instants each. The share is over every
-    row; the test over the rows of `blocks` (the equations the effect acts in; () all)."""
+    row; the test over the rows of `blocks` (the equations the effect acts in; () all).
+    `within` (a mask over the SEGMENTS segments, None for all) keeps the test and both
+    shares to those segments: a band of the log chosen without its residual (lag_band's
+    large deflections)."""
     a0, a1 = (e ** 2 for e in (e0, e1))
+    if within is not None:
+        inside = np.tile(np.asarray(within, bool)[segment_of_rows(n_times)], len(a0) // n_times)
+        a0, a1 = a0 * inside, a1 * inside
     share = _share(a0, a1)
     rows = list(blocks) if blocks else slice(None)
     acts = _share(a0.reshape(-1, n_times)[rows], a1.reshape(-1, n_times)[rows])
-    t, p = segment_t(segment_log_ratios(e0, e1, n_times, blocks) + np.log(1 - MATERIAL))
-    return Evidence(explained_pct=share, t=t, p=p, acts_pct=acts)
+    l = segment_log_ratios(e0, e1, n_times, blocks, within)
+    t, p = segment_t(l + np.log(1 - MATERIAL))
+    return Evidence(explained_pct=share, t=t, p=p, acts_pct=acts, segments=len(l))
 
 
 def _share(a0: np.ndarray, a1: np.ndarray) -> float:
@@ -201,15 +211,19 @@ def _share(a0: np.ndarray, a1: np.ndarray) -> float:
 
 
 def segment_log_ratios(e0: np.ndarray, e1: np.ndarray, n_times: int,
-                       blocks: tuple[int, ...] = ()) -> np.ndarray:
-    """log(sum e0^2 / sum e1^2) in each segment (where both are positive), over the rows of
-    `blocks` (every block for ()). An effect that acts in one equation is measured there:
+                       blocks: tuple[int, ...] = (),
+                       within: np.ndarray | None = None) -> np.ndarray:
+    """log(sum e0^2 / sum e1^2) in each segment (where both are positive; of the segments
+    `within` only, a mask over the SEGMENTS, when given), over the rows of `blocks` (every
+    block for ()), in time order. An effect that acts in one equation is measured there:
     the other equation's errors, which it leaves as they were, would add the same amount to
     both sums and pull every ratio towards 1."""
     sq0, sq1 = ((e ** 2).reshape(-1, n_times) for e in (e0, e1))
     rows = list(blocks) if blocks else slice(None)
     h0, h1 = segment_sums(sq0[rows].sum(axis=0)), segment_sums(sq1[rows].sum(axis=0))
     ok = (h0 > 0) & (h1 > 0)
+    if within is not None:
+        ok &= np.asarray(within, bool)
     return np.log(h0[ok] / h1[ok])
 
 
@@ -243,6 +257,6 @@ def bar(m: int) -> float:
     return ALPHA / max(m, 1)
 
 
-def t_bar(alpha: float) -> float:
-    """The t value that p-value bar `alpha` corresponds to."""
-    return float(stats.t.isf(alpha, dof(SEGMENTS)))
+def t_bar(alpha: float, k: int = SEGMENTS) -> float:
+    """The t value that p-value bar `alpha` corresponds to, for a test over k segments."""
+    return float(stats.t.isf(alpha, dof(k)))

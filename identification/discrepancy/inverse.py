@@ -10,11 +10,13 @@ until one of them is named, so the round where that would first happen tests eac
 or less, m at least their number. (A bar of ALPHA / (every test run so far), 15 tests in the
 second round of a log with q, 7 of one without, asked EMPS's offset for t > 4.18 where it has
 3.93; Holm asks 3.86.) A torque lag's hypothesis is tested in two bands on a log with a wide
-band, each test at half its level (identification.discrepancy.lag_band). The named cause of a
+band, each test at half its level, and so is a hardening's, its second view at large
+deflections (identification.discrepancy.lag_band). The named cause of a
 round is, among the significant ones, the one that explains the most of the held-out
 residual, unless a simpler significant
 one explains it as well: the richer is then named only if what it adds to the simpler is
-significant (_simplest_first), and the answer says when the log cannot tell them apart;
+significant (_simplest_first), and where the log cannot tell them apart the answer says
+"one of A or B": the named cause carries the other as its alternative (Alternative);
 between an effect and the one it reduces to (an asymmetric friction and an offset) the choice,
 once one of them is significant, is a two-way decision at its own level (_which).
 
@@ -35,13 +37,18 @@ the encoder's resolution, a simulator's small damping, the first cause's residua
 
 **More than two causes** (_leave_one_out): each must pass on its own, against the model
 holding all the others (their values from the joint fit), at the level of the round it
-entered; the weakest that fails is dropped, the others fitted again in order (_chain), and
-again until all pass. The dropped are listed with their test.
+entered; the weakest that fails is dropped, the others fitted again in order (_chain: one
+that fails against the ones before it is tried again on top of the ones kept after it; a
+later cause that reduces to the dropped one takes its place, _in_place), and again until
+all pass. The dropped are listed with their test.
 
 **One of A or B** (_alternatives): a significant candidate of a round that is not named,
 whose held-out errors the segment test without margin cannot separate from the named
-cause's in either direction at DECIDE, explains the same thing: the answer says "one of A
-or B", with the share each explains, rather than choosing silently.
+cause's in either direction at DECIDE, explains the same thing; so does the other of a
+parsimony choice that the log cannot make (_simplest_first: neither adds to the other, an
+offset and an asymmetric friction while the motor moves). The answer says "one of A or B",
+with the share each explains, in its text and as the named cause's alternative, rather than
+choosing silently.
 
 Every effect tested and not named is listed apart with why (NotNamed).
 """
@@ -99,11 +106,23 @@ class NotNamed:
         return out
 
 
+def one_of(note: str) -> frozenset[str]:
+    """The two effects a note or an alternative's text opens with ("one of A or B: ..." or
+    "A or B: ..."); empty when it opens with no such pair."""
+    head = note.split(":", 1)[0].removeprefix("one of ")
+    pair = frozenset(head.split(" or "))
+    return pair if len(pair) == 2 and all(x in EFFECTS for x in pair) else frozenset()
+
+
 @dataclass(frozen=True)
 class Alternative:
-    """One of A or B: the named cause `named` and a candidate `other` of the same round whose
-    held-out errors the segment test cannot separate from its (t of each better than the
-    other, at DECIDE): their shares of the held-out residual."""
+    """One of A or B: the named cause `named` and a candidate `other` of the same round that
+    the log cannot tell from it, with their shares of the held-out residual. Either their
+    held-out errors, compared directly, cannot be separated in either direction at DECIDE
+    (_alternatives: t, the named's errors smaller than the other's, t_back the converse), or
+    the parsimony choice between them could not be made (`how` "nested", _simplest_first: t
+    what the named adds on top of the other, NaN where not computed, t_back the converse;
+    `text` the note that says so)."""
 
     named: str
     other: str
@@ -112,22 +131,32 @@ class Alternative:
     t: float        # the named's held-out errors smaller than the other's
     t_back: float   # the converse
     round: int = 1
+    how: str = "direct"   # "direct" (_alternatives) or "nested" (the parsimony choice)
+    text: str = ""        # the parsimony note, for "nested"
 
     def describe(self) -> str:
+        if self.text:
+            return self.text
         return (f"one of {self.named} or {self.other}: held out {self.named} explains "
                 f"{self.named_pct:.3g} %, {self.other} {self.other_pct:.3g} % of the residual, "
                 f"and the segment test cannot separate them (t = {self.t:.3g} and "
                 f"{self.t_back:.3g}, the bar t > {t_bar(DECIDE):.3g}); {self.named} is named")
 
     def stated_in(self, notes: tuple[str, ...]) -> bool:
-        """A parsimony note (_apart, "A or B: ...") already says it."""
-        pair = {self.named, self.other}
-        return any(set(n.split(":", 1)[0].split(" or ")) == pair for n in notes)
+        """A parsimony note (_apart, "one of A or B: ..." or "A or B: ...") already says it."""
+        return any(one_of(n) == {self.named, self.other} for n in notes)
 
     def to_json(self) -> dict:
         return {"named": self.named, "other": self.other, "named_heldout_pct": self.named_pct,
                 "other_heldout_pct": self.other_pct, "t": self.t, "t_back": self.t_back,
-                "alpha": DECIDE, "round": self.round, "text": self.describe()}
+                "alpha": DECIDE, "round": self.round, "how": self.how,
+                "text": self.describe()}
+
+    def of_cause(self) -> dict:
+        """The named cause's entry for it (diagnose --json: causes[].alternatives)."""
+        return {"effect": self.other, "heldout_pct": self.other_pct,
+                "named_heldout_pct": self.named_pct, "round": self.round, "how": self.how,
+                "text": self.describe()}
 
 
 @dataclass(frozen=True)
@@ -181,10 +210,11 @@ def _model(causes: tuple[Candidate, ...]) -> tuple[tuple[str, dict], ...]:
 
 
 def _round(nom: Nominal, names: list[str], causes: tuple[Candidate, ...],
-           band: LagBand, k: int = 1) -> tuple[list[Candidate], str]:
-    """One round: the candidates ranked, the one to name first at the top, and a note when
-    the log cannot tell a richer candidate from it ("" otherwise: _simplest_first); the lag
-    tested in the wide band too (lag_band)."""
+           band: LagBand, k: int = 1) -> tuple[list[Candidate], str, Alternative | None]:
+    """One round: the candidates ranked, the one to name first at the top, a note when the
+    log cannot tell a richer candidate from it ("" otherwise: _simplest_first) and, when it
+    cannot, that candidate as the alternative of the one to name; the lag tested in the wide
+    band too (lag_band)."""
     m = len(names)
     model = _model(causes)
     ref = reference(nom, model, m=m)
@@ -234,7 +264,7 @@ def _material(richer: Candidate, simpler: Candidate, physical: bool) -> bool:
 
 
 def _simplest_first(ranked: list[Candidate], nom: Nominal,
-                    m: int) -> tuple[list[Candidate], str]:
+                    m: int) -> tuple[list[Candidate], str, Alternative | None]:
     """Parsimony among the significant: the best is named over a simpler significant
     candidate S (fewer parameters) only if what it adds to S predicts the held-out rows
     significantly better (it fitted on top of S, the segment test without margin at the
@@ -243,25 +273,33 @@ def _simplest_first(ranked: list[Candidate], nom: Nominal,
     the one it reduces to (registry `reduces_to`: an asymmetric friction and an offset), in
     either order, the choice is two-way (_which): while the motor moves the Coulomb part of
     an asymmetry is a constant torque, and only its viscous part a FVm |qm'| differs, so
-    compared directly, not nested, the share that differs goes either way by chance."""
+    compared directly, not nested, the share that differs goes either way by chance.
+
+    Where the log cannot tell them apart (neither adds to the other), the one named carries
+    the other as its alternative, "one of A or B" (Alternative, how "nested")."""
     if not ranked or not ranked[0].significant:
-        return ranked, ""
+        return ranked, "", None
     best = ranked[0]
     sig = [c for c in ranked if c.significant]
     alpha = best.alpha
-    first, note = best, ""
+    first, note, alt = best, "", None
     # a richer effect that reduces to the best, significant or not (while the motor moves a
-    # Coulomb-dominated asymmetric friction is an offset, and may explain a hair less)
-    richer = next((c for c in ranked if c.testable and not c.unphysical
+    # Coulomb-dominated asymmetric friction is an offset, and may explain a hair less), its
+    # own fit physical or beyond its bound by less than the round's bar (_near): such an
+    # asymmetry is never named (_which names only a significant one), but where the log
+    # cannot tell the two apart it is the alternative of the offset named
+    richer = next((c for c in ranked if c.testable and _near(c)
                    and EFFECTS[c.effect].reduces_to == best.effect), None)
     if richer is not None:
-        named, note = _which(nom, best, richer, m)
+        named, note, alt = _which(nom, best, richer, m)
         if named:
-            return [richer] + [c for c in ranked if c is not richer], note
+            return [richer] + [c for c in ranked if c is not richer], note, alt
     for s in sig:
         if EFFECTS[first.effect].reduces_to == s.effect:
-            named, why = _which(nom, s, first, m)
-            note, first = why or note, first if named else s
+            named, why, which = _which(nom, s, first, m)
+            if why:
+                note, alt = why, which
+            first = first if named else s
             continue
         if not s.k < first.k:
             continue
@@ -269,18 +307,39 @@ def _simplest_first(ranked: list[Candidate], nom: Nominal,
         if p < alpha:
             continue
         if _material(first, s, physical):
-            note = _apart(s, first, t, alpha, more=True)
+            note, alt = _apart(s, first, t, alpha, more=True), None
             continue
         note = _apart(s, first, t, alpha, unphysical=not physical)
+        alt = _nested(s, first, t, float("nan"), note)
         first = s
-    return [first] + [c for c in ranked if c is not first], note
+    if alt is not None and alt.named != first.effect:
+        alt = None
+    return [first] + [c for c in ranked if c is not first], note, alt
+
+
+def _near(c: Candidate) -> bool:
+    """Physical, or unphysical by less than the round's bar t_bar(alpha) of its own standard
+    errors (Candidate.beyond_se): an asymmetric friction at its bound (one direction's Coulomb
+    friction near zero) overshoots the bound by noise, and a log that excludes it as a
+    description must do so with the strength that naming a cause asks."""
+    return not c.unphysical or c.beyond_se <= t_bar(c.alpha)
+
+
+def _nested(simpler: Candidate, richer: Candidate, t: float, t_back: float,
+            note: str) -> Alternative:
+    """`richer` as the alternative of the named `simpler` where the parsimony choice cannot
+    tell them apart: t what `richer` adds to `simpler`, t_back the converse (NaN where not
+    computed); `note` says so."""
+    return Alternative(simpler.effect, richer.effect, simpler.heldout_pct, richer.heldout_pct,
+                       t_back, t, simpler.round, how="nested", text=note)
 
 
 def _which(nom: Nominal, simpler: Candidate, richer: Candidate,
-           m: int) -> tuple[bool, str]:
+           m: int) -> tuple[bool, str, Alternative | None]:
     """The two-way choice between `richer` and the effect it reduces to, `simpler` (an
     asymmetric friction and an offset), once one of them is established (significant at the
-    round's Holm level): is `richer` named, and the note. Both nest in the model with both
+    round's Holm level): is `richer` named, the note, and `richer` as the alternative of the
+    named `simpler` when the log cannot tell them apart. Both nest in the model with both
     columns; the segment test without margin (_on_top) of that model against each gives t,
     what `richer` adds to `simpler`, and t2, what `simpler` adds to `richer`. `richer` is
     named when it is significant itself, its fit on top of `simpler` is physical, and what it
@@ -308,13 +367,16 @@ def _which(nom: Nominal, simpler: Candidate, richer: Candidate,
     t, p, physical = _on_top(nom, richer, simpler, m)
     t2, p2, _ = _on_top(nom, simpler, richer, m)
     if richer.significant and physical and (p < DECIDE <= p2 or p < alpha):
-        return True, ""
+        return True, "", None
     if richer.significant and _material(richer, simpler, physical):
-        return True, _apart(simpler, richer, t, alpha, more=True)
+        return True, _apart(simpler, richer, t, alpha, more=True), None
     if p2 < DECIDE <= p:
-        return False, ""
-    return False, _apart(simpler, richer, t, DECIDE, t2, unphysical=not physical,
-                         both=p < DECIDE and p2 < DECIDE)
+        return False, "", None
+    both = p < DECIDE and p2 < DECIDE
+    note = _apart(simpler, richer, t, DECIDE, t2, unphysical=not physical, both=both)
+    if richer.unphysical:   # what keeps it from being named where its part adds
+        note += f"; {richer.effect}'s own fit is unphysical ({richer.unphysical})"
+    return False, note, None if both else _nested(simpler, richer, t, t2, note)
 
 
 def _apart(simpler: Candidate, richer: Candidate, t: float, alpha: float,
@@ -323,16 +385,19 @@ def _apart(simpler: Candidate, richer: Candidate, t: float, alpha: float,
     """The ambiguity note: `simpler` named (or `richer`, with `more`: it removes more than
     MATERIAL of `simpler`'s held-out residual, _material); `unphysical`: `richer` fitted on
     top of `simpler` is not physical, whatever its t; `both`: each adds to the other (_which),
-    `simpler` named first."""
+    `simpler` named first. Where the log cannot choose (neither), the note opens with "one of
+    A or B"."""
     back = ("" if converse is None else
             f", what {simpler.effect} adds to {richer.effect} t = {converse:.3g}")
     fit = " (an unphysical fit)" if unphysical else ""
     named = (f"{richer.effect}, which removes {100 * beyond(richer, simpler):.3g} % of what "
              f"{simpler.effect} leaves, is named" if more else
-             f"the simpler, {simpler.effect}, is named" + (" first" if both else ""))
+             f"the simpler, {simpler.effect}, is named" + (" first" if both else
+                                                            " for the two"))
     what = ("this log carries a part of each that the other cannot follow" if both else
             "this log cannot tell them apart")
-    return (f"{simpler.effect} or {richer.effect}: {what} "
+    head = "" if more or both else "one of "   # the log cannot choose: one of the two
+    return (f"{head}{simpler.effect} or {richer.effect}: {what} "
             f"({richer.effect} explains {richer.heldout_pct:.3g} % of the held-out residual, "
             f"{simpler.effect} {simpler.heldout_pct:.3g} %; what {richer.effect} adds to "
             f"{simpler.effect} has t = {t:.3g}{fit}{back}, the bar t > {t_bar(alpha):.3g}); "
@@ -340,7 +405,7 @@ def _apart(simpler: Candidate, richer: Candidate, t: float, alpha: float,
 
 
 def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...] | None = None,
-                     link_friction: bool = True) -> InverseDiagnosis:
+                     link_friction: bool = True, limit_applied: bool = False) -> InverseDiagnosis:
     """Evaluate every effect of docs/effects.md against the nominal model of `log` (with the
     link Coulomb friction FS unless `link_friction` is False) and rank them; name the best
     significant one, then test the others on top of it, and so on (module docstring: the
@@ -349,7 +414,7 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
     ValueError when the log has q and the deflection q_m - q never changes (to the text's
     precision, 12 digits): the link then moves with the motor as one body, and nothing acting
     between them (eq. 5) is testable."""
-    nom = nominal(log, settings, link_friction)
+    nom = nominal(log, settings, link_friction, limit_applied)
     if log.q is not None and (np.ptp(log.q_m - log.q)
                               <= 1e-9 * max(1.0, float(np.max(np.abs(log.q_m))))):
         raise ValueError(f"{log.path or 'the log'}: the deflection q_m - q never changes: "
@@ -365,10 +430,11 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
             first.append(Candidate(effect=name, testable=False, reason=WHY_IN_NOMINAL))
         else:
             names.append(name)
-    band = LagBand(log, settings, link_friction)
-    ranked, note = _round(nom, names, (), band, 1)
+    band = LagBand(log, settings, link_friction, limit_applied)
+    ranked, note, alt = _round(nom, names, (), band, 1)
     causes: tuple[Candidate, ...] = ()
     notes: tuple[tuple[str, str], ...] = ()   # (the cause it is about, the note)
+    nested: list[Alternative] = []   # the parsimony choices the log could not make
     rounds, round_, stopped, dropped = [ranked], ranked, "", []
     while round_:
         top, k = round_[0], len(rounds)
@@ -384,11 +450,12 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
             break
         causes += (top,)
         notes += ((top.effect, note),) if note else ()
+        nested += [alt] if alt is not None and alt.named == top.effect else []
         rest = [c.effect for c in round_[1:] if c.testable]
         if not rest:
             stopped = f"round {k}: every effect is named"
             break
-        round_, note = _round(nom, rest, causes, band, k + 1)   # Holm
+        round_, note, alt = _round(nom, rest, causes, band, k + 1)   # Holm
         rounds.append(round_)
     causes, notes, left = _pruned(nom, causes, notes, band)
     dropped += left
@@ -396,7 +463,14 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
         causes, left = _leave_one_out(nom, causes, band)
         dropped += left
         notes = tuple(x for x in notes if x[0] in {c.effect for c in causes})
-    alternatives = _alternatives(rounds, causes, len(nom.sig.index))
+    kept = {c.effect for c in causes}
+    # a "one of A or B" note whose two effects are both named in the end says no more
+    notes = tuple(x for x in notes if not (x[1].startswith("one of ") and one_of(x[1]) <= kept))
+    alternatives = tuple(a for a in nested if a.named in kept and a.other not in kept
+                         and any(one_of(n) == {a.named, a.other} for _, n in notes))
+    alternatives += tuple(a for a in _alternatives(rounds, causes, len(nom.sig.index))
+                          if not any({a.named, a.other} == {b.named, b.other}
+                                     for b in alternatives))
     # the first round's ranking, with the first named cause at the top
     top = [c for c in ranked if causes and c.effect == causes[0].effect] or ranked[:1]
     inv = InverseDiagnosis(nominal=nom, causes=causes, notes=tuple(n for _, n in notes),
@@ -435,17 +509,29 @@ def _why_fails(c: Candidate) -> str:
 def _chain(nom: Nominal, causes: tuple[Candidate, ...],
            band: LagBand) -> tuple[tuple[Candidate, ...], list[NotNamed]]:
     """`causes` fitted again in order, each against the ones kept before it at its own
-    level; one whose test no longer passes is not named (with why)."""
+    level; one whose test does not pass there is tried again once the others are kept, on
+    top of them, until no more pass; one that never passes is not named (with why). A cause
+    named on top of the one left out (a spring damping named on top of an offset that was
+    an asymmetric friction's Coulomb part) is then tested against the causes that hold what
+    that one held, not against a model that misses it."""
     chain: tuple[Candidate, ...] = ()
-    out: list[NotNamed] = []
-    for o in causes:
-        again = _against(nom, o, _model(chain), band)
-        if _passes(again):
-            chain += (again,)
-        else:
-            out.append(NotNamed(o.effect, "left_out",
-                                "fitted again once a cause before it was left out, it no "
-                                f"longer passes: {_why_fails(again)}", again.test, o.round))
+    pending = list(causes)
+    failed: dict[str, Candidate] = {}
+    while pending:
+        kept = []
+        for o in pending:
+            again = _against(nom, o, _model(chain), band)
+            if _passes(again):
+                chain += (again,)
+                kept.append(o)
+            else:
+                failed[o.effect] = again
+        if not kept:
+            break
+        pending = [o for o in pending if all(o is not k for k in kept)]
+    out = [NotNamed(o.effect, "left_out", "fitted again once a cause before it was left out, "
+                    f"it no longer passes: {_why_fails(failed[o.effect])}",
+                    failed[o.effect].test, o.round) for o in pending]
     return chain, out
 
 
@@ -471,9 +557,21 @@ def _leave_one_out(nom: Nominal, causes: tuple[Candidate, ...],
         out.append(NotNamed(causes[i].effect, "left_out",
                             f"against the model holding all the others ({others}) it does "
                             f"not pass: {_why_fails(again)}", again.test, causes[i].round))
-        causes, lost = _chain(nom, causes[:i] + causes[i + 1:], band)
+        causes, lost = _chain(nom, _in_place(causes, i), band)
         out += lost
     return causes, out
+
+
+def _in_place(causes: tuple[Candidate, ...], i: int) -> tuple[Candidate, ...]:
+    """`causes` without causes[i], a later cause that reduces to it (registry `reduces_to`:
+    an asymmetric friction beside an offset) moved to its place in the order: the one left
+    out was a part of it (the asymmetry's Coulomb part), and the causes named on top of that
+    part are fitted again on top of it (_chain)."""
+    rest = causes[:i] + causes[i + 1:]
+    j = next((k for k in range(i, len(rest))
+              if EFFECTS[rest[k].effect].reduces_to == causes[i].effect), None)
+    return rest if j is None else rest[:i] + (rest[j],) + rest[i:j] + rest[j + 1:]
+
 
 
 def _alternatives(rounds: list[list[Candidate]], causes: tuple[Candidate, ...],
@@ -590,7 +688,7 @@ def _pruned(nom: Nominal, causes: tuple[Candidate, ...],
                             HeldOutTest("on top of all the others, no margin",
                                         again.heldout_pct, t, p, c.alpha,
                                         acts_pct=again.acts_pct), c.round))
-        causes, lost = _chain(nom, others, band)
+        causes, lost = _chain(nom, _in_place(causes, i), band)
         out += lost
         kept = {o.effect for o in causes}
         notes, i = tuple(x for x in notes if x[0] in kept), 0

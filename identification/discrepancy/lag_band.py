@@ -1,4 +1,5 @@
-"""A second view of `torque_lag` in a band that reaches the excitation's top.
+"""A second view of `torque_lag` in a band that reaches the excitation's top, and of
+`hardening` there at large deflections.
 
 **Why the lag alone.** A first-order lag T shifts the applied torque's phase by about w T:
 its evidence grows with frequency, by physics. The chooser's band (identification.filter_choice:
@@ -48,6 +49,39 @@ that see the lag at different frequencies may then differ by that share of T.
 **Ranking** is unchanged: the candidates are ranked on the chooser's band's numbers (held-
 out share, t), and the named lag's value and gain are the chooser's band's; the wide view
 only decides whether the lag is significant.
+
+**The hardening at large deflections.** A hardening, Kh dz(qm - q, d) beside K (effects.
+hardening), acts only where the deflection passes its engagement d: near the mode, in the
+few segments of the sweep whose deflection is largest, and there its evidence is in the
+harmonics the kink makes, 3 f1 and above, which the chooser's band (about 1.4 f1) cuts. Tested
+over every segment of the chooser's band its evidence is diluted twice: by the segments where
+the spring never engages (their log-ratios carry the MATERIAL margin and nothing else), and by
+the few decimated rows each engaged segment has (13 a segment on a 40 s log of a 2 Hz axis),
+whose log-ratios then jump from one segment to the next, which the successive differences
+count as noise. Its second view is therefore in the wide band (more rows, the harmonics), over
+the segments where the deflection reaches the engagement only (`large_deflections`): segment
+s is kept when the largest |qm - q| on its rows exceeds the engagement that its fold's
+training rows chose (Candidate.fold_values[s mod FOLDS]), a choice made from the positions and
+the other folds, never from the held-out residual it is tested on. Under the null hypothesis
+the kept segments' log-ratios have a negative mean as every segment's do (the column adds
+only estimation variance), and the segment test counts their number in its degrees of freedom
+(heldout.dof): a view over few segments asks for a larger t. Its level is split with the
+chooser's band's test as the lag's is (t > 4.50 in either view in a first round of 8).
+
+The guard differs from the lag's. The wide view confirms only a hardening that the chooser's
+band fits physically (its overall share there need not be positive: beside a backlash the
+chooser's band, without the harmonics, lets a wider dead band and a stiffer K take the
+hardening's part, and the share it adds is lost in the refit), whose wide fit is physical too,
+and whose two engagements agree within CONSISTENCY_Z of their jackknife spreads' root-sum-
+square plus the search grid's step at the engagement (`grid_step`), what a search on a
+geometric grid can tell apart (the fold values are the search's trials, and every fold may
+prefer the same one). And the wide fit's engagement must lie beyond the first step of its
+grid (hardening.grid: from 2 % of the 99th percentile of |qm - q|): engaged there, Kh dz(d, d0)
+is Kh d - Kh d0 sign(d) on nearly every row, a stiffness and a sign of the deflection, not a
+spring that engages at large deflections, and in the wide band such a column takes up what the
+nominal and a named cause miss above the chooser's band (beside a spring damping whose value
+the wide band refits, it explained a fifth of the residual of the segments it covered, most of
+them). Such a fit is not a physical instance of the effect: SecondView.unphysical says why.
 """
 
 from __future__ import annotations
@@ -60,29 +94,36 @@ import numpy as np
 from jointbench.identification.band_choice import CONSISTENCY_Z, wide_settings
 from jointbench.identification.discrepancy.candidates import (Candidate, SecondView, candidate,
                                                               reference)
+from jointbench.identification.discrepancy.heldout import (FOLDS, SEGMENTS, evidence,
+                                                           segment_of_rows)
 from jointbench.identification.discrepancy.nominal import Nominal, nominal
+from jointbench.identification.effects import EFFECTS
 from jointbench.identification.filtering import FilterSettings, stencil_gain
 from jointbench.identification.log import Log
 
 LAG = "torque_lag"
+HARDENING = "hardening"
+SECOND = (LAG, HARDENING)   # the effects tested in a second view
 
 
 class LagBand:
     """The wide band of one log (None when the chooser's band already reaches the
     excitation's top, or no top is found) and its nominal, identified on first use."""
 
-    def __init__(self, log: Log, settings: FilterSettings, link_friction: bool = True):
+    def __init__(self, log: Log, settings: FilterSettings, link_friction: bool = True,
+                 limit_applied: bool = False):
         wide, _, why = wide_settings(log, settings)
         self.settings = None if wide is None else replace(wide, stencil=settings.stencil)
         self.label = "" if wide is None else (
             f"wide band (Nd {wide.Nd}, decimated cutoff {wide.decimated_cutoff_hz:.3g} Hz: "
             f"{why})")
-        self._log, self._link_friction = log, link_friction
+        self._log, self._link_friction, self._limit = log, link_friction, limit_applied
         self._nominal: Nominal | None = None
 
     def nominal(self) -> Nominal:
         if self._nominal is None:
-            self._nominal = nominal(self._log, self.settings, self._link_friction)
+            self._nominal = nominal(self._log, self.settings, self._link_friction,
+                                    self._limit)
         return self._nominal
 
 
@@ -103,23 +144,48 @@ def discretisation(settings: FilterSettings, lag_s: float) -> float:
     return abs(lag_s) * (1.0 - float(stencil_gain(x, 3)))
 
 
+def large_deflections(nom: Nominal, engagement: tuple[float, ...]) -> np.ndarray:
+    """The segments (a mask over heldout.SEGMENTS) whose largest |qm - q| on `nom`'s rows
+    exceeds the engagement `engagement[f]` of their fold f = s mod FOLDS (module docstring:
+    the hardening's view); none when the folds' values are not given."""
+    sig = nom.sig
+    if len(engagement) != FOLDS or sig.q is None:
+        return np.zeros(SEGMENTS, bool)
+    d = np.abs((sig.qm - sig.q)[sig.index])
+    top = np.zeros(SEGMENTS)
+    np.maximum.at(top, segment_of_rows(len(d)), d)
+    return top > np.asarray(engagement, float)[np.arange(SEGMENTS) % FOLDS]
+
+
+def grid_step(nom: Nominal, value: float) -> float:
+    """The step of the hardening's geometric search grid on `nom`'s rows at `value`:
+    |value| (r - 1), r the grid's ratio."""
+    g = EFFECTS[HARDENING].grid(nom)
+    return abs(value) * (float(g[1] / g[0]) - 1.0) if len(g) > 1 and g[0] > 0 else 0.0
+
+
 def second_view(band: LagBand, c: Candidate,
                 causes: tuple[tuple[str, dict], ...]) -> Candidate:
-    """`c` itself unless it is a torque lag and the log has a wide band; then `c` with its
-    level split over the two bands (Candidate.views = 2) and, when the chooser's band fits it
-    physically with a positive held-out share but does not find it significant at that
-    level, the wide band's view (Candidate.second). `causes`: the named causes with their
-    values (the round's reference)."""
-    if c.effect != LAG or band.settings is None or not c.testable:
+    """`c` itself unless it is a torque lag or a hardening and the log has a wide band; then
+    `c` with its level split over its two views (Candidate.views = 2) and, when the chooser's
+    band fits it physically with a positive held-out share but does not find it significant
+    at that level, the wide band's view (Candidate.second): the lag's over every segment, the
+    hardening's over its large deflections (module docstring). `causes`: the named causes
+    with their values (the round's reference)."""
+    if c.effect not in SECOND or band.settings is None or not c.testable:
         return c
     c = replace(c, views=2)
-    if c.unphysical or not c.heldout_pct > 0 or c.significant:
+    # a lag must show a positive share in the chooser's band; a hardening's share there may
+    # be lost to a cause beside it (module docstring: the guard)
+    if c.unphysical or c.significant or not (c.heldout_pct > 0 or c.effect == HARDENING):
         return c
     try:
         nom = band.nominal()
-        w = candidate(nom, LAG, reference(nom, causes))
+        w = candidate(nom, c.effect, reference(nom, causes))
     except (ValueError, ArithmeticError, np.linalg.LinAlgError):
         return c   # no second view (LogError is a ValueError: too short for the band)
+    if c.effect == HARDENING:
+        return replace(c, second=_deflection_view(nom, c, w, band.label))
     tc, tw = c.fixed["lag_s"], w.fixed["lag_s"]
     sc, sw = jackknife(c.fold_values), jackknife(w.fold_values)
     allowed = CONSISTENCY_Z * math.hypot(sc, sw) + discretisation(band.settings, tc)
@@ -131,3 +197,31 @@ def second_view(band: LagBand, c: Candidate,
     return replace(c, second=SecondView(
         band=band.label, heldout_pct=w.heldout_pct, t_stat=w.t_stat, p_heldout=w.p_heldout,
         value=tw, agree=agree, detail=detail, unphysical=w.unphysical, acts_pct=w.acts_pct))
+
+
+def _deflection_view(nom: Nominal, c: Candidate, w: Candidate, label: str) -> SecondView:
+    """The hardening `w` fitted in the wide band (`nom`), its held-out errors tested against
+    its reference's over the segments of large deflection only (large_deflections), its
+    engagement against the chooser's band's `c`, and not a physical hardening at large
+    deflections when that engagement is in the first step of its search grid (module
+    docstring: the guard)."""
+    within = large_deflections(nom, w.fold_values)
+    ev = evidence(w.reference_errors, w.heldout_errors, len(nom.sig.index), w.acts, within)
+    dc, dw = c.fixed["deflection_rad"], w.fixed["deflection_rad"]
+    sc, sw = jackknife(c.fold_values), jackknife(w.fold_values)
+    allowed = CONSISTENCY_Z * math.hypot(sc, sw) + grid_step(nom, max(dc, dw))
+    agree = abs(dw - dc) <= allowed
+    g = EFFECTS[HARDENING].grid(nom)
+    edge = (f"engagement {1e3 * dw:.3g} mrad in the first step of its search grid "
+            f"({1e3 * g[0]:.3g} to {1e3 * g[1]:.3g} mrad): a stiffness and a sign of the "
+            "deflection, not a spring engaging at large deflections") if dw < g[1] else ""
+    detail = (f"engagement {1e3 * dw:.3g} +- {1e3 * sw:.2g} mrad against {1e3 * dc:.3g} +- "
+              f"{1e3 * sc:.2g} mrad in the chooser's band, "
+              + ("within" if agree else "more than") + f" the {1e3 * allowed:.2g} mrad allowed "
+              f"({CONSISTENCY_Z:g} sigma and the search grid's step)")
+    label = (f"{label}, at large deflections ({int(within.sum())} of {SEGMENTS} segments "
+             "reach the engagement)")
+    return SecondView(band=label, heldout_pct=ev.explained_pct, t_stat=ev.t, p_heldout=ev.p,
+                      value=dw, agree=agree, detail=detail,
+                      unphysical="; ".join(x for x in (w.unphysical, edge) if x),
+                      acts_pct=ev.acts_pct, diluted=True, segments=ev.segments)

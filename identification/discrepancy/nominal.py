@@ -12,7 +12,7 @@ from scipy import optimize
 from jointbench.identification.discrepancy.signals import Signals, signals, stack
 from jointbench.identification.effects.base import Column, Design, hat, sign0
 from jointbench.identification.filtering import FilterSettings, derivatives
-from jointbench.identification.log import Log
+from jointbench.identification.log import Log, LogError
 from jointbench.identification.parameters import JOINT_MOTOR, RIGID
 
 # Eq. (13) with MX, MY folded into P (gravity at rest at qs), link Coulomb friction FS included
@@ -223,15 +223,23 @@ class Nominal:
 COLLAPSED = 1e-3
 
 
-def nominal(log: Log, settings: FilterSettings, link_friction: bool = True) -> Nominal:
+def nominal(log: Log, settings: FilterSettings, link_friction: bool = True,
+            limit_applied: bool = False) -> Nominal:
     """Identify the nominal model (block-weighted least squares, as for eq. 13);
     `link_friction` False leaves the link Coulomb friction FS out (then a candidate). Its
     parameters and block weights are estimated with a constant in the motor equation beside
-    them (_with_bias), which the model itself leaves out."""
-    sig = signals(log, settings)
+    them (_with_bias), which the model itself leaves out. `limit_applied`: the rows at the
+    metadata's tau_max are kept (signals)."""
+    sig = signals(log, settings, limit_applied)
     link_friction = link_friction and sig.has_link
     y, W, names = nominal_columns(sig, link_friction=link_friction)
     n = len(sig.index)
+    if n <= W.shape[1]:
+        # the rows out of reach of a clipped torque cannot hold the fit (beside its constant)
+        raise LogError(f"only {n} of the filtered rows are out of reach of the clipped torque "
+                       f"samples, too few to fit the nominal model's {W.shape[1]} parameters; "
+                       "record the experiment with a smaller amplitude or a wider torque range",
+                       log.path, column="tau_m")
     block = np.r_[np.zeros(n, int), np.ones(n, int)] if sig.has_link else np.zeros(n, int)
     Wb = _with_bias(sig, W)
     X, _ = solve(Wb, y, np.ones(len(y)))

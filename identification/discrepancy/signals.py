@@ -11,7 +11,7 @@ from scipy import signal
 
 from jointbench.identification.filtering import FilterSettings, derivatives, lowpass, zoh_align
 from jointbench.identification.log import Log, LogError
-from jointbench.identification.saturation import check_clipping, reach
+from jointbench.identification.saturation import clipped_samples, reach
 
 
 @dataclass(frozen=True)
@@ -74,8 +74,9 @@ def _filtfilt(q: int, x: np.ndarray) -> np.ndarray:
     return y[::-1][edge:-edge]
 
 
-def signals(log: Log, settings: FilterSettings) -> Signals:
-    """Filter and differentiate the log once (eq. 22 after the Butterworth of eq. 25)."""
+def signals(log: Log, settings: FilterSettings, limit_applied: bool = False) -> Signals:
+    """Filter and differentiate the log once (eq. 22 after the Butterworth of eq. 25); the
+    rows within reach of a clipped torque sample left out (`limit_applied`: _unclipped)."""
     s = settings
     n = len(log.t)
     if n < s.min_samples(2):  # before filtering: the filter itself needs a few samples
@@ -93,16 +94,20 @@ def signals(log: Log, settings: FilterSettings) -> Signals:
     head = max(1, min(n // 100, 20))
     qs = float(np.mean((log.q if log.q is not None else log.q_m)[:head]))
     tau_f = lowpass(zoh_align(log.tau_m), s.wn, s.ts, s.m)
-    keep = _unclipped(log, s, index)
+    keep = _unclipped(log, s, index, limit_applied)
     return Signals(ts=s.ts, g=log.gravity, qm=qm, qmd=qmd, qmdd=qmdd, tau=tau_f,
                    tau_raw=np.asarray(log.tau_m, float), q=q, qd=qd, qdd=qdd, qs=qs,
                    settings=s, sl=sl, index=index if keep is None else index[keep], keep=keep)
 
 
-def _unclipped(log: Log, s: FilterSettings, index: np.ndarray) -> np.ndarray | None:
+def _unclipped(log: Log, s: FilterSettings, index: np.ndarray,
+               limit_applied: bool = False) -> np.ndarray | None:
     """The decimated rows out of reach of a clipped torque sample (identification.saturation,
-    as identify's exclude_clipped does), or None when no sample is clipped."""
-    clip = check_clipping(log)
+    as identify's exclude_clipped does), or None when no sample is clipped. No share is
+    refused here: what the rows left can and cannot say is the diagnosis's to state
+    (bench.analysis.diagnose.verdict). `limit_applied`: the torque at the metadata's tau_max
+    is the one the axis received, its rows kept (saturation.clipped_samples)."""
+    clip = clipped_samples(log, limit_applied)
     if not clip.count:
         return None
     h = reach(s.wn, s.ts, s.Nd)

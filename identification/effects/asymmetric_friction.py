@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from jointbench.identification.effects.base import Design, Effect, Rows, sign0
+from jointbench.identification.effects.base import FOLD_FITS, Design, Effect, Rows, sign0, spread
 from jointbench.identification.effects.offset import COLUMN as OFFSET
 
 ORDER = 90
@@ -28,6 +28,12 @@ ORDER = 90
 # the viscous-to-Coulomb ratio relative to the reference's, theta / (1 - theta), is 0, 1/8,
 # 1/4, 1/2, 1, 2, 4, 8 and infinite.
 SHARES = np.array([0.0, 1 / 9, 1 / 5, 1 / 3, 1 / 2, 2 / 3, 4 / 5, 8 / 9, 1.0])
+
+
+# A Coulomb part beyond the fitted Coulomb friction by more than this many of its standard
+# errors is not noise at the bound (one-sided, about 2 % of estimates of a true asymmetry at
+# the bound itself).
+CHECK_Z = 2.0
 
 
 def _names(rows: Rows) -> tuple[str, str]:
@@ -89,19 +95,44 @@ def params(values: dict, fixed: dict, rows: Rows) -> dict[str, float]:
             "coulomb_asymmetry": float(ds / fs) if fs else 0.0}
 
 
+def _excess(v: dict, rows: Rows) -> tuple[float, float, float, float]:
+    """The Coulomb part dS = a (1 - theta) FS_ref, the fitted Coulomb friction FS, the excess
+    |dS| - FS and its standard error (the jackknife over the folds' fits, base.spread)."""
+    name = _names(rows)[1]
+    share = (1 - _share(v, False)) * v["FS_ref"]
+
+    def excess(x: dict) -> float:
+        return abs(x["a"] * share) - x[name]
+
+    return v["a"] * share, v[name], excess(v), spread(v.get(FOLD_FITS, ()), excess)
+
+
+def beyond(v: dict, rows: Rows) -> float:
+    """How many of its standard errors the excess |dS| - FS lies above 0 (check): inf when
+    it is positive and the folds give no spread; 0 beside an offset (check)."""
+    if OFFSET in v:
+        return 0.0
+    _, _, ex, sd = _excess(v, rows)
+    return ex / sd if sd > 0 else (np.inf if ex > 0 else 0.0)
+
+
 def check(v: dict, rows: Rows) -> str:
     """Each direction's Coulomb friction stays positive, FS (1 +- a_c) >= 0: a Coulomb part of
     the direction-dependent torque larger than the fitted Coulomb friction itself is not an
-    asymmetry of that friction but a constant torque beside it (an offset)."""
-    if OFFSET in v:
-        # beside an offset the constant splits between the two at will while the motor moves
+    asymmetry of that friction but a constant torque beside it (an offset). The excess
+    |dS| - FS is compared with its own standard error (the jackknife over the folds' fits,
+    base.spread): an asymmetry at its bound, one direction's Coulomb friction near zero, has
+    an estimate that overshoots the bound by noise about half the time, and is unphysical only
+    when the excess is more than CHECK_Z standard errors (`beyond`). Beside an offset the
+    constant splits between the two at will while the motor moves: no check there."""
+    z = beyond(v, rows)
+    if z <= CHECK_Z:
         return ""
-    fs = v[_names(rows)[1]]
-    ds = v["a"] * (1 - _share(v, False)) * v["FS_ref"]
-    if fs > 0 and abs(ds) <= fs:
-        return ""
-    return (f"its Coulomb part {ds:.4g} exceeds the fitted Coulomb friction {fs:.4g}: one "
-            "direction's friction would be negative (a constant torque beside it is an offset)")
+    ds, fs, _, sd = _excess(v, rows)
+    return (f"its Coulomb part {ds:.4g} exceeds the fitted Coulomb friction {fs:.4g}"
+            + (f" by {z:.1f} standard errors ({sd:.2g})" if np.isfinite(z) else "")
+            + ": one direction's friction would be negative (a constant torque beside it is "
+            "an offset)")
 
 
 EFFECT = Effect(
@@ -109,6 +140,7 @@ EFFECT = Effect(
     "viscous and Coulomb friction that differ with the direction of motion",
     needs_link=False, rigid_axis=False, block=0, k=2, design=design,
     params=params, reference=reference, search="viscous_share", grid=grid, check=check,
+    beyond=beyond,
     # While the motor moves, the Coulomb part of the asymmetry, a FSm, is a constant torque:
     # an offset. The viscous part a FVm |qm'| is what tells the two apart.
     reduces_to="offset")

@@ -41,7 +41,8 @@ class Effect:
     `search`, from a scalar search of the weighted residual over `grid(rows)`. The linear
     parameters come from least squares; `params(values, fixed, rows)` turns them into the
     reported parameters, `check(values, rows)` says why a fit is not a physical instance
-    (`values`: the fitted columns and the `fixed` values).
+    (`values`: the fitted columns and the `fixed` values, and under FOLD_FITS each fold's
+    training fit of the columns, from which `spread` gives the fit's own uncertainty).
     """
 
     name: str
@@ -62,6 +63,11 @@ class Effect:
     design: Callable[[Rows, dict], Design]
     params: Callable[[dict, dict, Rows], dict[str, float]]
     check: Callable[[dict, Rows], str] | None = None
+    # How many of its own standard errors an unphysical fit lies beyond the physical bound
+    # `check` tests (values as check's): where it is within the round's bar the fit is not
+    # named but not excluded either, and may be the alternative of the effect it reduces to
+    # (identification.discrepancy.inverse). None: an unphysical fit is excluded.
+    beyond: Callable[[dict, Rows], float] | None = None
     search: str = ""          # the nonlinear parameter searched, a key of `fixed`
     grid: Callable[[Rows], np.ndarray] | None = None
     reference: Callable[[Rows], dict] | None = None
@@ -86,6 +92,24 @@ def column_value(column: str, parameter: str) -> Callable[[dict, dict, Rows], di
 def searched_value(key: str) -> Callable[[dict, dict, Rows], dict]:
     """`params` of an effect that reports its searched value alone (no extra column)."""
     return lambda v, fixed, rows: {key: fixed[key]}
+
+
+# The key of `check`'s values holding each held-out fold's training fit (a tuple of dicts of
+# the fitted columns; empty when the folds were not fitted).
+FOLD_FITS = "fold_fits"
+
+
+def spread(folds: tuple[dict, ...], f: Callable[[dict], float]) -> float:
+    """The standard error of a fitted quantity f(values) by the delete-a-group jackknife over
+    the k training fits (each leaves one fold out): var = (k - 1) / k sum (f_i - mean f)^2.
+    The folds are contiguous pieces spread over the whole log, so the spread holds what the
+    residual's correlation in time does to the fit, which the least-squares covariance of
+    white noise understates. 0 without folds."""
+    if len(folds) < 2:
+        return 0.0
+    v = np.array([f(x) for x in folds], dtype=float)
+    k = len(v)
+    return float(np.sqrt((k - 1) / k * np.sum((v - v.mean()) ** 2)))
 
 
 def sign0(x: np.ndarray) -> np.ndarray:

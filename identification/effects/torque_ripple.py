@@ -14,11 +14,60 @@ def design(rows: Rows, fixed: dict) -> Design:
     return rows.extend(("As", np.sin(ph), None), ("Ac", np.cos(ph), None))
 
 
+# Periods from encoder-scale steps to the motion span: the span over this many.
+SHORTEST = 2000
+# The coarse geometric grid's points, and the periodogram's peaks added to it.
+COARSE, PEAKS = 160, 3
+# Bins of the motor angle a shortest period holds in the periodogram's FFT.
+BINS = 8
+
+
+def _periodogram_peaks(rows: Rows, span: float) -> np.ndarray:
+    """The wavenumbers k = 2 pi / p of the PEAKS highest local maxima of the periodogram
+    |sum r e^(-i k q_m)|^2 of the nominal's motor-equation residual r against the motor angle
+    q_m of its rows, on a uniform grid of step pi / (2 span): a period p off by dp drifts by
+    span dp / p^2 periods over the span, and a quarter period is where the column stops
+    following the torque, dk = 2 pi dp / p^2 < pi / (2 span). A coarse geometric grid (COARSE
+    points, a few % apart) misses a short period entirely when the span holds many of them
+    (a drive's ripple 2 pi / (6 N) with the gear ratio N: some 80 periods over a rad). The
+    sum is an FFT of r binned on q_m (BINS bins a shortest period, the phase within a bin
+    at most pi / BINS), zero-padded to 4 spans."""
+    sig = rows.sig
+    res, block = getattr(rows, "residual", None), getattr(rows, "block", None)
+    if res is None or block is None:
+        return np.empty(0)
+    r = np.asarray(res)[np.asarray(block) == 0]
+    q = sig.qm[sig.index]
+    if len(q) != len(r) or len(r) < 8 or not np.all(np.isfinite(r)):
+        return np.empty(0)
+    n = BINS * SHORTEST
+    dx = span / n
+    at = np.minimum(((q - q.min()) / dx).astype(int), n - 1)
+    binned = np.bincount(at, weights=r - r.mean(), minlength=n)
+    pw = np.abs(np.fft.rfft(binned, 4 * n)) ** 2   # wavenumber j 2 pi / (4 n dx)
+    step = np.pi / (2 * span)
+    j = np.arange(len(pw))
+    usable = (j * step >= 2 * np.pi / span) & (j * step <= 2 * np.pi * SHORTEST / span)
+    peak = np.flatnonzero(usable[1:-1] & (pw[1:-1] > pw[:-2]) & (pw[1:-1] >= pw[2:])) + 1
+    top = peak[np.argsort(pw[peak])[::-1][:PEAKS]]
+    return top * step
+
+
 def grid(rows: Rows) -> np.ndarray:
-    # Periods from encoder-scale steps to the motion span (the column must vary).
+    """Periods from encoder-scale steps to the motion span (the column must vary): a coarse
+    geometric grid and, around each of the periodogram's peaks (_periodogram_peaks), the
+    peak and its neighbours one wavenumber step either side, sorted so that the search's
+    refinement (candidates._search) brackets the best between its grid neighbours."""
     sig = rows.sig
     span = float(np.ptp(sig.qm[sig.sl]))
-    return np.geomspace(max(span / 2000, 1e-4), max(span, 2e-4), 160)
+    coarse = np.geomspace(max(span / SHORTEST, 1e-4), max(span, 2e-4), COARSE)
+    if span <= 0:
+        return coarse
+    step = np.pi / (2 * span)
+    k = _periodogram_peaks(rows, span)
+    fine = 2 * np.pi / np.concatenate([k - step, k, k + step]) if len(k) else np.empty(0)
+    fine = fine[(fine > 0) & (fine >= coarse[0]) & (fine <= coarse[-1])]
+    return np.unique(np.concatenate([coarse, fine]))
 
 
 def params(v: dict, fixed: dict, rows: Rows) -> dict[str, float]:

@@ -67,7 +67,7 @@ def test_a_clean_low_mode_log_stays_clean_in_the_wide_view(clean_soft):
     assert wide.t_stat < t_bar(bar(8) / 2) - 1.0
     tested = {c.effect: c for c in inv.candidates if c.testable}
     assert {c.alpha for c in tested.values()} == {ALPHA / 8}
-    assert {c.effect for c in tested.values() if c.level < c.alpha} == {"torque_lag"}
+    assert {c.effect for c in tested.values() if c.level < c.alpha} == {"torque_lag", "hardening"}
     assert tested["torque_lag"].level == ALPHA / 16
 
 

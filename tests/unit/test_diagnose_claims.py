@@ -180,3 +180,37 @@ def test_a_deflection_that_never_changes_is_refused_with_the_reason():
     log = Log(t=t, q_m=qm, q=qm - 0.01, tau_m=np.cos(2 * np.pi * 0.5 * t), path="rigid.csv")
     with pytest.raises(ValueError, match="rigid.csv: the deflection q_m - q never changes"):
         diagnose_inverse(log, FilterSettings(wn=100.0, m=4, Nd=10, ts=t[1]))
+
+
+def test_one_of_a_or_b_reads_both_heads():
+    from jointbench.identification.discrepancy.inverse import one_of
+    pair = {"offset", "asymmetric_friction"}
+    assert one_of("one of offset or asymmetric_friction: this log cannot tell them apart") \
+        == pair
+    assert one_of("offset or asymmetric_friction: this log carries a part of each") == pair
+    assert one_of("no effect is significant: the best, offset or not") == frozenset()
+    nested = Alternative("offset", "asymmetric_friction", 80.5, 80.7, -2.1, 1.19,
+                         how="nested", text="one of offset or asymmetric_friction: ...")
+    assert nested.describe() == nested.to_json()["text"] == nested.of_cause()["text"]
+    assert nested.stated_in((nested.text,))
+    assert nested.of_cause()["effect"] == "asymmetric_friction"
+
+
+def _with_alternative(doc, named="spring_damping", other="offset", in_entry=True, top=True):
+    alt = Alternative(named, other, 70.4, 70.1, 0.3, -0.2)
+    if top:
+        doc["alternatives"] = [alt.to_json()]
+    for c in doc["causes"]:
+        c["alternatives"] = [alt.of_cause()] if in_entry and c["effect"] == named else []
+    return doc
+
+
+def test_one_of_a_or_b_is_one_claim_stated_alike_at_the_top_and_in_the_entry():
+    assert failing_claims(_with_alternative(_doc(FIRST))) == []
+    (msg,) = failing_claims(_with_alternative(_doc(FIRST), in_entry=False))
+    assert "not in spring_damping's entry" in msg
+    (msg,) = failing_claims(_with_alternative(_doc(FIRST), top=False))
+    assert "is not among the alternatives" in msg
+    lag = _cause("torque_lag", 2, _test(7.49, 2.8e-8, 6.19))
+    msgs = failing_claims(_with_alternative(_doc(FIRST, lag), other="torque_lag"))
+    assert msgs == ["one of spring_damping or torque_lag: torque_lag is named as well"]

@@ -40,7 +40,8 @@ def test_the_note_says_which_is_named_and_why():
     assert note.endswith("hardening, which removes 35 % of what backlash leaves, is named")
     note = _apart(back, hard, 41.2, 1.25e-4, unphysical=True)
     assert "t = 41.2 (an unphysical fit)" in note
-    assert note.endswith("the simpler, backlash, is named")
+    assert note.startswith("one of backlash or hardening: this log cannot tell them apart")
+    assert note.endswith("the simpler, backlash, is named for the two")
 
 
 def _established(effect, share):
@@ -78,8 +79,17 @@ def test_offset_or_asymmetry_is_a_two_way_choice_at_its_own_level(monkeypatch, t
     monkeypatch.setattr(inverse, "_on_top", on_top)
     off, asym = _established("offset", 40.0), _established("asymmetric_friction", 40.2)
     for ranked in ([off, asym], [asym, off]):
-        order, why = inverse._simplest_first(list(ranked), None, 8)
+        order, why, alt = inverse._simplest_first(list(ranked), None, 8)
         assert order[0].effect == named and (note in why if note else why == "")
+        # the log cannot choose: one of the two, the other the named one's alternative
+        cannot = note == "cannot tell them apart"
+        assert why.startswith("one of offset or asymmetric_friction: ") is cannot
+        assert (alt is not None) is cannot
+        if cannot:
+            assert (alt.named, alt.other, alt.how) == ("offset", "asymmetric_friction",
+                                                       "nested")
+            assert (alt.named_pct, alt.other_pct) == (40.0, 40.2) and alt.describe() == why
+            assert (alt.t, alt.t_back) == (t_offset, t_asym)
     if note:
         assert "the bar t > 1.71" in why and "the simpler, offset, is named" in why
     # an asymmetry that is not significant on its own is never named for an established offset

@@ -328,7 +328,10 @@ def test_offset_named_over_an_asymmetry_that_explains_less_states_the_ambiguity(
     share = {c.effect: c.heldout_pct for c in d.inverse.candidates}
     assert share["asymmetric_friction"] <= share["offset"] + 1e-9
     (note,) = d.ambiguities
-    assert note.startswith("offset or asymmetric_friction: this log cannot tell them apart")
+    assert note.startswith("one of offset or asymmetric_friction: this log cannot tell them "
+                           "apart")
+    (alt,) = d.to_json()["causes"][0]["alternatives"]
+    assert alt["effect"] == "asymmetric_friction" and alt["text"] == note
     t = float(note.split("adds to offset has t = ")[1].split(",")[0])
     back = float(note.split("adds to asymmetric_friction t = ")[1].split(",")[0])
     assert max(t, back) < t_bar(DECIDE)   # neither adds, even at the two-way level

@@ -7,7 +7,9 @@ several runs, or --model), that no named cause has a failing test.
   a cause of a later round explains more than the floor (`floor_pct`) in that test (its
   `acts_pct`, the share over the equations it acts in; `heldout_pct` without it); the
   entry's `t`, `p_heldout`, `heldout_pct` and `alpha` are that test's; `named_cause` is the
-  first of them.
+  first of them. "One of A or B" is one claim: each of `alternatives` (A named, B the
+  effect the log cannot tell from it) is listed in A's entry's `alternatives` and B is not
+  named itself, and every entry's alternative is among them.
 - **Several runs** (`diagnose A B --json`): each run as one log, and each cause `supported`
   is named, with a passing test, on every run.
 - **--model**: each named cause but a link Coulomb friction has its entry in `causes` with a
@@ -96,6 +98,25 @@ def _one(doc: dict, where: str = "") -> list[str]:
             if c.get(key) != test.get(key):
                 out.append(f"{where}{name}: its {key} {c.get(key)} is not its test's "
                            f"{test.get(key)}")
+    return out + _one_of(doc, entries, named, where)
+
+
+def _one_of(doc: dict, entries: dict, named: list, where: str) -> list[str]:
+    """"One of A or B" stated alike at the top (`alternatives`) and in A's entry."""
+    out: list[str] = []
+    top = {(a.get("named"), a.get("other")) for a in doc.get("alternatives") or []
+           if isinstance(a, dict)}
+    listed = {(name, a.get("effect")) for name, c in entries.items()
+              for a in c.get("alternatives") or [] if isinstance(a, dict)}
+    for a, b in sorted(top - listed, key=str):
+        out.append(f"{where}{a}: one of {a} or {b} is stated, but not in {a}'s entry")
+    for a, b in sorted(listed - top, key=str):
+        out.append(f"{where}{a}: its entry's alternative {b} is not among the alternatives")
+    for a, b in sorted(top | listed, key=str):
+        if a not in named:
+            out.append(f"{where}one of {a} or {b}: {a} is not named")
+        if b in named:
+            out.append(f"{where}one of {a} or {b}: {b} is named as well")
     return out
 
 

@@ -36,6 +36,7 @@ from jointbench.identification.effects import EFFECTS
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.log import Log
 from jointbench.identification.log.schema import PLANT_INTEGRATOR_KEY, PLANT_STEPS_KEY
+from jointbench.identification.saturation import CLIP_RELATIVE
 
 
 def _axis_name(d: Diagnosis) -> str:
@@ -249,10 +250,74 @@ def follows(tau: np.ndarray, replayed: np.ndarray) -> bool:
     return segment_t(np.log(h0[ok] / h1[ok]))[1] < ALPHA
 
 
+def _tau_max(log: Log) -> float | None:
+    try:
+        value = float(log.meta.get("tau_max", "nan"))
+    except ValueError:
+        return None
+    return value if value > 0 else None
+
+
+def before_limit(log: Log) -> np.ndarray | None:
+    """The segments before the first one where the logged torque reaches the controller's
+    limit tau_max (None when it never does). Once the loop is clipped it is no longer
+    linear: the integrator winds up at the limit, and a replay that reaches it a sample
+    earlier or later than the log is left in another state; near the loop's stability limit
+    (a torque lag) that difference grows instead of decaying. Past that point the replays
+    follow the clip's history, not the model's, and their torque error judges neither model.
+    A replay that reaches the limit where the log does not is the model's own doing and
+    stays judged."""
+    tau_max = _tau_max(log)
+    if tau_max is None:
+        return None
+    at = np.abs(np.asarray(log.tau_m, float)) >= tau_max * (1 - CLIP_RELATIVE)
+    hit = segment_sums(at.astype(float)) > 0
+    if not hit.any():
+        return None
+    return np.arange(SEGMENTS) < int(np.argmax(hit))
+
+
+def limit_mismatch(log: Log, replayed: np.ndarray) -> float:
+    """How differently a replay reaches the controller's limit than the log [% of the
+    samples]: the sum over the SEGMENTS segments of |replayed - logged count of samples at
+    tau_max|, over the log's length (nan without tau_max). A limit cycle's clips fall at its
+    own phase, so they are counted per segment, not matched sample by sample."""
+    tau_max = _tau_max(log)
+    if tau_max is None:
+        return math.nan
+    bar = tau_max * (1 - CLIP_RELATIVE)
+    logged = segment_sums((np.abs(np.asarray(log.tau_m, float)) >= bar).astype(float))
+    replay_at = segment_sums((np.abs(np.asarray(replayed, float)) >= bar).astype(float))
+    return 100.0 * float(np.abs(replay_at - logged).sum()) / len(log.tau_m)
+
+
 def forward_scope(d: Diagnosis) -> ForwardScope:
-    """The segments where the forward view can judge the named causes: all
-    of them unless a cause is periodic in the motor angle; then those where both replays keep
-    its phase (phase_errors < PHASE_LIMIT), and none when they are fewer than MIN_JUDGED."""
+    """The segments where the forward view can judge the named causes: those before the loop
+    first reaches its torque limit (before_limit), and, when a cause is periodic in the motor
+    angle, those where both replays keep its phase (phase_errors < PHASE_LIMIT); none when
+    they are fewer than MIN_JUDGED."""
+    scope = _phase_scope(d)
+    a, b = d.forward_nominal, d.forward_extended
+    if not scope.judged or a is None or b is None:
+        return scope
+    before = before_limit(d.log)
+    if before is None:
+        return scope
+    keep = before if scope.keep is None else before & scope.keep
+    how = (f"the loop reaches its torque limit tau_max = {_tau_max(d.log):g} in segment "
+           f"{int(np.argmin(before)) + 1} of {SEGMENTS}: the replays are judged before it, "
+           f"in {int(keep.sum())} segments")
+    how = f"{how}; {scope.note}" if scope.note else how
+    if keep.sum() < MIN_JUDGED:
+        return ForwardScope(None, False, f"the forward view cannot judge the named causes on "
+                            f"this log: {how}, under {MIN_JUDGED}; they are named on the "
+                            "inverse view alone")
+    return ForwardScope(keep, True, f"the forward view judges the named causes where {how}")
+
+
+def _phase_scope(d: Diagnosis) -> ForwardScope:
+    """forward_scope without the torque limit: every segment unless a cause is periodic in
+    the motor angle; then those where both replays keep its phase."""
     a, b = d.forward_nominal, d.forward_extended
     if a is not None and b is not None and not follows(d.log.tau_m, a.tau_m):
         # a nominal replay no closer to the logged torque than a zero torque follows nothing

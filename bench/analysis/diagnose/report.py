@@ -77,6 +77,8 @@ def report_markdown(d: Diagnosis, figures: dict[str, str],
         L += [f"The rounds stopped at {d.inverse.stopped}.", ""]
     if d.reason:
         L += [f"Why: {d.reason}.", ""]
+    if d.clipped is not None and d.clipped.text() not in d.reason:
+        L += [f"Clipped torque: {d.clipped.text()}.", ""]
     L += [f"Warning: {w}" for w in d.warnings] + ([""] if d.warnings else [])
     c = d.named
     if c is not None:
@@ -113,6 +115,18 @@ def report_markdown(d: Diagnosis, figures: dict[str, str],
     return "\n".join(L) + "\n"
 
 
+def _one_of(d: Diagnosis, c) -> str:
+    """A named cause as the claim it is: "one of A or B (held out A explains x %, B y %)"
+    where the log cannot tell B from it (Diagnosis.alternatives_of), else its name."""
+    alts = d.alternatives_of(c.effect)
+    if not alts:
+        return c.effect
+    names = " or ".join([c.effect, *(a.other for a in alts)])
+    shares = ", ".join([f"{c.effect} {alts[0].named_pct:.3g} %",
+                        *(f"{a.other} {a.other_pct:.3g} %" for a in alts)])
+    return f"one of {names} (held out {shares} of the residual)"
+
+
 def _causes_lines(d: Diagnosis) -> list[str]:
     """Every named cause with the test it is named on (at the level of the round it
     entered) and its own gain."""
@@ -123,8 +137,8 @@ def _causes_lines(d: Diagnosis) -> list[str]:
     for c in d.causes:
         pars = ", ".join(f"{k} = {v:.4g}" for k, v in c.parameters.items())
         # the test that passed: its own band's, or the second band's that confirmed it
-        L.append(f"- {c.effect}: {pars}; its test, round {c.round}, {c.test.describe()}; "
-                 f"{BLOCK_NAMES[c.block].split(':')[0]} "
+        L.append(f"- {_one_of(d, c)}: {pars}; its test, round {c.round}, "
+                 f"{c.test.describe()}; {BLOCK_NAMES[c.block].split(':')[0]} "
                  f"{c.before_pct:.3g} % -> {c.after_pct:.3g} % ({c.gain:.2f}x)")
     return L + [""]
 
@@ -240,7 +254,7 @@ def summary_text(d: Diagnosis) -> str:
     L += ["", f"named cause: {d.named_cause}" + (" (inconclusive)" if d.overruled else "")]
     if len(d.causes) > 1:
         L += [f"named causes: {', '.join(c.effect for c in d.causes)}"]
-    L += [f"  {c.effect}: {BLOCK_NAMES[c.block].split(':')[0]} {c.before_pct:.3g} % -> "
+    L += [f"  {_one_of(d, c)}: {BLOCK_NAMES[c.block].split(':')[0]} {c.before_pct:.3g} % -> "
           f"{c.after_pct:.3g} % ({c.gain:.2f}x); its test, round {c.round}, "
           f"{c.test.describe()}" for c in d.causes]
     L += [f"ambiguity: {a}" for a in d.ambiguities]
@@ -249,6 +263,8 @@ def summary_text(d: Diagnosis) -> str:
         L.append(f"rounds stopped: {d.inverse.stopped}")
     if d.reason:
         L.append(f"why: {d.reason}")
+    if d.clipped is not None and d.clipped.text() not in d.reason:
+        L.append(f"clipped torque: {d.clipped.text()}")
     if d.named is not None:
         info = EFFECTS[d.named_cause]
         before, after = d.inverse_before_after

@@ -17,20 +17,22 @@ import math
 from pathlib import Path
 from typing import Callable
 
+from jointbench.bench.analysis.diagnose.clipped import clipped_inverse
 from jointbench.bench.analysis.diagnose.forward import add_forward_view
 from jointbench.bench.analysis.diagnose.report import write
 from jointbench.bench.analysis.diagnose.types import Diagnosis, ForwardView
-from jointbench.bench.analysis.diagnose.verdict import (clipped_reason, gain_reason,
-                                                        nominal_reason)
+from jointbench.bench.analysis.diagnose.verdict import (clipped_reason, every_row_reason,
+                                                        gain_reason, nominal_reason,
+                                                        with_clipping)
 from jointbench.identification.filter_choice import choose_filter
 from jointbench.identification.discrepancy import (NUMERICS, Candidate, InverseDiagnosis, Nominal,
                                                    diagnose_inverse)
 from jointbench.identification.discrepancy.candidates import joint_parameters
-from jointbench.identification.discrepancy.inverse import NotNamed
+from jointbench.identification.discrepancy.inverse import NotNamed, one_of
 from jointbench.identification.effects import EFFECTS
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.log import Log, unit_warnings
-from jointbench.identification.saturation import clipping_warnings
+from jointbench.identification.saturation import clipped_samples, clipping_warnings
 
 
 def diagnosis_settings(log: Log) -> tuple[FilterSettings, str]:
@@ -84,11 +86,16 @@ def diagnose(log: Log, out_dir: Path | None = None, forward: bool = True,
     say = progress or (lambda msg: None)
     settings, how = diagnosis_settings(log)
     say(f"nominal model and {len(EFFECTS)} effects, inverse view ({how})")
-    inv = diagnose_inverse(log, settings)
+    inv, clipped = clipped_inverse(log, settings, diagnose_inverse(log, settings))
     nom_p = nominal_parameters(inv.nominal)
+    clip_note = clipping_warnings(log, refuse=False)
+    if clipped is not None and clipped.named_by:
+        clip_note = [clipped_samples(log).message(log.path) + ": the answer rests on every "
+                     "row, the torque at tau_max taken as the one applied (the controller's "
+                     "own clip)"]
     d = Diagnosis(log=log, settings=settings, settings_note=how, inverse=inv,
                   nominal_parameters=nom_p, extended_parameters={},
-                  warnings=tuple(unit_warnings(log) + clipping_warnings(log)))
+                  warnings=tuple(unit_warnings(log) + clip_note), clipped=clipped)
     judged = _judged(d, forward, say)
     left_out: list[str] = []
     # Several causes whose extended model the forward view rejects: the later ones are left
@@ -98,7 +105,7 @@ def diagnose(log: Log, out_dir: Path | None = None, forward: bool = True,
         left_out.append(f"{judged.inverse.causes[-1].effect} left out: {judged.overruled}")
         judged = _judged(replace(d, inverse=_without_last(judged.inverse, judged.overruled)),
                          forward, say, judged.forward_nominal)
-    d = judged
+    d = replace(judged, overruled=with_clipping(judged))
     if left_out and not d.overruled:
         d = replace(d, forward_note="; ".join(n for n in (d.forward_note, *left_out) if n))
     if out_dir is not None:
@@ -119,7 +126,7 @@ def _judged(d: Diagnosis, forward: bool, say: Callable[[str], None],
     if forward:
         d = add_forward_view(d, say, nominal_view)
     if not d.overruled:
-        d = replace(d, overruled=gain_reason(d) or clipped_reason(d))
+        d = replace(d, overruled=gain_reason(d) or every_row_reason(d) or clipped_reason(d))
     if d.overruled:   # nothing named: no extended model
         d = replace(d, extended_parameters={})
     return d
@@ -135,11 +142,11 @@ def _replay_rejects(d: Diagnosis) -> bool:
 
 def _without_last(inv: InverseDiagnosis, why: str = "") -> InverseDiagnosis:
     """`inv` without its last named cause, and without the ambiguity notes about it (a
-    note's head "A or B:" names the cause it is about); the cause listed as not named, left
+    note's head "A or B:" or "one of A or B:" names the cause it is about: inverse.one_of); the cause listed as not named, left
     out for `why` (the forward view rejects its extended model)."""
     causes = inv.causes[:-1]
     kept = {c.effect for c in causes}
-    notes = tuple(n for n in inv.notes if kept & set(n.split(":", 1)[0].split(" or ")))
+    notes = tuple(n for n in inv.notes if kept & one_of(n))
     last = inv.causes[-1]
     out = NotNamed(last.effect, "left_out", f"the forward view rejects it: {why}", last.test,
                    last.round)

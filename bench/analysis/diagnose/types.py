@@ -7,9 +7,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from jointbench.bench.analysis.diagnose.clipped import ClippedViews
 from jointbench.bench.effects import axis_keys
 from jointbench.identification.discrepancy import Candidate, InverseDiagnosis
-from jointbench.identification.discrepancy.inverse import FLOOR, NotNamed
+from jointbench.identification.discrepancy.inverse import FLOOR, Alternative, NotNamed
 from jointbench.identification.effects import NONE
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.log import Log
@@ -52,6 +53,8 @@ class Diagnosis:
     # an unphysical nominal, or an extended model that is worse; "" when nothing overrules
     overruled: str = ""
     warnings: tuple[str, ...] = ()   # units, clipped torque (stderr and JSON "warnings")
+    # a clipped log's inverse views (bench.analysis.diagnose.clipped; None when none clipped)
+    clipped: ClippedViews | None = None
 
     @property
     def named(self) -> Candidate | None:
@@ -77,6 +80,13 @@ class Diagnosis:
         notes = self.inverse.notes
         return notes + tuple(a.describe() for a in self.inverse.alternatives
                              if not a.stated_in(notes))
+
+    def alternatives_of(self, effect: str) -> tuple[Alternative, ...]:
+        """The named cause `effect`'s alternatives: "one of `effect` or B", B an effect the
+        log cannot tell from it (identification.discrepancy.inverse.Alternative)."""
+        if self.overruled:
+            return ()
+        return tuple(a for a in self.inverse.alternatives if a.named == effect)
 
     @property
     def not_named(self) -> tuple[NotNamed, ...]:
@@ -116,7 +126,8 @@ class Diagnosis:
             "verdict": self.verdict,
             "candidates": [_candidate_json(c, self.log.prismatic)
                            for c in self.inverse.candidates],
-            "causes": [_cause_json(c, self.log.prismatic) for c in self.causes],
+            "causes": [_cause_json(c, self.log.prismatic, self.alternatives_of(c.effect))
+                       for c in self.causes],
             "extended_parameters": axis_keys(self.extended_parameters, self.log.prismatic),
             "gain": {"metric": "inverse view, " + BLOCK_NAMES[self.view_block],
                      "before": before, "after": after,
@@ -144,6 +155,8 @@ class Diagnosis:
         if self.overruled and self.inverse.named is not None:
             out["rejected_cause"] = self.inverse.named.effect
         out["warnings"] = list(self.warnings)
+        if self.clipped is not None:
+            out["clipped"] = self.clipped.to_json()
         untested = {c.effect: c.reason for c in self.inverse.candidates if not c.testable}
         if untested:
             out["untested"] = untested
@@ -152,12 +165,15 @@ class Diagnosis:
         return finite_json(out)
 
 
-def _cause_json(c: Candidate, prismatic: bool = False) -> dict:
+def _cause_json(c: Candidate, prismatic: bool = False,
+                alternatives: tuple[Alternative, ...] = ()) -> dict:
     """One named cause: its parameters, the held-out test it is named on (at the level of
     the round it entered: heldout_pct, t, p_heldout, alpha are that test's, `test` all of
-    it) and its own gain, against the causes before it."""
+    it), its own gain, against the causes before it, and its `alternatives` (the effects
+    the log cannot tell from it: the claim is then "one of" them, with the share each
+    explains)."""
     test = c.test
-    return {"effect": c.effect, "after": [e for e, _ in c.base], "round": c.round,
+    return {"effect": c.effect, "alternatives": [a.of_cause() for a in alternatives], "after": [e for e, _ in c.base], "round": c.round,
             "parameters": axis_keys(c.parameters, prismatic),
             "heldout_pct": test.heldout_pct, "t": test.t, "p_heldout": test.p,
             "alpha": test.level, "test": test.to_json(),

@@ -26,20 +26,22 @@ answer is then "inconclusive", with the reason.
 - **"None" from a small part of the experiment.** Rows within reach of a clipped torque sample
   are left out (identification.saturation). When no effect passes and the rows left are under
   half of the experiment's, "none" would speak for the whole experiment from the minority of
-  it (a torque lag that drives the loop into its limit leaves 60 of a 40 s log's 820 rows):
-  the answer is "inconclusive", with the share.
+  it (a torque lag that drives the loop into its limit leaves a few percent of the rows):
+  the inverse view is run again on every row when the clip is the controller's own
+  (bench.analysis.diagnose.clipped), and when that names nothing either the answer is
+  "inconclusive", with the share of clipped samples and each candidate's held-out share in
+  each view.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from jointbench.bench.analysis.diagnose.forward import forward_scope
+from jointbench.bench.analysis.diagnose.clipped import USABLE_MIN, undecided  # noqa: F401
+from jointbench.bench.analysis.diagnose.forward import forward_scope, limit_mismatch
 from jointbench.bench.analysis.diagnose.types import Diagnosis
 from jointbench.identification.discrepancy.heldout import ALPHA, segment_sums, segment_t
 from jointbench.identification.checks.plausibility import mislabel_reason
-
-USABLE_MIN = 0.5   # "none" needs at least half of the experiment's rows (a majority of it)
 
 
 def _unphysical(p: dict[str, float]) -> str:
@@ -124,12 +126,49 @@ def forward_worse(tau: np.ndarray, nominal: np.ndarray, extended: np.ndarray,
     return segment_t(np.log(h1[ok] / h0[ok]))
 
 
+def every_row_reason(d: Diagnosis) -> str:
+    """Why causes named on every row of a clipped log (bench.analysis.diagnose.clipped) are
+    not named ("" when they stand): that view takes the torque at tau_max as the one the
+    axis received, which is what the closed-loop replay assumes too (it applies the same
+    clip); when the nominal or the extended model does not replay (it saturates far beyond
+    the log, diverges, or the log describes no controller), or when the extended model's
+    replay does not reach the limit more as the log does than the nominal's (the share of
+    samples at tau_max, segment by segment: forward.limit_mismatch), nothing confirms that
+    reading of the log: a torque clipped after the fact (a sensor's range) reads as an
+    effect there."""
+    views = getattr(d, "clipped", None)
+    if views is None or not views.named_by or not d.inverse.causes:
+        return ""
+    a, b = d.forward_nominal, d.forward_extended
+    head = (f"{d.inverse.causes[0].effect} is named only on every row, the torque at tau_max "
+            f"taken as the one applied, and the closed-loop replay that applies it so does "
+            f"not confirm that reading")
+    if a is None or b is None:
+        why = d.forward_note or "the forward view was not run"
+        return f"{head} ({why})"
+    ma, mb = (limit_mismatch(d.log, x.tau_m) for x in (a, b))
+    if mb < ma:
+        return ""
+    return (f"{head} (the extended model's replay reaches the limit no more as the log does "
+            f"than the nominal's: {mb:.3g} % of the samples off, against {ma:.3g} %)")
+
+
+def with_clipping(d: Diagnosis) -> str:
+    """The reason of an inconclusive answer on a clipped log, with the share of clipped
+    samples and each candidate's held-out share in each view (clipped.ClippedViews)."""
+    views = d.clipped
+    if not d.overruled or views is None or views.text() in d.overruled:
+        return d.overruled
+    return f"{d.overruled}; {views.text()}"
+
+
 def clipped_reason(d: Diagnosis) -> str:
     """Why "none" cannot be said of this log ("" when it can, or when a cause is named): the
     rows left after the clipped torque's are under USABLE_MIN of the experiment's."""
-    keep = d.inverse.nominal.sig.keep
-    if d.inverse.causes or keep is None or not len(keep) or keep.mean() >= USABLE_MIN:
+    if not undecided(d.inverse):
         return ""
-    return (f"only {int(keep.sum())} of {len(keep)} regression rows "
-            f"({100 * keep.mean():.3g} %) are out of reach of the clipped torque samples: no "
-            f"effect passes on them, which does not say that the experiment has none")
+    keep = d.inverse.nominal.sig.keep
+    why = (f"only {int(keep.sum())} of {len(keep)} regression rows "
+           f"({100 * keep.mean():.3g} %) are out of reach of the clipped torque samples: no "
+           f"effect passes on them, which does not say that the experiment has none")
+    return why

@@ -1,0 +1,157 @@
+"""A log whose loop reaches its torque limit: which rows the inverse view may use, and what the
+answer says when neither view can decide (docs/effects.md, identification.saturation).
+
+**Two inverse views.** A clipped torque sample may not be the torque the axis received (a
+current sensor or an ADC at the end of its range, a flat top), so by default the rows within
+reach of one are left out (identification.saturation.exclude_clipped's reach). At the
+metadata's `tau_max` the clip is the controller's own (docs/controller.md: tau_m[k] =
+clip(kv e[k] + I[k], -tau_max, tau_max)): the logged torque there is the command the drive
+applied, the input the closed-loop replay gives its plant too (bench.sim.replay), and the
+equations of eqs. (5)-(6) hold on those rows as on any other. A torque lag that drives the loop
+into its limit clips a third of the samples and more, in every period of the limit cycle:
+the rows out of reach of them are a few percent of the experiment, too few for the nominal
+model itself (Jm three times off on a pendulum's 31 rows of 820), and nothing passes on them.
+
+So when the first view cannot decide (nothing passes and its rows are under
+verdict.USABLE_MIN of the experiment's) and the clip is at the metadata's `tau_max`, the
+inverse view is run again on every row (`limit_applied`), each of its tests at half its
+level: the two views split the level as a lag's two bands do (identification.discrepancy.
+lag_band), and the chance that a clean clipped log names anything is at most ALPHA from the
+first view plus ALPHA / 2 from the second. A cause the second view names is then judged by
+the forward view as any other (bench.analysis.diagnose.verdict.gain_reason: the replay
+applies the same clip). When the second view names nothing either, or cannot be run (a flat
+top, no `tau_max`), the answer is "inconclusive" with the share of clipped samples, the rows
+each view used, and the held-out share each candidate explains in each.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from jointbench.identification.discrepancy import InverseDiagnosis, diagnose_inverse
+from jointbench.identification.discrepancy.candidates import Candidate
+from jointbench.identification.discrepancy.inverse import NotNamed, not_named
+from jointbench.identification.filtering import FilterSettings
+from jointbench.identification.log import Log
+from jointbench.identification.saturation import at_limit, clipped_samples
+
+USABLE_MIN = 0.5   # the first view decides "none" on at least half of the experiment's rows
+VIEWS = 2          # the inverse views a clipped log's hypotheses are split over
+
+
+@dataclass(frozen=True)
+class ClippedViews:
+    """What a clipped log's inverse views used and found: the clipped share, the rows of the
+    first view (out of reach of the clip) and of the second (every row, the clip taken as
+    applied; None when it did not run, `why` says why), and each view's held-out share per
+    candidate."""
+
+    clipped_pct: float
+    how: str
+    rows_kept: int
+    rows: int
+    first: dict[str, float]
+    second: dict[str, float] | None = None
+    why: str = ""        # why the second view did not run ("" when it did)
+    named_by: str = ""   # "every row" when the answer's causes come from the second view
+
+    def text(self) -> str:
+        """The shares in words, for the inconclusive reason and the report."""
+        out = (f"{self.clipped_pct:.3g} % of the torque samples are clipped ({self.how}); on "
+               f"the {self.rows_kept} of {self.rows} regression rows out of their reach "
+               f"({100 * self.rows_kept / max(1, self.rows):.3g} %) the candidates explain "
+               f"{_shares(self.first)} of the held-out residual")
+        if self.second is not None:
+            out += (f"; on every row, the torque at tau_max taken as applied (each test at "
+                    f"1/{VIEWS} of its level), {_shares(self.second)}")
+        elif self.why:
+            out += f"; {self.why}"
+        if self.named_by:
+            out += f"; the named causes are named on {self.named_by}"
+        return out
+
+    def to_json(self) -> dict:
+        out: dict = {"clipped_pct": self.clipped_pct, "how": self.how,
+                     "rows_kept": self.rows_kept, "rows": self.rows,
+                     "heldout_pct": self.first}
+        if self.second is not None:
+            out["heldout_pct_every_row"] = self.second
+        if self.why:
+            out["why_not_every_row"] = self.why
+        if self.named_by:
+            out["named_by"] = self.named_by
+        return out
+
+
+def _shares(shares: dict[str, float]) -> str:
+    return ", ".join(f"{e} {v:.3g} %" for e, v in shares.items()) or "nothing (none testable)"
+
+
+def heldout_shares(inv: InverseDiagnosis) -> dict[str, float]:
+    """Each testable first-round candidate's held-out share [%], in the ranking's order."""
+    return {c.effect: float(c.heldout_pct) for c in inv.candidates if c.testable}
+
+
+def undecided(inv: InverseDiagnosis) -> bool:
+    """The first view names nothing from under USABLE_MIN of the experiment's rows."""
+    keep = inv.nominal.sig.keep
+    return (not inv.causes and keep is not None and len(keep) > 0
+            and keep.mean() < USABLE_MIN)
+
+
+def _split(c: Candidate) -> Candidate:
+    return replace(c, views=c.views * VIEWS) if c.testable else c
+
+
+def split_level(inv: InverseDiagnosis) -> InverseDiagnosis:
+    """`inv` with every test at 1/VIEWS of its level: the causes kept while each, in order,
+    still passes (a later cause was tested on top of the ones before it), the others not
+    named (kind "failed", with why)."""
+    causes: tuple[Candidate, ...] = ()
+    dropped: list[NotNamed] = []
+    for c in inv.causes:
+        s = _split(c)
+        if s.significant and not dropped:
+            causes += (s,)
+        else:
+            why = (s.why_not or "a cause before it is not named") + \
+                f" (every row, each test at 1/{VIEWS} of its level)"
+            dropped.append(NotNamed(c.effect, "failed", why, s.test, c.round))
+    kept = {c.effect for c in causes}
+    given = tuple(n for n in inv.not_named if n.kind in ("floor", "left_out"))
+    out = replace(inv, causes=causes,
+                  candidates=tuple(_split(c) for c in inv.candidates),
+                  rounds=tuple(tuple(_split(c) for c in r) for r in inv.rounds),
+                  notes=tuple(n for n in inv.notes
+                              if kept & set(n.split(":", 1)[0].split(" or "))),
+                  alternatives=tuple(a for a in inv.alternatives if a.named in kept))
+    return replace(out, not_named=not_named(out, tuple(dropped) + given))
+
+
+def clipped_inverse(log: Log, settings: FilterSettings,
+                    inv: InverseDiagnosis) -> tuple[InverseDiagnosis, ClippedViews | None]:
+    """The inverse view the answer rests on, and what the clipped log's views found (None
+    for a log without clipped samples): the first view `inv` (rows out of reach of the
+    clip), or, when it cannot decide and the clip is at the metadata's tau_max, the second
+    (every row) if it names a cause at its split level (module docstring)."""
+    clip = clipped_samples(log)
+    if not clip.count:
+        return inv, None
+    keep = inv.nominal.sig.keep
+    rows = len(keep) if keep is not None else len(inv.nominal.sig.index)
+    kept = int(np.count_nonzero(keep)) if keep is not None else rows
+    views = ClippedViews(clipped_pct=100 * clip.share, how=clip.how, rows_kept=kept, rows=rows,
+                         first=heldout_shares(inv))
+    if not undecided(inv):
+        return inv, views
+    if not at_limit(log).any():
+        return inv, replace(views, why="the clip is not at the metadata's tau_max (a flat "
+                            "top, not the controller's own clip): its torque is not known to "
+                            "be the one applied, so its rows stay out")
+    every = split_level(diagnose_inverse(log, settings, limit_applied=True))
+    views = replace(views, second=heldout_shares(every))
+    if every.causes:
+        return every, replace(views, named_by="every row")
+    return inv, views

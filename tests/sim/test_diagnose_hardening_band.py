@@ -1,0 +1,111 @@
+"""A hardening tested at large deflections (identification/discrepancy/lag_band.py): on a
+low-f1 axis the spring engages in a few segments of the sweep only, and the chooser's band
+has a few rows each there; its second view, in the wide band over the segments whose
+deflection reaches the engagement, names it with a test that passes at half its level. The
+independent simulator's soft family (f1 about 4 Hz, the chooser's band to 5.4 Hz), a
+hardening of ratio 0.16 engaged at 22 mrad (the deflection reaches 0.27 rad at the mode)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from jointbench.bench.analysis.diagnose.run import diagnosis_settings
+from jointbench.identification.discrepancy import diagnose_inverse
+from jointbench.identification.discrepancy.candidates import CHOOSER
+from jointbench.identification.discrepancy.heldout import (ALPHA, FOLDS, SEGMENTS, bar,
+                                                           segment_of_rows, t_bar)
+from jointbench.identification.discrepancy.lag_band import LagBand, large_deflections
+
+DURATION = 30.0
+RATIO, ENGAGED = 0.16, 0.022
+
+
+def _soft(effects: str):
+    from jointbench.testing import FAMILIES, simulate
+    return simulate(FAMILIES["soft"], seed=2, duration=DURATION, effects=effects)
+
+
+def _hardening(inv):
+    return next(c for c in inv.candidates if c.effect == "hardening")
+
+
+def _named_at_large_deflections(inv, engaged: float):
+    assert inv.causes and inv.causes[0].effect == "hardening"
+    named = inv.causes[0]
+    test = named.test
+    assert test.passes and test.p < named.alpha / 2          # half the hypothesis' level
+    assert test.view != CHOOSER and "large deflections" in test.view
+    # a test over the few engaged segments has fewer degrees of freedom: a higher bar
+    assert 3 <= test.segments < SEGMENTS and test.t > test.bar > t_bar(named.level)
+    assert named.second.agree and not named.second.unphysical
+    # the engagement found within a grid step or two of the true one (the filtered deflection
+    # the columns see is the measured one's low-passed version)
+    assert named.fixed["deflection_rad"] == pytest.approx(engaged, rel=0.3)
+    assert named.second.value == pytest.approx(engaged, rel=0.3)
+    return named
+
+
+def test_a_hardening_at_large_deflections_is_named_from_its_band():
+    """Over every segment of the chooser's band its t is under the bar of a first round of 8
+    (4.23): the 9 or so engaged segments carry 13 rows each, and their log-ratios jump from
+    one to the next. At large deflections in the wide band it passes at half the level."""
+    log = _soft(f"hardening={RATIO}:deflection={ENGAGED}")
+    settings = diagnosis_settings(log)[0]
+    inv = diagnose_inverse(log, settings)
+    h = _hardening(inv)
+    assert h.t_stat < t_bar(bar(8))                 # the chooser's band alone: not named
+    named = _named_at_large_deflections(inv, ENGAGED)
+    assert [c.effect for c in inv.causes] == ["hardening"]
+    assert named.parameters["hardening_ratio"] == pytest.approx(RATIO, rel=0.5)
+    # the view's segments: those whose largest deflection passes their fold's engagement
+    nom = LagBand(log, settings).nominal()
+    within = large_deflections(nom, h.fold_values)
+    sig = nom.sig
+    d = np.abs((sig.qm - sig.q)[sig.index])
+    seg = segment_of_rows(len(d))
+    top = np.array([d[seg == s].max() for s in range(SEGMENTS)])
+    assert np.array_equal(within, top > np.asarray(h.fold_values)[np.arange(SEGMENTS) % FOLDS])
+    assert 3 <= within.sum() < SEGMENTS // 2        # a few segments of the sweep
+
+
+def test_a_hardening_beside_a_backlash_is_named_from_its_band():
+    """A backlash of 2 mrad beside a stronger hardening (ratio 0.5 at 30 mrad): the hardening
+    is named with its test at large deflections."""
+    log = _soft("backlash=0.002,hardening=0.5:deflection=0.03")
+    inv = diagnose_inverse(log, diagnosis_settings(log)[0])
+    _named_at_large_deflections(inv, 0.03)
+
+
+def test_the_hardening_and_the_lag_split_their_level():
+    """On a log with a wide band the two effects with a second view test their hypothesis
+    twice, each at half its level; every other effect keeps the round's level (Holm)."""
+    from jointbench.testing import FAMILIES, simulate
+    log = simulate(FAMILIES["soft"], seed=2, duration=DURATION)
+    inv = diagnose_inverse(log, diagnosis_settings(log)[0])
+    assert inv.causes == ()
+    tested = {c.effect: c for c in inv.candidates if c.testable}
+    assert {c.alpha for c in tested.values()} == {ALPHA / 8}
+    assert {e for e, c in tested.items() if c.views == 2} == {"torque_lag", "hardening"}
+    assert all(c.level == c.alpha / c.views for c in tested.values())
+
+
+def test_a_hardening_view_confirms_only_at_large_deflections():
+    """The guard: a view at its level, physical and agreeing confirms a hardening whose
+    chooser's-band share over every row is lost to a cause beside it (a diluted view); a
+    lag's view still asks for a positive share there; an engagement in the first step of
+    its grid is a stiffness and a sign of the deflection, unphysical, never confirmed."""
+    from jointbench.identification.discrepancy.candidates import Candidate, SecondView
+    alpha = ALPHA / 7
+    seen = SecondView(band="wide, at large deflections", heldout_pct=30.0, t_stat=12.0,
+                      p_heldout=1e-6, value=0.02, agree=True, detail="", diluted=True)
+    h = Candidate(effect="hardening", testable=True, heldout_pct=-1.0, t_stat=-3.0,
+                  p_heldout=0.99, alpha=alpha, views=2)
+    assert not h.significant
+    named = Candidate(**{**h.__dict__, "second": seen})
+    assert named.significant and named.test.passes and named.test.heldout_pct == 30.0
+    edge = SecondView(**{**seen.__dict__, "unphysical": "engagement in the first step"})
+    assert not Candidate(**{**h.__dict__, "second": edge}).significant
+    lag = Candidate(**{**h.__dict__, "effect": "torque_lag",
+                       "second": SecondView(**{**seen.__dict__, "diluted": False})})
+    assert not lag.significant

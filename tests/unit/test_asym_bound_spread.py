@@ -1,0 +1,51 @@
+"""The asymmetric friction's physical check with the fit's own uncertainty: the jackknife
+spread over the folds' fits (effects.base.spread) and the bound FS (1 +- a_c) >= 0 tested
+against it (effects.asymmetric_friction.check, beyond)."""
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from jointbench.identification.effects import asymmetric_friction as af
+from jointbench.identification.effects.base import FOLD_FITS, spread
+
+
+def test_spread_of_a_mean_is_its_standard_error():
+    # k groups' leave-one-out means of group means x_i: the delete-a-group jackknife gives
+    # exactly s / sqrt(k), s the sample standard deviation of the x_i.
+    x = np.array([1.0, 3.0, 2.5, 4.0, 0.5, 2.0, 3.5, 1.5, 2.0, 3.0])
+    k = len(x)
+    folds = tuple({"m": (x.sum() - xi) / (k - 1)} for xi in x)
+    assert spread(folds, lambda v: v["m"]) == pytest.approx(x.std(ddof=1) / np.sqrt(k))
+    assert spread((), lambda v: v["m"]) == 0.0
+
+
+def _rows():
+    return SimpleNamespace(sig=SimpleNamespace(has_link=True))
+
+
+def _values(a: float, fs: float, sd: float) -> dict:
+    # theta = 0 and FS_ref = 1: the Coulomb part is a itself; ten folds whose excess
+    # |a| - FSm spreads with the jackknife standard error sd
+    k = 10
+    dev = np.array([1.0, -1.0] * (k // 2))
+    step = sd / np.sqrt((k - 1) / k * np.sum(dev ** 2))
+    folds = tuple({"a": a + step * d, "FSm": fs} for d in dev)
+    return {"a": a, "FSm": fs, "FS_ref": 1.0, "viscous_share": 0.0, FOLD_FITS: folds}
+
+
+@pytest.mark.parametrize("over, physical", [(-1.0, True), (1.0, True), (af.CHECK_Z - 0.1, True),
+                                            (af.CHECK_Z + 0.1, False), (10.0, False)])
+def test_bound_allows_the_fit_own_uncertainty(over, physical):
+    # a Coulomb part over FSm = 2 by `over` standard errors (sd 0.1)
+    v = _values(2.0 + 0.1 * over, 2.0, 0.1)
+    assert af.beyond(v, _rows()) == pytest.approx(over)
+    assert (af.check(v, _rows()) == "") is physical
+
+
+def test_without_folds_any_excess_is_unphysical():
+    v = {"a": 2.01, "FSm": 2.0, "FS_ref": 1.0, "viscous_share": 0.0}
+    assert af.beyond(v, _rows()) == np.inf
+    assert "exceeds the fitted Coulomb friction" in af.check(v, _rows())
+    assert af.check({**v, "a": 1.99}, _rows()) == ""
