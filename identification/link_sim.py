@@ -52,65 +52,76 @@ def simulate_link(qm: np.ndarray, ts: float, a: float, b: float, c: float = 0.0,
                   gx: float = 0.0, gy: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """The link angle q [rad] at the samples of the motor angle `qm` [rad] (sample period `ts`
     [s]), from rest at the start, and the link friction phi = friction / FS averaged over each
-    step (phi[k] over [t_k, t_k+1); the last is 0). Raises ValueError unless a > 0, b, c >= 0."""
+    step (phi[k] over [t_k, t_k+1); the last is 0). Raises ValueError unless a > 0, b, c >= 0.
+
+    Each step is x' = P x + U0 u_k + S0 u'_k + F0 f (`_transition`), the linear part
+    P x + U0 u_k + S0 u'_k summed once and the friction and gravity f added to it (once more
+    with the gravity at the step's middle angle, and once more when the velocity reaches zero
+    inside the step); the gravity is evaluated only where q moved."""
     if not (a > 0 and b >= 0 and c >= 0):
         raise ValueError(f"the link needs a > 0, b >= 0, c >= 0 (got {a}, {b}, {c})")
     (p00, p01, p10, p11), (u0q, u0v), (s0q, s0v), (f0q, f0v) = _transition(a, b, ts)
-    u = np.asarray(qm, dtype=float).tolist()
-    n = len(u)
+    qm = np.asarray(qm, dtype=float)
     cos, sin = math.cos, math.sin
-    q, v = rest_angle(u[0], a, gx, gy), 0.0
+    q, v = rest_angle(float(qm[0]), a, gx, gy), 0.0
     stuck = c > 0
     gravity = gx != 0 or gy != 0
-    out_q, phi = np.empty(n), np.zeros(n)
-    out_q[0] = q
-    for k in range(n - 1):
-        slope = (u[k + 1] - u[k]) / ts
-        grav = gx * cos(q) + gy * sin(q)
+    out_q, phi = [q], []
+    add_q, add_phi = out_q.append, phi.append
+    grav, grav_at = 0.0, None       # the gravity gx cos q + gy sin q, and the q it is of
+    u = qm.tolist()
+    for uk, uk1, slope in zip(u, u[1:], ((qm[1:] - qm[:-1]) / ts).tolist()):
+        if gravity and q != grav_at:
+            grav, grav_at = gx * cos(q) + gy * sin(q), q
         if stuck:
-            force = a * (u[k + 1] - q) - grav
+            force = a * (uk1 - q) - grav
             if abs(force) <= c:                # the spring cannot move it yet
                 # the friction holds the spring's force: its mean over the step, not its end
                 # value (that would lead the motor by half a sample while the link sticks)
-                phi[k] = (a * (0.5 * (u[k] + u[k + 1]) - q) - grav) / c
-                out_q[k + 1] = q
+                add_phi((a * (0.5 * (uk + uk1) - q) - grav) / c)
+                add_q(q)
                 continue
             stuck = False
             sg = 1.0 if force > 0 else -1.0    # breaks away (at the sample)
         else:
             sg = 1.0 if v > 0 else -1.0
+        lin_q = p00 * q + p01 * v + u0q * uk + s0q * slope
+        lin_v = p10 * q + p11 * v + u0v * uk + s0v * slope
         f = -c * sg - grav
-        qn = p00 * q + p01 * v + u0q * u[k] + s0q * slope + f0q * f
+        qn = lin_q + f0q * f
         if gravity:
             # gravity at the step's middle angle: held at its start it would lag half a step,
             # a negative damping of g MY T / 2 (12 % of FV on the arm's axis 6)
             qh = 0.5 * (q + qn)
-            grav = gx * cos(qh) + gy * sin(qh)
+            grav, grav_at = gx * cos(qh) + gy * sin(qh), None
             f = -c * sg - grav
-            qn = p00 * q + p01 * v + u0q * u[k] + s0q * slope + f0q * f
-        vn = p10 * q + p11 * v + u0v * u[k] + s0v * slope + f0v * f
+            qn = lin_q + f0q * f
+        vn = lin_v + f0v * f
         if vn * sg > 0 or c == 0:
-            phi[k], q, v = sg, qn, vn
+            add_phi(sg)
+            q, v = qn, vn
         else:
             # the velocity reaches zero inside the step, at the share th of it: the friction
             # is sg until then, and after it either holds the link or reverses
             th = v / (v - vn) if v != vn else 0.0
             qx = q + (qn - q) * th
-            end = a * (u[k + 1] - qx) - grav
-            ux = u[k] + (u[k + 1] - u[k]) * th
+            end = a * (uk1 - qx) - grav
+            ux = uk + (uk1 - uk) * th
             hold = abs(a * (ux - qx) - grav) <= c
-            held = a * (0.5 * (ux + u[k + 1]) - qx) - grav    # its mean over the rest
+            held = a * (0.5 * (ux + uk1) - qx) - grav    # its mean over the rest
             after = max(-1.0, min(1.0, end / c)) if hold else -sg
-            phi[k] = sg * th + after * (1.0 - th)
-            f = -c * phi[k] - grav
-            qn = p00 * q + p01 * v + u0q * u[k] + s0q * slope + f0q * f
-            vn = p10 * q + p11 * v + u0v * u[k] + s0v * slope + f0v * f
+            mean = sg * th + after * (1.0 - th)
+            f = -c * mean - grav
+            qn = lin_q + f0q * f
+            vn = lin_v + f0v * f
             stuck = hold and abs(end) <= c
             if stuck:     # held to the step's end: the holding force's mean, as above
-                phi[k] = sg * th + held / c * (1.0 - th)
+                mean = sg * th + held / c * (1.0 - th)
+            add_phi(mean)
             q, v = (qx if stuck else qn), (0.0 if stuck else vn)
-        out_q[k + 1] = q
-    return out_q, phi
+        add_q(q)
+    add_phi(0.0)
+    return np.array(out_q), np.array(phi)
 
 
 def spectra(signals: list[np.ndarray], ts: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
