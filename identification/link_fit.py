@@ -34,8 +34,8 @@ from scipy import optimize
 
 from jointbench.identification import regressors
 from jointbench.identification.estimate import LSResult, least_squares
-from jointbench.identification.filtering import (FilterSettings, decimate_parallel, lowpass,
-                                                 zoh_align)
+from jointbench.identification.filtering import (FilterSettings, decimate, decimate_parallel,
+                                                 lowpass, zoh_align)
 from jointbench.identification.instruments import instrument_log
 from jointbench.identification.link_sim import inverse, simulate_link, spectra
 from jointbench.identification.log import Log
@@ -68,7 +68,12 @@ class LinkFit:
 
 class _Rows:
     """The motor rows of one log for given (a, b) and given profiles (phi, gravity, reversal
-    rate): the filtered motor derivatives are computed once."""
+    rate): the filtered motor derivatives and their spectra are computed once, the decimated
+    torque, qm'', qm' and sign once per profile.
+
+    Decimation is linear, and so is the link's response in its inputs: the Jacobian's columns
+    dm/da and dm/db (`_design`) are decimated as the two sums they are, not as the nine
+    responses they sum (the same numbers to rounding)."""
 
     def __init__(self, log: Log, s: FilterSettings, lp: Callable = lowpass):
         self.log, self.s = log, s
@@ -77,77 +82,106 @@ class _Rows:
         self.g = log.gravity
         self.bad = ~np.isfinite(self.qm[2])
         self.gravity = self.g != 0    # False: the gravity columns are zero (not identified)
+        self.motor_spectra = spectra([self.qm[2], self.qm[1]], s.ts)   # of qm'', qm'
+        self._key: tuple | None = None
 
     def profiles(self, p: dict[str, float]) -> None:
         """The link friction phi and gravity (link_sim with p's a, b, c, gx, gy) and the motor
-        reversals (placed with p's FSm / Jm), kept until the next call."""
+        reversals (placed with p's FSm / Jm), kept until the next call (kept as they are
+        when those are the same)."""
         a, b, K = p["a"], p["b"], p["K"]
         # the columns are H(g cos q), H(g sin q): Kgx = K MX / JL, so g MX / JL = g Kgx / K
         c = max(p["Kc"] / K, 0.0) if K > 0 else 0.0
         gx, gy = ((self.g * p["Kgx"] / K, self.g * p["Kgy"] / K) if K > 0 and self.gravity
                   else (0.0, 0.0))
+        rate = p["FSm"] / p["Jm"] if p["Jm"] > 0 and p["FSm"] > 0 else 0.0
+        key = (a, b, c, gx, gy, rate, self.gravity)
+        if key == self._key:
+            return
         q, phi = simulate_link(self.log.q_m, self.s.ts, a, b, c, gx, gy)
         self.phi = zoh_align(phi)            # the step means at the samples
         g = self.g if self.gravity else 0.0
         self.cos, self.sin = g * np.cos(q), g * np.sin(q)
-        self.spectra = spectra([self.qm[2], self.qm[1], self.phi, self.cos, self.sin],
-                               self.s.ts)
-        rate = p["FSm"] / p["Jm"] if p["Jm"] > 0 and p["FSm"] > 0 else 0.0
+        s, U, u0 = spectra([self.phi, self.cos, self.sin], self.s.ts)
+        self.spectra = (s, np.vstack([self.motor_spectra[1], U]),
+                        np.r_[self.motor_spectra[2], u0])
         # the reversals placed as the joint-motor chain places them
         motor, _ = regressors._friction_models(self.log, (rate, 0.0), self.log.q_m)
         self.sign = regressors._sign(self.qm[1], self.s, *motor)
+        self._rows(np.column_stack([self.qm[2], self.qm[1], self.sign]))
+        self._key = key
 
-    def columns(self, p: dict[str, float]) -> np.ndarray:
-        """The columns before decimation: (qm'', qm', sign, H u_i for the link inputs
-        u = (qm'' + b qm', phi, g cos q, g sin q), H^2 u_i, s H^2 u_i, H qm'); `_design`
-        combines the last nine into dm/da and dm/db, which are linear in the parameters."""
-        a, b = p["a"], p["b"]
+    def _rows(self, M: np.ndarray) -> None:
+        """The rows `decimate_parallel` keeps for the torque and the columns (the motor ones
+        `M` and the link's responses, NaN where qm'' is), less those near a clipped torque
+        (`exclude_clipped`, as for every model); the decimated torque and `M` on them, and the
+        span the decimation filters."""
+        M = M.copy()
+        M[self.bad] = np.nan
+        y, Md, idx = decimate_parallel(self.tau, M, self.s)
+        reg = exclude_clipped(regressors.Regressor("motor-only", NAMES[:3], y, Md,
+                                                   np.zeros(len(y), int), idx, self.s),
+                              self.log)
+        self.y, self.motor, self.index = reg.y, reg.W, reg.index
+        valid = np.all(np.isfinite(M), axis=1) & np.isfinite(self.tau)   # decimate_parallel's
+        self.first = max(int(np.argmax(valid)), self.s.skip)
+        self.last = len(valid) - int(np.argmax(valid[::-1]))
+
+    def _decimated(self, X: np.ndarray) -> np.ndarray:
+        """The columns X (NaN where qm'' is NaN) decimated as `decimate_parallel` does, on the
+        rows of `_rows`."""
+        X[self.bad] = np.nan
+        X = X[self.first:self.last]
+        Nd = self.s.Nd
+        Xd = decimate(X, Nd, axis=0) if Nd > 1 else X
+        return Xd[(self.index - self.first) // Nd]
+
+    def _inputs(self, b: float) -> tuple[np.ndarray, ...]:
+        """s, the spectra of the link inputs u = (qm'' + b qm', phi, g cos q, g sin q) and
+        their first samples."""
         s, U, u0 = self.spectra     # of qm'', qm', phi, g cos q, g sin q
-        ins = np.vstack([U[0] + b * U[1], U[2:]])
-        i0 = np.r_[u0[0] + b * u0[1], u0[2:]]
+        return s, np.vstack([U[0] + b * U[1], U[2:]]), np.r_[u0[0] + b * u0[1], u0[2:]]
+
+    def linear(self, p: dict[str, float]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The decimated rows (y, the LINEAR columns qm'', qm', sign, H u_i, raw sample
+        index) for p's a, b."""
+        a, b = p["a"], p["b"]
+        s, ins, i0 = self._inputs(b)
         H = 1.0 / (s * s + b * s + a)
-        n = len(self.tau)
-        resp = inverse(np.vstack([H * ins, H * H * ins, s * H * H * ins, H * U[1]]), s, n)
-        resp[:4] += (i0 / a)[:, None]
-        resp[4:8] += (i0 / a ** 2)[:, None]
-        resp[12] += u0[1] / a
-        W = np.column_stack([self.qm[2], self.qm[1], self.sign, resp.T])
-        W[self.bad] = np.nan
-        return W
+        resp = inverse(H * ins, s, len(self.tau)) + (i0 / a)[:, None]
+        return self.y, np.column_stack([self.motor, self._decimated(resp.T)]), self.index
 
-    def decimated(self, p: dict[str, float]):
-        return decimate_parallel(self.tau, self.columns(p), self.s)
+    def derivatives(self, p: dict[str, float]) -> np.ndarray:
+        """The decimated columns dm/da = -sum beta_i H^2 u_i and dm/db = K H qm' - sum
+        beta_i s H^2 u_i at p (beta = K, Kc, Kgx, Kgy), on the rows of `linear`."""
+        a, b = p["a"], p["b"]
+        beta = np.array([p["K"], p["Kc"], p["Kgx"], p["Kgy"]])
+        s, ins, i0 = self._inputs(b)
+        U1, u01 = self.spectra[1][1], self.spectra[2][1]
+        H = 1.0 / (s * s + b * s + a)
+        HH = H * H
+        spec = np.vstack([-HH * (beta @ ins), p["K"] * H * U1 - s * HH * (beta @ ins)])
+        D = inverse(spec, s, len(self.tau))
+        D[0] += -(beta @ i0) / a ** 2
+        D[1] += p["K"] * u01 / a
+        return self._decimated(D.T)
 
-
-def _design(C: np.ndarray, p: dict[str, float]) -> np.ndarray:
-    """The rows' Jacobian J = (the LINEAR columns, dm/da, dm/db) from `Rows.columns`' C:
-    m = Jm qm'' + FVm qm' + FSm sign + sum beta_i H u_i (beta = K, Kc, Kgx, Kgy), so
-    dm/da = -sum beta_i H^2 u_i and dm/db = K H qm' - sum beta_i s H^2 u_i."""
-    beta = np.array([p["K"], p["Kc"], p["Kgx"], p["Kgy"]])
-    da = -C[:, 7:11] @ beta
-    db = p["K"] * C[:, 15] - C[:, 11:15] @ beta
-    return np.column_stack([C[:, :LINEAR], da, db])
+    def design(self, p: dict[str, float]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(y, the Jacobian J = (the LINEAR columns, dm/da, dm/db) at p, index): m = Jm qm''
+        + FVm qm' + FSm sign + sum beta_i H u_i, linear in the first LINEAR parameters."""
+        y, L, idx = self.linear(p)
+        return y, np.column_stack([L, self.derivatives(p)]), idx
 
 
 def _model(W: np.ndarray, p: dict[str, float]) -> np.ndarray:
     return W[:, :LINEAR] @ np.array([p[n] for n in NAMES[:LINEAR]])
 
 
-def _kept(rows: _Rows, log: Log, p: dict[str, float]) -> tuple[np.ndarray, ...]:
-    """The decimated rows (y, the columns of `_Rows.columns`, raw sample index) without those
-    near a clipped torque, as for every model."""
-    y, C, idx = rows.decimated(p)
-    reg = exclude_clipped(regressors.Regressor("motor-only", NAMES, y, C, np.zeros(len(y), int),
-                                               idx, rows.s), log)
-    return reg.y, reg.W, reg.index
-
-
 def _solve(rows: _Rows, log: Log, p: dict[str, float], Z: tuple | None = None,
            corrected: bool = False):
     """One Gauss-Newton pass: the linearised rows y - m(p) + J p = J X solved for X, with the
     instruments `Z` = (instrument rows, their index) when given and covering the rows."""
-    y, C, idx = _kept(rows, log, p)
-    J = _design(C, p)
+    y, J, idx = rows.design(p)
     ylin = y - _model(J, p) + J @ np.array([p[n] for n in NAMES])
     inst = None
     if Z is not None:
@@ -173,15 +207,14 @@ def _linear(rows: _Rows, log: Log, p: dict[str, float]) -> tuple[dict[str, float
     columns (profiles as they are), the residual, and its Jacobian with respect to
     (log a, log b) at those linear parameters projected off the linear columns (variable
     projection, Kaufman's form)."""
-    y, C, _ = _kept(rows, log, p)
-    Q, R, norms = _orthonormal(C[:, :LINEAR])
+    y, L, _ = rows.linear(p)
+    Q, R, norms = _orthonormal(L)
     x = np.zeros(LINEAR)
     x[norms > 0] = np.linalg.solve(R, Q.T @ y) / norms[norms > 0]
     new = dict(p)
     new.update({n: float(v) for n, v in zip(NAMES, x)})
-    J = _design(C, new)
-    r = y - _model(J, new)
-    Jab = J[:, LINEAR:] * np.array([new["a"], new["b"]])
+    r = y - _model(L, new)
+    Jab = rows.derivatives(new) * np.array([new["a"], new["b"]])
     return new, r, -(Jab - Q @ (Q.T @ Jab))
 
 
@@ -343,8 +376,8 @@ def _instruments(log: Log, s: FilterSettings, f1_hz: float | None):
 
     def Z(p: dict[str, float]) -> np.ndarray:
         rows.profiles(p)
-        _, C, idx = rows.decimated(p)
-        return _design(C, p), idx
+        _, J, idx = rows.design(p)
+        return J, idx
 
     return Z, "instrumental variables from q_ref's predictions for the last passes"
 
