@@ -34,8 +34,7 @@ from scipy import optimize
 
 from jointbench.identification import regressors
 from jointbench.identification.estimate import LSResult, least_squares
-from jointbench.identification.filtering import (FilterSettings, decimate, decimate_parallel,
-                                                 lowpass, zoh_align)
+from jointbench.identification.filtering import FilterSettings, decimate, lowpass, zoh_align
 from jointbench.identification.instruments import instrument_log
 from jointbench.identification.link_sim import inverse, simulate_link, spectra
 from jointbench.identification.log import Log
@@ -84,6 +83,9 @@ class _Rows:
         self.gravity = self.g != 0    # False: the gravity columns are zero (not identified)
         self.motor_spectra = spectra([self.qm[2], self.qm[1]], s.ts)   # of qm'', qm'
         self._key: tuple | None = None
+        # decimate_parallel's valid rows before the sign's: the torque, qm'', qm'
+        self.finite = np.isfinite(self.tau) & np.isfinite(self.qm[1]) & ~self.bad
+        self._span: tuple[int, int] | None = None
 
     def profiles(self, p: dict[str, float]) -> None:
         """The link friction phi and gravity (link_sim with p's a, b, c, gx, gy) and the motor
@@ -108,33 +110,45 @@ class _Rows:
         # the reversals placed as the joint-motor chain places them
         motor, _ = regressors._friction_models(self.log, (rate, 0.0), self.log.q_m)
         self.sign = regressors._sign(self.qm[1], self.s, *motor)
-        self._rows(np.column_stack([self.qm[2], self.qm[1], self.sign]))
+        self._rows(self.sign)
         self._key = key
 
-    def _rows(self, M: np.ndarray) -> None:
-        """The rows `decimate_parallel` keeps for the torque and the columns (the motor ones
-        `M` and the link's responses, NaN where qm'' is), less those near a clipped torque
-        (`exclude_clipped`, as for every model); the decimated torque and `M` on them, and the
-        span the decimation filters."""
-        M = M.copy()
-        M[self.bad] = np.nan
-        y, Md, idx = decimate_parallel(self.tau, M, self.s)
-        reg = exclude_clipped(regressors.Regressor("motor-only", NAMES[:3], y, Md,
-                                                   np.zeros(len(y), int), idx, self.s),
-                              self.log)
-        self.y, self.motor, self.index = reg.y, reg.W, reg.index
-        valid = np.all(np.isfinite(M), axis=1) & np.isfinite(self.tau)   # decimate_parallel's
+    def _rows(self, sign: np.ndarray) -> None:
+        """The rows `decimate_parallel` keeps for the torque and the columns (qm'', qm', the
+        motor's `sign` and the link's responses, NaN where qm'' is), less those near a clipped
+        torque (`exclude_clipped`, as for every model); the decimated torque and motor columns
+        on them (the torque, qm'' and qm' decimated once per span), and the span the
+        decimation filters."""
+        sign = np.where(self.bad, np.nan, sign)
+        valid = self.finite & np.isfinite(sign)
         self.first = max(int(np.argmax(valid)), self.s.skip)
         self.last = len(valid) - int(np.argmax(valid[::-1]))
+        span = (self.first, self.last)
+        if self._span != span:
+            self._span = span
+            self._motor = self._decimate_span(np.column_stack([self.tau, self.qm[2],
+                                                               self.qm[1]]))
+        D = np.column_stack([self._motor, self._decimate_span(sign[:, None])])
+        e = self.s.edge
+        index = self.first + np.arange(len(D)) * self.s.Nd
+        D, index = D[e:len(D) - e], index[e:len(D) - e]
+        ok = np.all(np.isfinite(D), axis=1)
+        reg = exclude_clipped(regressors.Regressor("motor-only", NAMES[:3], D[ok, 0],
+                                                   D[ok, 1:], np.zeros(ok.sum(), int),
+                                                   index[ok], self.s), self.log)
+        self.y, self.motor, self.index = reg.y, reg.W, reg.index
+
+    def _decimate_span(self, X: np.ndarray) -> np.ndarray:
+        """The columns X decimated by Nd over the span of `_rows` (filtering.decimate, as in
+        `decimate_parallel`)."""
+        X = X[self.first:self.last]
+        return decimate(X, self.s.Nd, axis=0) if self.s.Nd > 1 else X.copy()
 
     def _decimated(self, X: np.ndarray) -> np.ndarray:
         """The columns X (NaN where qm'' is NaN) decimated as `decimate_parallel` does, on the
         rows of `_rows`."""
         X[self.bad] = np.nan
-        X = X[self.first:self.last]
-        Nd = self.s.Nd
-        Xd = decimate(X, Nd, axis=0) if Nd > 1 else X
-        return Xd[(self.index - self.first) // Nd]
+        return self._decimate_span(X)[(self.index - self.first) // self.s.Nd]
 
     def _inputs(self, b: float) -> tuple[np.ndarray, ...]:
         """s, the spectra of the link inputs u = (qm'' + b qm', phi, g cos q, g sin q) and
@@ -201,12 +215,13 @@ def _orthonormal(W: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return Q, R, norms
 
 
-def _linear(rows: _Rows, log: Log, p: dict[str, float]) -> tuple[dict[str, float], np.ndarray,
-                                                              np.ndarray]:
+def _linear(rows: _Rows, log: Log, p: dict[str, float]
+            ) -> tuple[dict[str, float], np.ndarray, Callable[[], np.ndarray]]:
     """The linear parameters for the (a, b) of `p` by least squares on the first LINEAR
-    columns (profiles as they are), the residual, and its Jacobian with respect to
-    (log a, log b) at those linear parameters projected off the linear columns (variable
-    projection, Kaufman's form)."""
+    columns (profiles as they are), the residual, and a function giving its Jacobian with
+    respect to (log a, log b) at those linear parameters projected off the linear columns
+    (variable projection, Kaufman's form; made when asked for: the trust region asks for it
+    at the points it accepts only)."""
     y, L, _ = rows.linear(p)
     Q, R, norms = _orthonormal(L)
     x = np.zeros(LINEAR)
@@ -214,8 +229,12 @@ def _linear(rows: _Rows, log: Log, p: dict[str, float]) -> tuple[dict[str, float
     new = dict(p)
     new.update({n: float(v) for n, v in zip(NAMES, x)})
     r = y - _model(L, new)
-    Jab = rows.derivatives(new) * np.array([new["a"], new["b"]])
-    return new, r, -(Jab - Q @ (Q.T @ Jab))
+
+    def jacobian() -> np.ndarray:
+        Jab = rows.derivatives(new) * np.array([new["a"], new["b"]])
+        return -(Jab - Q @ (Q.T @ Jab))
+
+    return new, r, jacobian
 
 
 def _converge(rows: _Rows, log: Log, p: dict[str, float], rounds: int) -> dict[str, float]:
@@ -233,7 +252,8 @@ def _converge(rows: _Rows, log: Log, p: dict[str, float], rounds: int) -> dict[s
             return cache[key]
 
         sol = optimize.least_squares(lambda x: evaluate(x)[1], np.log([p["a"], p["b"]]),
-                                     jac=lambda x: evaluate(x)[2], method="trf", x_scale=1.0)
+                                     jac=lambda x: evaluate(x)[2](), method="trf",
+                                     x_scale=1.0)
         p = evaluate(sol.x)[0]
     return p
 

@@ -24,6 +24,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy import fft
 from scipy.linalg import expm
 
 
@@ -132,12 +133,12 @@ def spectra(signals: list[np.ndarray], ts: float) -> tuple[np.ndarray, np.ndarra
     n = u.shape[-1]
     L = 1 << int(math.ceil(math.log2(2 * max(n, 2))))
     u0 = u[:, 0].copy()
-    return 2j * np.pi * np.fft.rfftfreq(L, ts), np.fft.rfft(u - u0[:, None], L), u0
+    return 2j * np.pi * fft.rfftfreq(L, ts), fft.rfft(u - u0[:, None], L), u0
 
 
 def inverse(X: np.ndarray, s: np.ndarray, n: int) -> np.ndarray:
     """The first n samples of the signals whose spectra are the rows of X (bins of s)."""
-    return np.fft.irfft(X, 2 * (len(s) - 1))[..., :n]
+    return fft.irfft(X, 2 * (len(s) - 1))[..., :n]
 
 
 def link_response(u: np.ndarray, a: float, b: float, ts: float, order: int = 1,
