@@ -86,6 +86,7 @@ class _Rows:
         # decimate_parallel's valid rows before the sign's: the torque, qm'', qm'
         self.finite = np.isfinite(self.tau) & np.isfinite(self.qm[1]) & ~self.bad
         self._span: tuple[int, int] | None = None
+        self._H: tuple | None = None
 
     def profiles(self, p: dict[str, float]) -> None:
         """The link friction phi and gravity (link_sim with p's a, b, c, gx, gy) and the motor
@@ -111,7 +112,7 @@ class _Rows:
         motor, _ = regressors._friction_models(self.log, (rate, 0.0), self.log.q_m)
         self.sign = regressors._sign(self.qm[1], self.s, *motor)
         self._rows(self.sign)
-        self._key = key
+        self._key, self._H = key, None
 
     def _rows(self, sign: np.ndarray) -> None:
         """The rows `decimate_parallel` keeps for the torque and the columns (qm'', qm', the
@@ -150,35 +151,44 @@ class _Rows:
         X[self.bad] = np.nan
         return self._decimate_span(X)[(self.index - self.first) // self.s.Nd]
 
-    def _inputs(self, b: float) -> tuple[np.ndarray, ...]:
-        """s, the spectra of the link inputs u = (qm'' + b qm', phi, g cos q, g sin q) and
-        their first samples."""
-        s, U, u0 = self.spectra     # of qm'', qm', phi, g cos q, g sin q
-        return s, np.vstack([U[0] + b * U[1], U[2:]]), np.r_[u0[0] + b * u0[1], u0[2:]]
+    def _link(self, a: float, b: float) -> tuple[np.ndarray, ...]:
+        """s, H = 1 / (s^2 + b s + a), the spectra of the link inputs u = (qm'' + b qm', phi,
+        g cos q, g sin q), their first samples, and which of them are not zero (no gravity:
+        the last two are), for the last (a, b) asked for."""
+        if self._H is None or self._H[0] != (a, b):
+            s, U, u0 = self.spectra     # of qm'', qm', phi, g cos q, g sin q
+            ins = np.vstack([U[0] + b * U[1], U[2:]])
+            i0 = np.r_[u0[0] + b * u0[1], u0[2:]]
+            live = np.any(ins != 0, axis=1) | (i0 != 0)
+            self._H = ((a, b), s, 1.0 / (s * s + b * s + a), ins, i0, live)
+        return self._H[1:]
+
+    def _responses(self, spec: np.ndarray, const: np.ndarray) -> np.ndarray:
+        """The decimated columns of the signals whose spectra (less their first sample) are
+        the rows of `spec` and whose first samples are `const`."""
+        s = self.spectra[0]
+        return self._decimated((inverse(spec, s, len(self.tau)) + const[:, None]).T)
 
     def linear(self, p: dict[str, float]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The decimated rows (y, the LINEAR columns qm'', qm', sign, H u_i, raw sample
-        index) for p's a, b."""
-        a, b = p["a"], p["b"]
-        s, ins, i0 = self._inputs(b)
-        H = 1.0 / (s * s + b * s + a)
-        resp = inverse(H * ins, s, len(self.tau)) + (i0 / a)[:, None]
-        return self.y, np.column_stack([self.motor, self._decimated(resp.T)]), self.index
+        index) for p's a, b; a zero input's column is zero."""
+        a = p["a"]
+        s, H, ins, i0, live = self._link(a, p["b"])
+        resp = np.zeros((len(self.index), len(ins)))
+        resp[:, live] = self._responses(H * ins[live], i0[live] / a)
+        return self.y, np.column_stack([self.motor, resp]), self.index
 
     def derivatives(self, p: dict[str, float]) -> np.ndarray:
         """The decimated columns dm/da = -sum beta_i H^2 u_i and dm/db = K H qm' - sum
         beta_i s H^2 u_i at p (beta = K, Kc, Kgx, Kgy), on the rows of `linear`."""
-        a, b = p["a"], p["b"]
-        beta = np.array([p["K"], p["Kc"], p["Kgx"], p["Kgy"]])
-        s, ins, i0 = self._inputs(b)
-        U1, u01 = self.spectra[1][1], self.spectra[2][1]
-        H = 1.0 / (s * s + b * s + a)
+        a, K = p["a"], p["K"]
+        s, H, ins, i0, live = self._link(a, p["b"])
+        beta = np.array([K, p["Kc"], p["Kgx"], p["Kgy"]])[live]
         HH = H * H
-        spec = np.vstack([-HH * (beta @ ins), p["K"] * H * U1 - s * HH * (beta @ ins)])
-        D = inverse(spec, s, len(self.tau))
-        D[0] += -(beta @ i0) / a ** 2
-        D[1] += p["K"] * u01 / a
-        return self._decimated(D.T)
+        bu = beta @ ins[live]
+        spec = np.vstack([-HH * bu, K * H * self.spectra[1][1] - s * HH * bu])
+        return self._responses(spec, np.array([-(beta @ i0[live]) / a ** 2,
+                                               K * self.spectra[2][1] / a]))
 
     def design(self, p: dict[str, float]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(y, the Jacobian J = (the LINEAR columns, dm/da, dm/db) at p, index): m = Jm qm''
