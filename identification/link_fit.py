@@ -71,8 +71,8 @@ class _Rows:
     torque, qm'', qm' and sign once per profile.
 
     Decimation is linear, and so is the link's response in its inputs: the Jacobian's columns
-    dm/da and dm/db (`_design`) are decimated as the two sums they are, not as the nine
-    responses they sum (the same numbers to rounding)."""
+    dm/da and dm/db (`derivatives`) are summed in the frequency domain and decimated as the two
+    columns they are, not as the nine responses they sum (the same numbers to rounding)."""
 
     def __init__(self, log: Log, s: FilterSettings, lp: Callable = lowpass):
         self.log, self.s = log, s
@@ -230,8 +230,8 @@ def _linear(rows: _Rows, log: Log, p: dict[str, float]
     """The linear parameters for the (a, b) of `p` by least squares on the first LINEAR
     columns (profiles as they are), the residual, and a function giving its Jacobian with
     respect to (log a, log b) at those linear parameters projected off the linear columns
-    (variable projection, Kaufman's form; made when asked for: the trust region asks for it
-    at the points it accepts only)."""
+    (variable projection, Kaufman's form; made when the trust region asks for it: at the
+    points it steps to, not at the trial points it rejects)."""
     y, L, _ = rows.linear(p)
     Q, R, norms = _orthonormal(L)
     x = np.zeros(LINEAR)
