@@ -12,6 +12,7 @@ from scipy import signal
 
 from jointbench.identification import link_fit
 from jointbench.identification.filter_choice import choose_filter
+from jointbench.identification.filtering import decimate_parallel
 from jointbench.identification.identify import identify
 from jointbench.bench.sim.experiment import run_experiment
 from jointbench.bench.sim.sensors import Sensors
@@ -142,3 +143,27 @@ def test_jacobian_columns_are_the_model_derivatives():
         fd = (link_fit._model(rows.linear(up)[1], p)
               - link_fit._model(rows.linear(down)[1], p)) / (2 * h)
         assert np.linalg.norm(J[:, col] - fd) < 1e-6 * np.linalg.norm(fd), name
+
+
+def test_rows_are_those_of_decimate_parallel():
+    """`_Rows.linear` decimates its columns once per profile or per (a, b), on the rows
+    filtering.decimate_parallel keeps: the same rows and numbers (to rounding) as
+    decimate_parallel of the torque and the full columns (qm'', qm', sign, H u_i from
+    `link_response`; measured: the motor columns equal, the responses within 3e-14 of their
+    largest value)."""
+    log = simulate(replace(FAMILIES["balanced"], MY=0.3), 1, 10.0, "linear", True)
+    truth, s = log.truth(), choose_filter(log).settings
+    a, b = link_params(log)[:2]
+    p = {"Jm": truth["Jm"], "FVm": truth["FVm"], "FSm": truth["FSm"], "K": truth["K"],
+         "Kc": a * truth["FS"], "Kgx": a * truth["MX"], "Kgy": a * truth["MY"], "a": a, "b": b}
+    rows = link_fit._Rows(log, s)
+    rows.profiles(p)
+    y, L, idx = rows.linear(p)
+    qm2, qm1 = np.nan_to_num(rows.qm[2]), np.nan_to_num(rows.qm[1])   # 0 at the ends
+    inputs = (qm2 + b * qm1, rows.phi, rows.cos, rows.sin)
+    W = np.column_stack([rows.qm[2], rows.qm[1], rows.sign]
+                        + [link_response(u, a, b, s.ts) for u in inputs])
+    W[rows.bad] = np.nan
+    y0, W0, idx0 = decimate_parallel(rows.tau, W, s)
+    assert np.array_equal(idx, idx0) and np.array_equal(y, y0)
+    np.testing.assert_allclose(L, W0, rtol=1e-10, atol=1e-12 * np.abs(W0).max())
