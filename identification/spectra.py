@@ -32,14 +32,18 @@ _Key = tuple[str, int, int, int, int]
 def segment_transforms(x: np.ndarray, sft: signal.ShortTimeFFT, noverlap: int) -> np.ndarray:
     """`sft.stft_detrend(x, "constant", p0=0, p1=(len(x) - noverlap) // sft.hop,
     k_offset=nperseg // 2)`, the transforms csd takes of x's segments (frequency by segment),
-    in one FFT call over all segments instead of scipy's loop over them: the same operations
-    on each segment (its mean taken out, times the scaled window, the one-sided FFT), the same
-    numbers."""
-    nperseg = len(sft.win)
+    in one FFT call over all segments instead of scipy's loop over them (`_transformed`):
+    the same numbers."""
     count = (len(x) - noverlap) // sft.hop
-    segs = sliding_window_view(np.asarray(x, dtype=float), nperseg)[::sft.hop][:count]
+    return _transformed(sliding_window_view(np.asarray(x, dtype=float),
+                                            len(sft.win))[::sft.hop][:count], sft)
+
+
+def _transformed(segs: np.ndarray, sft: signal.ShortTimeFFT) -> np.ndarray:
+    """The one-sided FFTs (frequency by segment) of the segments `segs` (segment by sample),
+    each with its mean taken out and times the scaled window: scipy's operations on each."""
     segs = segs - np.mean(segs, axis=-1, keepdims=True)
-    return np.ascontiguousarray(fft.rfft(segs * sft.win.conj(), n=sft.mfft, axis=-1).T)
+    return fft.rfft((segs * sft.win.conj()).T, n=sft.mfft, axis=0)
 
 
 def _average(P: np.ndarray, nperseg: int) -> np.ndarray:
