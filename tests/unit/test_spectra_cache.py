@@ -68,3 +68,13 @@ def test_spectra_results_are_shared_read_only():
     a = S.csd("q_ref", "q", 512)
     assert S.csd("q_ref", "q", 512) is a and not a.flags.writeable
     assert not S.welch("q", 512).flags.writeable
+
+
+def test_welch_with_the_linear_detrend_equals_scipy_to_rounding():
+    x = np.cumsum(_log(6001).q)   # a trend for the detrend to take out
+    f, P = signal.welch(x, fs=FS, nperseg=1024, detrend="linear")
+    f2, P2 = welch(x, FS, 1024, detrend="linear")
+    assert np.array_equal(f, f2)
+    np.testing.assert_allclose(P2, P, rtol=1e-10, atol=0)
+    with pytest.raises(ValueError, match="detrend"):
+        welch(x, FS, 1024, detrend="quadratic")
