@@ -144,7 +144,7 @@ def _estimate(log: Log, sl: slice, nperseg: int, noverlap: int | None, top_hz: f
         s_tt = spectra.welch("tau_m", nperseg, noverlap, sl)
         with np.errstate(divide="ignore", invalid="ignore"):
             Hq = s_tq / s_tt
-    fit = inertia_ratio(f2, Hq, w2, *ab, top_hz, fs)
+    fit = inertia_ratio(f2, Hq, w2, *ab, top_hz, spectra.hold_hz)
     if fit is None:
         return None
     Jm, _, JL = fit

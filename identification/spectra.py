@@ -89,11 +89,17 @@ class Spectra:
     """Welch's estimates (`csd`, `welch`, `coherence`) of the log's columns `SIGNALS` over
     the samples [start, stop), segments of `nperseg` overlapping by `noverlap` (None: half),
     density scaling, one-sided, Hann window, constant detrend: scipy.signal's defaults, with
-    each signal's short-time transforms computed once per segmentation."""
+    each signal's short-time transforms computed once per segmentation. `hold_hz` and
+    `decimation`: the logged record's rate and the factor `log` was decimated by when it is
+    a decimated copy of it (`first_mode.analysis_log`)."""
 
-    def __init__(self, log: Log):
+    def __init__(self, log: Log, hold_hz: float | None = None, decimation: int = 1):
         self.log = log
         self.fs = log.sample_rate_hz
+        # the rate the torque was held at (its zero-order hold) and the factor `log` was
+        # decimated by: `log` may be a decimated copy of the logged record
+        self.hold_hz = float(hold_hz) if hold_hz is not None else self.fs
+        self.decimation = int(decimation)
         self._stft: dict[_Key, np.ndarray] = {}
         self._sft: dict[tuple[int, int], signal.ShortTimeFFT] = {}
         self._memo: dict[str, object] = {}
