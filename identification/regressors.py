@@ -86,19 +86,16 @@ def _sign(x: np.ndarray, s: FilterSettings, rate: float = 0.0,
     return out
 
 
-def _torque(log: Log, s: FilterSettings, filtered: bool = True, lp: Callable = lowpass,
-            fresh: Callable = lowpass) -> np.ndarray:
+def _torque(log: Log, s: FilterSettings, filtered: bool = True, lp: Callable = lowpass
+            ) -> np.ndarray:
     """The torque paired with the positions: ZOH-aligned (`zoh_align`; exact with the 5-point
     chain, applied after the Butterworth since both are linear and the exact view leaves NaN
-    at the ends) and Butterworth filtered when `filtered` (`lp` as `_filtered`'s; `fresh`
-    filters the ZOH-aligned array made here, which `lp`'s cache would keep for nothing)."""
+    at the ends) and Butterworth filtered when `filtered` (`lp` as `_filtered`'s)."""
     tau = np.asarray(log.tau_m, dtype=float)
     if s.zoh and s.stencil == 5:
         return zoh_align(lp(tau, s.wn, s.ts, s.m) if filtered else tau, exact=True, ts=s.ts)
-    if s.zoh:
-        tau = zoh_align(tau)
-        return fresh(tau, s.wn, s.ts, s.m) if filtered else tau
-    return lp(tau, s.wn, s.ts, s.m) if filtered else tau
+    tau = zoh_align(tau) if s.zoh else tau
+    return lowpass(tau, s.wn, s.ts, s.m) if filtered else tau
 
 
 def joint_motor(log: Log, s: FilterSettings,
