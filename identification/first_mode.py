@@ -32,6 +32,7 @@ GAP_HZ = 1.0            # a gap this wide in the coherent bins ends the excited 
 MIN_BINS = 8            # coherent bins needed around the mode for the fit
 CONSISTENCY_Z = 3.0     # link and motor modes this many sigmas apart: one of them is biased
 ZETA_MAX = 1.0          # a second-order pair of damping ratio 1 or more is two real poles
+ANALYSIS_MIN_SAMPLES = 4096   # `analysis_log` leaves at least this many samples
 
 
 @dataclass(frozen=True)
@@ -68,7 +69,7 @@ def _response(spectra: Spectra, x: str, y: str, sl: slice, nperseg: int,
     spectrum."""
     kw = dict(nperseg=nperseg, noverlap=noverlap, sl=sl)
     f = spectra.frequencies(nperseg)
-    fs = spectra.fs
+    fs = spectra.hold_hz
     s_xy = spectra.csd(x, y, **kw)
     s_xt = spectra.welch(x, **kw) if same else spectra.csd(x, "tau_m", **kw)
     with np.errstate(divide="ignore", invalid="ignore"):   # constant signals: 0 / 0
@@ -215,13 +216,44 @@ def measure_first_mode(log: Log) -> FirstMode:
     the reason in `note`, when no resonance stands out of the coherent band (a rigid axis, too
     little excitation). With `q`, a link mode is cross-checked against the motor response's
     (`_cross_checked`): when the two disagree, `sigma_hz` covers both."""
-    spectra = Spectra(log)
-    mode = _measure(log, motor=log.q is None, spectra=spectra)
+    work, spectra = analysis_log(log)
+    mode = _measure(work, motor=log.q is None, spectra=spectra)
     if log.q is None:
-        return _excitation_checked(log, mode, spectra)
-    mode = _cross_checked(mode, _measure(log, motor=True, spectra=spectra)) if mode.found \
-        else _from_motor(log, mode, spectra)
-    return _excitation_checked(log, _with_link_mode(log, mode, spectra), spectra)
+        return _excitation_checked(work, mode, spectra)
+    mode = _cross_checked(mode, _measure(work, motor=True, spectra=spectra)) if mode.found \
+        else _from_motor(work, mode, spectra)
+    return _excitation_checked(work, _with_link_mode(work, mode, spectra), spectra)
+
+
+def analysis_log(log: Log) -> tuple[Log, Spectra]:
+    """The record the responses are measured on, and its spectra: the log, or a copy
+    decimated by the largest power of two D (`filtering.decimate`: the zero-phase anti-alias
+    filter, every D-th sample) whose anti-alias cutoff 0.8 fs / (2 D) stays at or above the
+    top of the band the responses are read in, 1.1 times the excitation's top
+    (`link_mode.excitation_top_hz`, on the logged record), and which leaves at least
+    ANALYSIS_MIN_SAMPLES samples (the filter's start-up at the ends stays a small share of
+    the record). Segments of 1/D the samples at fs / D give the same bins; the anti-alias
+    filter, common to every signal, leaves the responses (ratios of their spectra) and the
+    coherences unchanged in that band; the torque's zero-order hold stays the logged rate's
+    (`Spectra.hold_hz`). D times fewer samples to transform (a 60 s prototype log: D = 4)."""
+    from jointbench.identification.filtering import decimate
+    from jointbench.identification.link_mode import excitation_top_hz
+
+    full = Spectra(log)
+    top = excitation_top_hz(log, full)
+    fs, D = log.sample_rate_hz, 1
+    while np.isfinite(top) and 0.8 * fs / (2 * 2 * D) >= 1.1 * top \
+            and len(log) // (2 * D) >= ANALYSIS_MIN_SAMPLES:
+        D *= 2
+    if D == 1:
+        return log, full
+    cols = {name: decimate(np.asarray(getattr(log, name), dtype=float), D)
+            for name in ("q_m", "tau_m", "q", "q_ref") if getattr(log, name) is not None}
+    work = replace(log, t=np.asarray(log.t)[::D], extra={},
+                   meta={**log.meta, "sample_rate_hz": repr(fs / D)}, **cols)
+    spectra = Spectra(work, hold_hz=fs, decimation=D)
+    spectra.memo("link_mode.excitation_top_hz", lambda: top)
+    return work, spectra
 
 
 def _with_link_mode(log: Log, mode: FirstMode, spectra: Spectra | None = None) -> FirstMode:
@@ -333,7 +365,8 @@ def _measure(log: Log, motor: bool, spectra: Spectra | None = None) -> FirstMode
     terms = [sd_fit, df / math.sqrt(12)] + ([spread] if np.isfinite(spread) else [])
     sigma = float(math.sqrt(sum(v ** 2 for v in terms if np.isfinite(v))))
     note = (f"phase crossing at the peak of |H| f^2 (ZOH half sample removed), Welch segments "
-            f"of {nperseg} samples (bins {df:.3g} Hz), coherence >= {COHERENCE_MIN:g}; "
+            f"of {nperseg * spectra.decimation} samples (bins {df:.3g} Hz), coherence >= "
+            f"{COHERENCE_MIN:g}; "
             f"sigma {sigma:.3g} Hz from the fit ({sd_fit:.2g} Hz), the bin width "
             f"({df / math.sqrt(12):.2g} Hz) and "
             + (f"half the spread of two interleaved segment sets ({spread:.2g} Hz: "

@@ -27,10 +27,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import signal
 
 from jointbench.identification.log import Log
-from jointbench.identification.spectra import Spectra
+from jointbench.identification.spectra import Spectra, welch
 
 COHERENCE_MIN = 0.5     # bins kept: coherence of the instrument with input and output
 SEGMENT_S = 8.0         # Welch segment length [s] of q / q_m, as identification.first_mode
@@ -145,7 +144,7 @@ def _estimate(log: Log, sl: slice, nperseg: int, noverlap: int | None, top_hz: f
         s_tt = spectra.welch("tau_m", nperseg, noverlap, sl)
         with np.errstate(divide="ignore", invalid="ignore"):
             Hq = s_tq / s_tt
-    fit = inertia_ratio(f2, Hq, w2, *ab, top_hz, fs)
+    fit = inertia_ratio(f2, Hq, w2, *ab, top_hz, spectra.hold_hz)
     if fit is None:
         return None
     Jm, _, JL = fit
@@ -175,7 +174,7 @@ def excitation_top_hz(log: Log, spectra: Spectra | None = None) -> float:
         return spectra.memo("link_mode.excitation_top_hz", lambda: excitation_top_hz(log))
     x = log.q_ref if log.q_ref is not None else log.tau_m
     fs = log.sample_rate_hz
-    f, p = signal.welch(np.diff(x) * fs, fs=fs, nperseg=_nperseg(len(x) - 1, fs))
+    f, p = welch(np.diff(x) * fs, fs, _nperseg(len(x) - 1, fs))
     c = np.cumsum(p)
     return float(f[np.searchsorted(c, 0.99 * c[-1])]) if c[-1] > 0 else math.nan
 

@@ -113,78 +113,88 @@ def joint_motor(log: Log, s: FilterSettings,
 class JointMotorChain:
     """Eq. (13)'s chain on one log at one filter setting, built once: the filtered and
     differentiated positions, the torque, the columns that do not depend on the friction and
-    their decimation (per row span, `decimate_parallel`'s), so that each `regressor` call
-    rebuilds and decimates the two Coulomb columns alone. The numbers are
-    `decimate_parallel`'s: the decimation filters every column on its own. `lp`: the
-    Butterworth (`lowpass`, or a `filtering.Lowpassed` shared with other chains of the log)."""
+    their decimation (per row span), so that each `regressor` call builds and decimates the
+    two Coulomb columns alone. The numbers are `decimate_parallel`'s: the decimation filters
+    every column on its own (with its own odd extension at the span's ends, so that eq. (13)
+    holds between the decimated columns up to the record's ends: an anti-alias pass per
+    signal, differentiated after it, would start the filter differently in each column and
+    break it there); the spring column, in both equations, is decimated once. `lp`: the
+    Butterworth (`lowpass`, or a `filtering.Lowpassed` shared with other chains of the
+    log)."""
 
     MOTOR_SIGN, LINK_SIGN = 2, 8   # the sign columns of the motor and link blocks
+    # the columns that do not depend on the friction, by block: (column, name in `_columns`);
+    # the equations' other columns are zero, whose decimation is zero (the filter is linear)
+    FIXED = (((0, "qm''"), (1, "qm'"), (3, "spring")),
+             ((3, "-spring"), (4, "q''"), (5, "g cos q"), (6, "g sin q"), (7, "q'")))
 
     def __init__(self, log: Log, s: FilterSettings, lp: Callable = lowpass):
         if log.q is None:
             raise LogError("the joint-motor model needs the link position column 'q'",
                            log.path, column="q")
         self.log, self.s = log, s
-        self.qm = _filtered(log.q_m, s, 2, lp)
+        self.qm = qm = _filtered(log.q_m, s, 2, lp)
         self.q = q = _filtered(log.q, s, 2, lp)
         self.tau = _torque(log, s, lp=lp)
-        qm, g, n = self.qm, log.gravity, len(log.t)
-        zero = np.zeros(n)
-        self.zero = zero
         self.defl = defl = qm[0] - q[0]
+        g = log.gravity
         seen = _as_seen(s)
-        spring = seen(defl, 0)   # one column in both equations: filtered once
-        motor = [qm[2], seen(qm[1], 1), None, spring, None, None, None, None, None]
-        link = [None, None, None, -spring, q[2], seen(g * np.cos(q[0]), 0),
-                seen(g * np.sin(q[0]), 0), seen(q[1], 1), None]
-        self.W1 = np.column_stack([zero if c is None else c for c in motor])
-        self.W2 = np.column_stack([zero if c is None else c for c in link])
-        # the columns decimated once: neither a sign column nor one of the equation's zeros
-        # (their decimation is zero: the filter is linear)
-        self._fixed = tuple([j for j, c in enumerate(cols) if c is not None and j != sign]
-                            for cols, sign in ((motor, self.MOTOR_SIGN), (link, self.LINK_SIGN)))
-        self._decimated: dict[tuple[int, int, int], tuple[np.ndarray, np.ndarray]] = {}
+        self._columns = {"qm''": qm[2], "qm'": seen(qm[1], 1), "spring": seen(defl, 0),
+                         "q''": q[2], "g cos q": seen(g * np.cos(q[0]), 0),
+                         "g sin q": seen(g * np.sin(q[0]), 0), "q'": seen(q[1], 1),
+                         "tau": self.tau}
+        fine = {k: np.isfinite(c) for k, c in self._columns.items()}
+        # where the block's columns that do not depend on the friction (and y) are defined
+        self._valid = (fine["qm''"] & fine["qm'"] & fine["spring"] & fine["tau"],
+                       fine["spring"] & fine["q''"] & fine["g cos q"] & fine["g sin q"]
+                       & fine["q'"])
+        self._decimated: dict[tuple[str, int, int], np.ndarray] = {}
 
     def regressor(self, friction: tuple[float, float] | Mapping[str, float] = (0.0, 0.0)
                   ) -> Regressor:
         """`joint_motor(log, s, friction)` from the chain's columns."""
         s = self.s
         motor, link = _friction_models(self.log, friction, self.defl)
-        W1, W2 = self.W1.copy(), self.W2.copy()
-        W1[:, self.MOTOR_SIGN] = _sign(self.qm[1], s, *motor)
-        W2[:, self.LINK_SIGN] = _sign(self.q[1], s, *link)
-        y1, W1, i1 = self._decimate(0, self.tau, W1, self.MOTOR_SIGN)
-        y2, W2, i2 = self._decimate(1, self.zero, W2, self.LINK_SIGN)
+        y1, W1, i1 = self._decimate(0, _sign(self.qm[1], s, *motor))
+        y2, W2, i2 = self._decimate(1, _sign(self.q[1], s, *link))
         return Regressor("joint-motor", JOINT_MOTOR, np.concatenate([y1, y2]),
                          np.vstack([W1, W2]),
                          np.r_[np.zeros(len(y1), int), np.ones(len(y2), int)], np.r_[i1, i2], s)
 
-    def _decimate(self, block: int, y: np.ndarray, W: np.ndarray, varying: int
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """`decimate_parallel(y, W, s)` with y and the columns other than `varying`
-        decimated once per row span (the equation's zero columns, and y = 0 of the link
-        equation, not at all: their decimation is zero)."""
+    def _span(self, names: list[str], first: int, last: int) -> list[np.ndarray]:
+        """The named columns decimated over the samples [first, last), each once per span
+        (those not yet decimated in one call); "-spring" is the spring's negative."""
         s = self.s
-        n = len(y)
-        valid = np.all(np.isfinite(W), axis=1) & np.isfinite(y)
+        base = [n.lstrip("-") for n in names]
+        todo = [n for n in dict.fromkeys(base) if (n, first, last) not in self._decimated]
+        if todo:
+            cols = np.column_stack([self._columns[n][first:last] for n in todo])
+            dec = decimate(cols, s.Nd, axis=0) if s.Nd > 1 else cols
+            for j, n in enumerate(todo):
+                self._decimated[(n, first, last)] = dec[:, j]
+        return [-self._decimated[(b, first, last)] if n.startswith("-")
+                else self._decimated[(b, first, last)] for n, b in zip(names, base)]
+
+    def _decimate(self, block: int, sign: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """`decimate_parallel(y, W, s)` of `block` (0: motor, y = tau_m; 1: link, y = 0)
+        with its Coulomb column `sign`: the rows from the first to the last sample where every
+        column is defined, decimated, `edge` rows dropped at each end and any row with NaN.
+        The other columns are decimated once per row span (`_span`; the equation's zero
+        columns, and y = 0 of the link equation, not at all: their decimation is zero)."""
+        s = self.s
+        n = len(sign)
+        valid = self._valid[block] & np.isfinite(sign)
         first, last = max(int(np.argmax(valid)), s.skip), n - int(np.argmax(valid[::-1]))
-        sl = slice(first, last)
-        key = (block, first, last)
-        if key not in self._decimated:
-            if s.Nd > 1:
-                fixed = self._fixed[block]
-                Wd = np.zeros((len(range(first, last, s.Nd)), W.shape[1]))
-                Wd[:, fixed] = decimate(W[sl][:, fixed], s.Nd, axis=0)
-                yd = np.zeros(len(Wd)) if y is self.zero else decimate(y[sl], s.Nd)
-                self._decimated[key] = (yd, Wd)
-            else:
-                self._decimated[key] = (y[sl].copy(), W[sl].copy())
-        yd, Wd = self._decimated[key]
-        yd, Wd = yd.copy(), Wd.copy()
-        if s.Nd > 1:
-            Wd[:, varying] = decimate(W[sl, varying], s.Nd)
-        else:
-            Wd[:, varying] = W[sl, varying]
+        fixed = self.FIXED[block]
+        names = [name for _, name in fixed] + (["tau"] if block == 0 else [])
+        dec = self._span(names, first, last)
+        Wd = np.zeros((len(dec[0]), len(JOINT_MOTOR)))
+        for (j, _), col in zip(fixed, dec):
+            Wd[:, j] = col
+        yd = dec[-1] if block == 0 else np.zeros(len(Wd))
+        varying = self.MOTOR_SIGN if block == 0 else self.LINK_SIGN
+        Wd[:, varying] = decimate(sign[first:last], s.Nd) if s.Nd > 1 else sign[first:last]
         index = first + np.arange(len(yd)) * s.Nd
         e = s.edge
         keep = slice(e, len(yd) - e)

@@ -38,11 +38,11 @@ from dataclasses import replace
 from functools import lru_cache
 
 import numpy as np
-from scipy import signal
 
 from jointbench.identification.estimate import LSResult, NotIdentifiable, block_weighted, least_squares
 from jointbench.identification.filtering import FilterSettings, lowpass
 from jointbench.identification.log import Log
+from jointbench.identification.spectra import welch
 
 EXCITATION_LIMIT = 1e-4     # smallest / largest singular value of the column-scaled W
 MAX_RELATIVE_ERROR = 0.90   # ||residual|| / ||y - mean y|| over the torque rows
@@ -78,7 +78,7 @@ def excited_lines(log: Log, settings: FilterSettings, lp: Callable = lowpass
     v = np.diff(lp(log.q_m, settings.wn, settings.ts, settings.m))
     fs = 1.0 / settings.ts
     nperseg = int(min(len(v), 4096))
-    f, P = signal.welch(v, fs, nperseg=nperseg, detrend="linear")
+    f, P = welch(v, fs, nperseg, detrend="linear")
     band = (f > 0) & (f <= settings.decimated_cutoff_hz)
     P, f = P[band], f[band]
     if not len(P) or not P.sum() > 0:
@@ -97,8 +97,8 @@ def _tone_spectrum(f_hz: float, n: int, fs: float, nperseg: int) -> np.ndarray:
     """The Welch spectrum (linear detrend) of n samples of a unit sine at f_hz, the single
     line `excited_lines` measures a motion's participation against: made once per setting
     (read-only: shared)."""
-    _, tone = signal.welch(np.sin(2 * np.pi * f_hz * np.arange(n) / fs), fs,
-                           nperseg=nperseg, detrend="linear")
+    _, tone = welch(np.sin(2 * np.pi * f_hz * np.arange(n) / fs), fs, nperseg,
+                    detrend="linear")
     tone.setflags(write=False)
     return tone
 

@@ -9,7 +9,7 @@ import pytest
 from scipy import signal
 
 from jointbench.identification.log import Log
-from jointbench.identification.spectra import Spectra
+from jointbench.identification.spectra import Spectra, welch
 
 FS = 350.87
 
@@ -53,3 +53,28 @@ def test_spectra_refuse_a_missing_column_and_memoise():
     calls = []
     assert S.memo("x", lambda: calls.append(1) or 2.5) == 2.5
     assert S.memo("x", lambda: calls.append(1) or 3.5) == 2.5 and calls == [1]
+
+
+@pytest.mark.parametrize("n,nperseg", [(6000, 1024), (6001, 256), (5000, 4096)])
+def test_welch_of_an_array_equals_scipy_bit_for_bit(n, nperseg):
+    x = np.diff(_log(n + 1).q_ref) * FS
+    f, P = signal.welch(x, fs=FS, nperseg=nperseg)
+    f2, P2 = welch(x, FS, nperseg)
+    assert np.array_equal(f, f2) and np.array_equal(P, P2)
+
+
+def test_spectra_results_are_shared_read_only():
+    S = Spectra(_log())
+    a = S.csd("q_ref", "q", 512)
+    assert S.csd("q_ref", "q", 512) is a and not a.flags.writeable
+    assert not S.welch("q", 512).flags.writeable
+
+
+def test_welch_with_the_linear_detrend_equals_scipy_to_rounding():
+    x = np.cumsum(_log(6001).q)   # a trend for the detrend to take out
+    f, P = signal.welch(x, fs=FS, nperseg=1024, detrend="linear")
+    f2, P2 = welch(x, FS, 1024, detrend="linear")
+    assert np.array_equal(f, f2)
+    np.testing.assert_allclose(P2, P, rtol=1e-10, atol=0)
+    with pytest.raises(ValueError, match="detrend"):
+        welch(x, FS, 1024, detrend="quadratic")
