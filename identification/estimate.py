@@ -186,7 +186,7 @@ def least_squares(W: np.ndarray, y: np.ndarray, names: tuple[str, ...],
 
 def block_weighted(W: np.ndarray, y: np.ndarray, names: tuple[str, ...],
                    block: np.ndarray, time: np.ndarray | None = None,
-                   instruments: np.ndarray | None = None) -> LSResult:
+                   instruments: np.ndarray | None = None, corrected: bool = True) -> LSResult:
     """Weighted least squares over equation blocks (motor and link equations of eq. 13): an
     ordinary solution gives each block's residual sigma, then every row is weighted by
     1 / sigma of its block, so that torque (N m) and link (N m, from encoder noise) residuals
@@ -195,7 +195,7 @@ def block_weighted(W: np.ndarray, y: np.ndarray, names: tuple[str, ...],
     `time` labels each row's sampling instant (for example the raw sample index); the
     corrected covariance adds the weighted scores of the blocks' rows at one instant, so the
     covariance between blocks is counted at every lag. Without it the k-th row of every
-    block is taken as the k-th instant."""
+    block is taken as the k-th instant. `corrected` as `least_squares`'."""
     block = np.asarray(block)
     if time is None:
         time = np.empty(len(block), dtype=int)
@@ -208,4 +208,5 @@ def block_weighted(W: np.ndarray, y: np.ndarray, names: tuple[str, ...],
         rows = block == b
         s = np.sqrt(np.mean(first.residual[rows] ** 2))
         weights[rows] = 1.0 / s if s > 0 else 1.0
-    return least_squares(W, y, names, weights=weights, time=time, instruments=instruments)
+    return least_squares(W, y, names, weights=weights, time=time, corrected=corrected,
+                         instruments=instruments)
