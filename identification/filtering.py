@@ -288,9 +288,18 @@ def coulomb_integrals(v: np.ndarray, ts: float, rate: float = 0.0,
     return friction_integrals(v, drive[0], drive[1], drive[2], rate, ts)
 
 
+def held_missed(held: np.ndarray, s: FilterSettings) -> np.ndarray:
+    """The share of a held drive's velocity (`held` [rad/s^2] on [t_k, t_k+1)) that the chain
+    misses, H1 - D(lowpass(H2)) (H1, H2 its first and second integrals; `kink_corrected`).
+    Linear in `held`: a chain makes it once for the held torque and scales it by 1 / J."""
+    h = np.asarray(held, dtype=float)
+    h = h - np.mean(h)   # a constant's share passes the chain whole; its t^2 trips filtfilt
+    return held_integrals(h, s.ts)[0] - seen_velocity(held_double_integral(h, s.ts), s)
+
+
 def kink_corrected(v: np.ndarray, rate: float, s: FilterSettings, iterations: int = 3,
                    held: np.ndarray | None = None, drive: Drive | None = None,
-                   inside: bool = True) -> np.ndarray:
+                   inside: bool = True, missed: np.ndarray | None = None) -> np.ndarray:
     """The band-limited velocity v = D(lowpass(q)) with its zero crossings put back where the
     unfiltered velocity has them, for a Coulomb friction of `rate` = FS / J [rad/s^2].
 
@@ -308,16 +317,15 @@ def kink_corrected(v: np.ndarray, rate: float, s: FilterSettings, iterations: in
     zero-order-hold drive). Its steps at every sample are the velocity's other kinks: a stiff
     velocity loop answers a reversal within a sample, and the filter averages that answer
     into the crossing too. Its share the chain misses, H1 - D(lowpass(H2)) (H1, H2 its first
-    and second integrals), is added like the friction's. `drive`: the friction's share taken with its stick phases
+    and second integrals), is added like the friction's (`held_missed`; `missed`: that share
+    already made, in place of `held`). `drive`: the friction's share taken with its stick phases
     (`coulomb_integrals`). `inside` False: the crossings placed linearly between samples (a
     plant that switches its friction once a sample, `regressors.joint_motor`)."""
     v = np.asarray(v, dtype=float)
     base = np.nan_to_num(v)
     if held is not None:
-        h = np.asarray(held, dtype=float)
-        h = h - np.mean(h)   # a constant's share passes the chain whole; its t^2 trips filtfilt
-        H1 = held_integrals(h, s.ts)[0]
-        missed = H1 - seen_velocity(held_double_integral(h, s.ts), s)
+        missed = held_missed(held, s)
+    if missed is not None:
         base = base + np.nan_to_num(missed)
     u = base
     for _ in range(iterations):
@@ -375,6 +383,15 @@ def stencil_gain(w_ts: np.ndarray, stencil: int = 5) -> np.ndarray:
     return np.where(x == 0, 1.0, g)
 
 
+@lru_cache(maxsize=32)
+def _mirrored_gain(n: int, stencil: int, order: int) -> np.ndarray:
+    """`as_acceleration_sees`' gain g(w_k Ts)^(2 - order) at w_k Ts = pi k / n, k < n (the
+    mirrored record's bins), made once per length (read-only: shared)."""
+    gain = stencil_gain(np.pi * np.arange(n) / n, stencil) ** (2 - order)
+    gain.setflags(write=False)
+    return gain
+
+
 def as_acceleration_sees(x: np.ndarray, ts: float, order: int, stencil: int = 5) -> np.ndarray:
     """A column that holds derivative `order` (0 or 1) of a sampled signal x as the second
     stencil derivative sees the acceleration: the stencil's second derivative of samples is the
@@ -389,8 +406,7 @@ def as_acceleration_sees(x: np.ndarray, ts: float, order: int, stencil: int = 5)
     x = np.asarray(x, dtype=float)
     bad = ~np.isfinite(x)
     y = np.where(bad, 0.0, x)
-    w_ts = np.pi * np.arange(len(y)) / len(y)
-    out = scipy_fft.idct(scipy_fft.dct(y, type=2) * stencil_gain(w_ts, stencil) ** (2 - order),
+    out = scipy_fft.idct(scipy_fft.dct(y, type=2) * _mirrored_gain(len(y), stencil, order),
                          type=2)
     out[bad] = np.nan
     return out

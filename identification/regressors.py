@@ -23,8 +23,9 @@ import numpy as np
 
 from jointbench.identification.filtering import (Drive, FilterSettings, as_acceleration_sees,
                                                  coulomb_integrals, decimate,
-                                                 decimate_parallel, derivatives, kink_corrected,
-                                                 lowpass, stencil_view, zoh_align)
+                                                 decimate_parallel, derivatives, held_missed,
+                                                 kink_corrected, lowpass, stencil_view,
+                                                 zoh_align)
 from jointbench.identification.log import Log, LogError
 from jointbench.identification.parameters import JOINT_MOTOR, MOTOR_ONLY, MOTOR_ONLY_CORRECTED, RIGID
 
@@ -57,7 +58,7 @@ def _filtered(x: np.ndarray, s: FilterSettings, nd: int, lp: Callable = lowpass
 
 def _sign(x: np.ndarray, s: FilterSettings, rate: float = 0.0,
           held: np.ndarray | None = None, drive: Drive | None = None,
-          inside: bool = True) -> np.ndarray:
+          inside: bool = True, missed: np.ndarray | None = None) -> np.ndarray:
     """sign(x) at the samples (the paper's chain), or as the 5-point stencil sees it (the
     `stencil_view` of `coulomb_integrals`: each reversal placed between samples, weighted as
     its acceleration).
@@ -65,9 +66,10 @@ def _sign(x: np.ndarray, s: FilterSettings, rate: float = 0.0,
     kink has them (`kink_corrected`, with the held drive `held` = tau / J when given) and
     placed between samples with that kink (`crossing_share`); with `drive`, the friction's
     state with its stick phases (`coulomb_integrals`) in place of sign(x). `inside` False:
-    the reversals placed linearly between samples."""
+    the reversals placed linearly between samples. `missed`: the held drive's share
+    (`filtering.held_missed`) already made, in place of `held`."""
     if rate > 0:
-        x = kink_corrected(x, rate, s, held=held, drive=drive, inside=inside)
+        x = kink_corrected(x, rate, s, held=held, drive=drive, inside=inside, missed=missed)
     if s.stencil == 5:
         return stencil_view(coulomb_integrals(x, s.ts, rate if inside else 0.0, drive)[1],
                             s.ts, 5)
@@ -144,6 +146,7 @@ class JointMotorChain:
         self._fixed = tuple([j for j, c in enumerate(cols) if c is not None and j != sign]
                             for cols, sign in ((motor, self.MOTOR_SIGN), (link, self.LINK_SIGN)))
         self._decimated: dict[tuple[int, int, int], tuple[np.ndarray, np.ndarray]] = {}
+        self._held_missed: np.ndarray | None = None   # `filtering.held_missed` of tau
 
     def regressor(self, friction: tuple[float, float] | Mapping[str, float] = (0.0, 0.0)
                   ) -> Regressor:
@@ -151,7 +154,14 @@ class JointMotorChain:
         s = self.s
         motor, link = _friction_models(self.log, friction, self.defl)
         W1, W2 = self.W1.copy(), self.W2.copy()
-        W1[:, self.MOTOR_SIGN] = _sign(self.qm[1], s, *motor)
+        if len(motor) == 3:   # the held torque tau / Jm: its missed share made once, scaled
+            if self._held_missed is None:
+                self._held_missed = held_missed(self.log.tau_m, s)
+            rate, _, drive = motor
+            W1[:, self.MOTOR_SIGN] = _sign(self.qm[1], s, rate, drive=drive,
+                                           missed=self._held_missed / friction["Jm"])
+        else:
+            W1[:, self.MOTOR_SIGN] = _sign(self.qm[1], s, *motor)
         W2[:, self.LINK_SIGN] = _sign(self.q[1], s, *link)
         y1, W1, i1 = self._decimate(0, self.tau, W1, self.MOTOR_SIGN)
         y2, W2, i2 = self._decimate(1, self.zero, W2, self.LINK_SIGN)
