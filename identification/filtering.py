@@ -3,6 +3,7 @@ zero-order-hold alignment of the torque, and the parallel decimation of y and W.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -392,7 +393,8 @@ def _mirrored_gain(n: int, stencil: int, order: int) -> np.ndarray:
     return gain
 
 
-def as_acceleration_sees(x: np.ndarray, ts: float, order: int, stencil: int = 5) -> np.ndarray:
+def as_acceleration_sees(x: np.ndarray, ts: float, order: int | Sequence[int],
+                         stencil: int = 5) -> np.ndarray:
     """A column that holds derivative `order` (0 or 1) of a sampled signal x as the second
     stencil derivative sees the acceleration: the stencil's second derivative of samples is the
     acceleration weighted over its span, the gain G = g(w Ts)^2 (g = `stencil_gain`), so an
@@ -402,11 +404,14 @@ def as_acceleration_sees(x: np.ndarray, ts: float, order: int, stencil: int = 5)
     excess it leaves. Zero phase: the gain applied to the mirrored record [x, x reversed] (no
     jump at the ends), whose discrete Fourier transform at w_k Ts = pi k / n is x's DCT-II
     times exp(i w_k Ts / 2): a DCT-II, the gain and the inverse transform, of half the
-    mirrored record's length. NaN where x is."""
+    mirrored record's length. NaN where x is. x may hold several signals, one a row, each
+    with its `order` (a sequence): transformed together."""
     x = np.asarray(x, dtype=float)
     bad = ~np.isfinite(x)
     y = np.where(bad, 0.0, x)
-    out = scipy_fft.idct(scipy_fft.dct(y, type=2) * _mirrored_gain(len(y), stencil, order),
-                         type=2)
+    n = y.shape[-1]
+    gain = (_mirrored_gain(n, stencil, order) if np.ndim(order) == 0 else
+            np.stack([_mirrored_gain(n, stencil, k) for k in order]))
+    out = scipy_fft.idct(scipy_fft.dct(y, type=2, axis=-1) * gain, type=2, axis=-1)
     out[bad] = np.nan
     return out

@@ -134,11 +134,11 @@ class JointMotorChain:
         zero = np.zeros(n)
         self.zero = zero
         self.defl = defl = qm[0] - q[0]
-        seen = _as_seen(s)
-        spring = seen(defl, 0)   # one column in both equations: filtered once
-        motor = [qm[2], seen(qm[1], 1), None, spring, None, None, None, None, None]
-        link = [None, None, None, -spring, q[2], seen(g * np.cos(q[0]), 0),
-                seen(g * np.sin(q[0]), 0), seen(q[1], 1), None]
+        # the spring is one column in both equations: filtered once; all five together
+        spring, vm, gc, gs, v = _as_seen(s)(
+            [defl, qm[1], g * np.cos(q[0]), g * np.sin(q[0]), q[1]], (0, 1, 0, 0, 1))
+        motor = [qm[2], vm, None, spring, None, None, None, None, None]
+        link = [None, None, None, -spring, q[2], gc, gs, v, None]
         self.W1 = np.column_stack([zero if c is None else c for c in motor])
         self.W2 = np.column_stack([zero if c is None else c for c in link])
         # the columns decimated once: neither a sign column nor one of the equation's zeros
@@ -206,10 +206,10 @@ class JointMotorChain:
 def _as_seen(s: FilterSettings):
     """The 5-point chain's pairing of the columns that are not second derivatives with the
     acceleration (`as_acceleration_sees`), or as they are with eq. (22)'s chain (the paper's,
-    kept as printed)."""
+    kept as printed): a function of the columns and their derivative orders."""
     if s.stencil != 5:
-        return lambda x, order: x
-    return lambda x, order: as_acceleration_sees(x, s.ts, order, s.stencil)
+        return lambda xs, orders: list(xs)
+    return lambda xs, orders: list(as_acceleration_sees(np.stack(xs), s.ts, orders, s.stencil))
 
 
 def _friction_models(log: Log, friction: tuple[float, float] | Mapping[str, float],
