@@ -265,18 +265,24 @@ def _slip_stick(u: np.ndarray, d0: np.ndarray, d1: np.ndarray, visc: float, rate
 def _one_way_every_pass(u0: np.ndarray, u1: np.ndarray, d0: np.ndarray, d1: np.ndarray,
                         visc: float, rate: float, ts: float) -> np.ndarray:
     """Intervals `_surely_one_way` in every pass of `friction_integrals`, whatever the shifts:
-    while an interval moves one way its shift is the closed form's, shift_1 = delta and
-    shift_2 = delta (2 - G0 / SUBSTEPS) (`_powers`; or unchanged where the end does not move
-    as measured), with |delta| = |u1 - end_0| / ts <= (|u1 - u0| + |u0| ts visc + ts (D +
-    rate)) / ts, so |shift| <= 2 |delta|; `_surely_one_way`'s bound with the drive moved by
+    while an interval moves one way its end is the free recurrence's closed form (`_powers`),
+    end_0 in the first pass, and its shifts are shift_1 = delta = (u1 - end_0) / ts and
+    shift_2 = delta (2 - G0 / SUBSTEPS) (or unchanged where the end does not move as
+    measured), so |shift| <= 2 |delta|; `_surely_one_way`'s bound with the drive moved by
     that much (1 % more, for the rounding of the shifts) holds in every pass."""
     k = min(1.0, 1.0 - ts * visc)
+    if not k > 0:
+        return np.zeros(len(u0), dtype=bool)
+    P, G0, G1 = _powers(visc, ts)
+    h = ts / SUBSTEPS
     sg = np.sign(u0)
+    slope = (d1 - d0) / SUBSTEPS
+    alpha = d0 + (d1 - d0) * 0.5 / SUBSTEPS - rate * sg
+    end = P[-1] * u0 + h * (alpha * G0[-1] + slope * G1[-1])   # `_interval`'s
+    moved = 2.02 * np.abs(u1 - end)                            # ts |shift| at most
     excess = np.maximum(rate - np.minimum(sg * d0, sg * d1), 0.0)
     reach = ts * (np.maximum(np.abs(d0), np.abs(d1)) + rate)
-    speed = np.abs(u0)
-    moved = 2.02 * (np.abs(u1 - u0) + speed * (ts * max(visc, 0.0)) + reach)
-    return (u0 != 0) & (k > 0) & (speed * k - ts * excess - moved > 0.01 * (reach + moved))
+    return (u0 != 0) & (np.abs(u0) * k - ts * excess - moved > 0.01 * (reach + moved))
 
 
 def _matched(u0: np.ndarray, u1: np.ndarray, d0: np.ndarray, d1: np.ndarray, after: np.ndarray,

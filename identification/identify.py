@@ -425,9 +425,12 @@ def _instruments(log: Log, reg: regressors.Regressor, f1_hz: float | None,
     Z = regressors.JointMotorChain(inst, reg.settings,
                                    made.get("lowpass", lowpass)).regressor()
     # the same rows (block, sample) as the regressor's, which may have lost clipped ones
-    rows = {key: i for i, key in enumerate(zip(Z.block.tolist(), Z.index.tolist()))}
-    pick = [rows.get(key) for key in zip(reg.block.tolist(), reg.index.tolist())]
-    if any(i is None for i in pick):
+    span = int(max(Z.index.max(initial=0), reg.index.max(initial=0))) + 1
+    keys, wanted = Z.block * span + Z.index, reg.block * span + reg.index
+    order = np.argsort(keys, kind="stable")
+    at = np.minimum(np.searchsorted(keys, wanted, sorter=order), len(keys) - 1)
+    pick = order[at] if len(keys) else at
+    if not (len(keys) and np.array_equal(keys[pick], wanted)):
         notes.append("least squares: the instruments do not cover the regressor's rows")
         return None
     notes.append("instrumental variables: the regressor rebuilt from q_ref's predictions")
