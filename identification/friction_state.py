@@ -49,6 +49,7 @@ def _powers(visc: float, ts: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     return P, G0, G1
 
 
+@lru_cache(maxsize=64)
 def _unit_integrals(ts: float) -> tuple[float, float]:
     """The first and second integrals of a state of +1 over an interval, summed over its
     sub-steps as `_slip_stick` sums them (of -1: their negatives)."""

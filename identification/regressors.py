@@ -147,36 +147,38 @@ class JointMotorChain:
                             for cols, sign in ((motor, self.MOTOR_SIGN), (link, self.LINK_SIGN)))
         self._decimated: dict[tuple[int, int, int], tuple[np.ndarray, np.ndarray]] = {}
         self._held_missed: np.ndarray | None = None   # `filtering.held_missed` of tau
+        self._finite: dict[int, np.ndarray] = {}      # rows of each block's fixed W finite
 
     def regressor(self, friction: tuple[float, float] | Mapping[str, float] = (0.0, 0.0)
                   ) -> Regressor:
         """`joint_motor(log, s, friction)` from the chain's columns."""
         s = self.s
         motor, link = _friction_models(self.log, friction, self.defl)
-        W1, W2 = self.W1.copy(), self.W2.copy()
         if len(motor) == 3:   # the held torque tau / Jm: its missed share made once, scaled
             if self._held_missed is None:
                 self._held_missed = held_missed(self.log.tau_m, s)
             rate, _, drive = motor
-            W1[:, self.MOTOR_SIGN] = _sign(self.qm[1], s, rate, drive=drive,
-                                           missed=self._held_missed / friction["Jm"])
+            m = _sign(self.qm[1], s, rate, drive=drive, missed=self._held_missed / friction["Jm"])
         else:
-            W1[:, self.MOTOR_SIGN] = _sign(self.qm[1], s, *motor)
-        W2[:, self.LINK_SIGN] = _sign(self.q[1], s, *link)
-        y1, W1, i1 = self._decimate(0, self.tau, W1, self.MOTOR_SIGN)
-        y2, W2, i2 = self._decimate(1, self.zero, W2, self.LINK_SIGN)
+            m = _sign(self.qm[1], s, *motor)
+        y1, W1, i1 = self._decimate(0, self.tau, m, self.MOTOR_SIGN)
+        y2, W2, i2 = self._decimate(1, self.zero, _sign(self.q[1], s, *link), self.LINK_SIGN)
         return Regressor("joint-motor", JOINT_MOTOR, np.concatenate([y1, y2]),
                          np.vstack([W1, W2]),
                          np.r_[np.zeros(len(y1), int), np.ones(len(y2), int)], np.r_[i1, i2], s)
 
-    def _decimate(self, block: int, y: np.ndarray, W: np.ndarray, varying: int
+    def _decimate(self, block: int, y: np.ndarray, column: np.ndarray, varying: int
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """`decimate_parallel(y, W, s)` with y and the columns other than `varying`
-        decimated once per row span (the equation's zero columns, and y = 0 of the link
-        equation, not at all: their decimation is zero)."""
+        """`decimate_parallel(y, W, s)` for the block's W with `column` in place `varying`,
+        with y and the other columns decimated once per row span (the equation's zero
+        columns, and y = 0 of the link equation, not at all: their decimation is zero) and
+        their rows' finiteness found once."""
         s = self.s
+        W = (self.W1, self.W2)[block]   # `varying` holds zeros there
+        if block not in self._finite:
+            self._finite[block] = np.all(np.isfinite(W), axis=1) & np.isfinite(y)
         n = len(y)
-        valid = np.all(np.isfinite(W), axis=1) & np.isfinite(y)
+        valid = self._finite[block] & np.isfinite(column)
         first, last = max(int(np.argmax(valid)), s.skip), n - int(np.argmax(valid[::-1]))
         sl = slice(first, last)
         key = (block, first, last)
@@ -192,9 +194,9 @@ class JointMotorChain:
         yd, Wd = self._decimated[key]
         yd, Wd = yd.copy(), Wd.copy()
         if s.Nd > 1:
-            Wd[:, varying] = decimate(W[sl, varying], s.Nd)
+            Wd[:, varying] = decimate(column[sl], s.Nd)
         else:
-            Wd[:, varying] = W[sl, varying]
+            Wd[:, varying] = column[sl]
         index = first + np.arange(len(yd)) * s.Nd
         e = s.edge
         keep = slice(e, len(yd) - e)
