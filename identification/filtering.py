@@ -262,9 +262,12 @@ def sign_integrals(v: np.ndarray, ts: float, rate: float = 0.0
     v = np.asarray(v, dtype=float)
     a, b = np.sign(v[:-1]), np.sign(v[1:])
     theta = crossing_share(v[:-1], v[1:], ts, rate)   # share of the step at sign a
-    b = np.where(a != b, b, a)
-    step1 = (a * theta + b * (1 - theta)) * ts
-    step2 = (a * theta ** 2 / 2 + a * theta * (1 - theta) + b * (1 - theta) ** 2 / 2) * ts ** 2
+    # the whole step at sign a (theta = 1: a ts and a ts^2 / 2), the crossings' own below
+    step1, step2 = a * ts, a / 2 * ts ** 2
+    k = np.flatnonzero(theta != 1)
+    a, b, theta = a[k], np.where(a[k] != b[k], b[k], a[k]), theta[k]
+    step1[k] = (a * theta + b * (1 - theta)) * ts
+    step2[k] = (a * theta ** 2 / 2 + a * theta * (1 - theta) + b * (1 - theta) ** 2 / 2) * ts ** 2
     bad = ~(np.isfinite(v[:-1]) & np.isfinite(v[1:]))
     step1[bad], step2[bad] = 0.0, 0.0   # keep the sums finite; those samples are NaN below
     S1 = np.concatenate([[0.0], np.cumsum(step1)])
