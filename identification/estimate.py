@@ -136,10 +136,14 @@ def least_squares(W: np.ndarray, y: np.ndarray, names: tuple[str, ...],
     live = norms > 0
     reasons = {names[i]: "its column is zero: the data does not excite it"
                for i in np.flatnonzero(~live)}
+    sv = None   # the singular values of the scaled live columns, when all are kept
     if live.any():
         Ws = Ww[:, live] / norms[live]
         live_names = tuple(n for n, ok in zip(names, live) if ok)
-        reasons.update(_unidentified(Ws, live_names))
+        sv = np.linalg.svd(Ws, compute_uv=False)   # `_unidentified`'s first test, made here
+        if not (sv[0] != 0 and sv[-1] >= sv[0] / COND_LIMIT):
+            reasons.update(_unidentified(Ws, live_names))
+            sv = None
     keep = np.array([n not in reasons for n in names])
     if not keep.any():
         raise NotIdentifiable("no parameter is identifiable from this data: "
@@ -170,7 +174,8 @@ def least_squares(W: np.ndarray, y: np.ndarray, names: tuple[str, ...],
     X[keep] = Xk
     cov = np.full((len(names), len(names)), np.nan)
     cov[np.ix_(keep, keep)] = cov_k
-    sv = np.linalg.svd(Ws, compute_uv=False)
+    if sv is None or not np.array_equal(keep, live):
+        sv = np.linalg.svd(Ws, compute_uv=False)
     residual = y - np.nan_to_num(W[:, keep] @ Xk) if weights is not None else rho
     hac, cov_corr = None, None
     if corrected:
