@@ -316,6 +316,12 @@ def _matched(u0: np.ndarray, u1: np.ndarray, d0: np.ndarray, d1: np.ndarray, aft
     return I1, I2
 
 
+def _finite(x: np.ndarray) -> np.ndarray:
+    """np.nan_to_num(x), or x itself when every value is finite (not written into)."""
+    x = np.asarray(x, dtype=float)
+    return x if np.isfinite(x).all() else np.nan_to_num(x)
+
+
 def friction_integrals(v: np.ndarray, drive0: np.ndarray, drive1: np.ndarray, visc: float,
                        rate: float, ts: float) -> tuple[np.ndarray, np.ndarray]:
     """Samples of the first and second integrals of the friction state s(t) in [-1, 1]
@@ -325,9 +331,9 @@ def friction_integrals(v: np.ndarray, drive0: np.ndarray, drive1: np.ndarray, vi
     leave their sign in some pass, and those after them (which may start held), go through
     the passes (`_matched`); the others have a constant sign's integrals in every pass."""
     v = np.asarray(v, dtype=float)
-    u0, u1 = np.nan_to_num(v[:-1]), np.nan_to_num(v[1:])
-    d0 = np.nan_to_num(np.asarray(drive0, dtype=float)[:-1])
-    d1 = np.nan_to_num(np.asarray(drive1, dtype=float)[:-1])
+    finite = np.nan_to_num(v)
+    u0, u1 = finite[:-1], finite[1:]
+    d0, d1 = _finite(drive0)[:-1], _finite(drive1)[:-1]
     p1, p2 = _unit_integrals(ts)
     sg = np.sign(u0)
     I1, I2 = sg * p1, sg * p2
