@@ -19,6 +19,14 @@ parameters; the velocities are measured). It returns the first and second integr
 turns into the regressor's column (`filtering.stencil_view`), as `filtering.sign_integrals`
 does for sign(v).
 
+The law is stepped SUBSTEPS times an interval (`_slip_stick`, the definition). An interval
+that moves one way is a linear recurrence with a drive linear in the sub-step, whose end
+has a closed form (`_powers`), so only the intervals that may leave their sign (reversals,
+stick phases: a few % of a log with feed-forward) are followed, phase by phase between
+their events (`_phases`), and only those, with the ones after them, go through the passes
+(`_one_way_every_pass`); the numbers are the sub-steps' to rounding (tests/unit/
+test_friction_state.py).
+
 Pure numpy.
 """
 
