@@ -136,10 +136,14 @@ def least_squares(W: np.ndarray, y: np.ndarray, names: tuple[str, ...],
     live = norms > 0
     reasons = {names[i]: "its column is zero: the data does not excite it"
                for i in np.flatnonzero(~live)}
+    sv = None   # the singular values of the scaled live columns, when all are kept
     if live.any():
         Ws = Ww[:, live] / norms[live]
         live_names = tuple(n for n, ok in zip(names, live) if ok)
-        reasons.update(_unidentified(Ws, live_names))
+        sv = np.linalg.svd(Ws, compute_uv=False)   # `_unidentified`'s first test, made here
+        if not (sv[0] != 0 and sv[-1] >= sv[0] / COND_LIMIT):
+            reasons.update(_unidentified(Ws, live_names))
+            sv = None
     keep = np.array([n not in reasons for n in names])
     if not keep.any():
         raise NotIdentifiable("no parameter is identifiable from this data: "
@@ -170,7 +174,8 @@ def least_squares(W: np.ndarray, y: np.ndarray, names: tuple[str, ...],
     X[keep] = Xk
     cov = np.full((len(names), len(names)), np.nan)
     cov[np.ix_(keep, keep)] = cov_k
-    sv = np.linalg.svd(Ws, compute_uv=False)
+    if sv is None or not np.array_equal(keep, live):
+        sv = np.linalg.svd(Ws, compute_uv=False)
     residual = y - np.nan_to_num(W[:, keep] @ Xk) if weights is not None else rho
     hac, cov_corr = None, None
     if corrected:
@@ -186,7 +191,7 @@ def least_squares(W: np.ndarray, y: np.ndarray, names: tuple[str, ...],
 
 def block_weighted(W: np.ndarray, y: np.ndarray, names: tuple[str, ...],
                    block: np.ndarray, time: np.ndarray | None = None,
-                   instruments: np.ndarray | None = None) -> LSResult:
+                   instruments: np.ndarray | None = None, corrected: bool = True) -> LSResult:
     """Weighted least squares over equation blocks (motor and link equations of eq. 13): an
     ordinary solution gives each block's residual sigma, then every row is weighted by
     1 / sigma of its block, so that torque (N m) and link (N m, from encoder noise) residuals
@@ -195,7 +200,7 @@ def block_weighted(W: np.ndarray, y: np.ndarray, names: tuple[str, ...],
     `time` labels each row's sampling instant (for example the raw sample index); the
     corrected covariance adds the weighted scores of the blocks' rows at one instant, so the
     covariance between blocks is counted at every lag. Without it the k-th row of every
-    block is taken as the k-th instant."""
+    block is taken as the k-th instant. `corrected` as `least_squares`'."""
     block = np.asarray(block)
     if time is None:
         time = np.empty(len(block), dtype=int)
@@ -208,4 +213,5 @@ def block_weighted(W: np.ndarray, y: np.ndarray, names: tuple[str, ...],
         rows = block == b
         s = np.sqrt(np.mean(first.residual[rows] ** 2))
         weights[rows] = 1.0 / s if s > 0 else 1.0
-    return least_squares(W, y, names, weights=weights, time=time, instruments=instruments)
+    return least_squares(W, y, names, weights=weights, time=time, corrected=corrected,
+                         instruments=instruments)

@@ -3,10 +3,12 @@ zero-order-hold alignment of the torque, and the parallel decimation of y and W.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
+from scipy import fft as scipy_fft
 from scipy import signal
 
 from jointbench.identification.friction_state import friction_integrals
@@ -79,47 +81,32 @@ def antialias(q: int) -> tuple[tuple[float, ...], ...]:
     return tuple(map(tuple, signal.cheby1(8, 0.05, 0.8 / q, output="sos")))
 
 
-@lru_cache(maxsize=128)
-def _zero_phase_design(sos: tuple[tuple[float, ...], ...]
-                       ) -> tuple[np.ndarray, np.ndarray, int]:
-    """(sections, sosfilt_zi's initial state, sosfiltfilt's default pad length) of `sos`, made
-    once per design: scipy.signal.sosfiltfilt makes the last two at every call."""
-    arr = np.array(sos)   # writable: scipy's sosfilt takes a writable buffer (never written)
-    zi = signal.sosfilt_zi(arr)
+@lru_cache(maxsize=64)
+def _zero_phase_design(sos: tuple[tuple[float, ...], ...]) -> tuple[np.ndarray, np.ndarray, int]:
+    """The sections as an array, their steady-state initial conditions
+    (scipy.signal.sosfilt_zi) and scipy.signal.sosfiltfilt's default odd-extension length,
+    made once per filter (read-only: shared)."""
+    a = np.array(sos)
+    ntaps = 2 * len(a) + 1 - min(int((a[:, 2] == 0).sum()), int((a[:, 5] == 0).sum()))
+    zi = signal.sosfilt_zi(a)
     zi.setflags(write=False)
-    ntaps = 2 * len(arr) + 1 - min(int((arr[:, 2] == 0).sum()), int((arr[:, 5] == 0).sum()))
-    return arr, zi, 3 * ntaps
+    return a, zi, 3 * ntaps
 
 
-def zero_phase(sos: tuple[tuple[float, ...], ...], x: np.ndarray, axis: int = -1
-               ) -> np.ndarray:
-    """scipy.signal.sosfiltfilt(sos, x, axis=axis) (odd extension of its default length,
-    forward and reverse passes from the steady state of the end samples) with the initial
-    state and the pad length made once per design (`_zero_phase_design`): the same
-    operations in the same order, the same numbers. `sos`: a design as `butterworth` and
-    `antialias` return it."""
-    arr, zi, edge = _zero_phase_design(sos)
-    x = np.asarray(x)
-    axis = axis % x.ndim
-    if x.shape[axis] <= edge:
-        raise ValueError(f"The length of the input vector x must be greater than padlen, "
-                         f"which is {edge}.")
-
-    def cut(a: np.ndarray, start=None, stop=None, step=None) -> np.ndarray:
-        sl = [slice(None)] * a.ndim
-        sl[axis] = slice(start, stop, step)
-        return a[tuple(sl)]
-
-    # scipy.signal._arraytools.odd_ext
-    left, right = cut(x, 0, 1), cut(x, -1)
-    ext = np.concatenate((2 * left - cut(x, edge, 0, -1), x,
-                          2 * right - cut(x, -2, -(edge + 2), -1)), axis=axis)
-    shape = [1] * x.ndim
-    shape[axis] = 2
-    z = zi.reshape([len(arr)] + shape)
-    y, _ = signal.sosfilt(arr, ext, axis=axis, zi=z * cut(ext, None, 1))
-    y, _ = signal.sosfilt(arr, cut(y, None, None, -1), axis=axis, zi=z * cut(y, -1))
-    return cut(cut(y, None, None, -1), edge, -edge)
+def zero_phase(sos: tuple[tuple[float, ...], ...], x: np.ndarray, axis: int = -1) -> np.ndarray:
+    """scipy.signal.sosfiltfilt(np.array(sos), x, axis=axis) (odd extension of the default
+    length, each pass started in its steady state) with the filter's initial conditions made
+    once (`_zero_phase_design`): the same operations, so the same numbers."""
+    a, zi, edge = _zero_phase_design(sos)
+    x = np.moveaxis(np.asarray(x, dtype=float), axis, -1)
+    if x.shape[-1] <= edge:   # scipy's own error for a record shorter than the extension
+        return signal.sosfiltfilt(a, np.moveaxis(x, -1, axis), axis=axis)
+    ext = np.concatenate((2 * x[..., :1] - x[..., edge:0:-1], x,
+                          2 * x[..., -1:] - x[..., -2:-(edge + 2):-1]), axis=-1)
+    zi = zi.reshape((len(a),) + (1,) * (x.ndim - 1) + (2,))
+    y, _ = signal.sosfilt(a, ext, zi=zi * ext[..., :1])
+    y, _ = signal.sosfilt(a, y[..., ::-1], zi=zi * y[..., -1:])
+    return np.moveaxis(y[..., ::-1][..., edge:-edge], -1, axis)
 
 
 def decimate(x: np.ndarray, q: int, axis: int = 0) -> np.ndarray:
@@ -275,9 +262,12 @@ def sign_integrals(v: np.ndarray, ts: float, rate: float = 0.0
     v = np.asarray(v, dtype=float)
     a, b = np.sign(v[:-1]), np.sign(v[1:])
     theta = crossing_share(v[:-1], v[1:], ts, rate)   # share of the step at sign a
-    b = np.where(a != b, b, a)
-    step1 = (a * theta + b * (1 - theta)) * ts
-    step2 = (a * theta ** 2 / 2 + a * theta * (1 - theta) + b * (1 - theta) ** 2 / 2) * ts ** 2
+    # the whole step at sign a (theta = 1: a ts and a ts^2 / 2), the crossings' own below
+    step1, step2 = a * ts, a / 2 * ts ** 2
+    k = np.flatnonzero(theta != 1)
+    a, b, theta = a[k], np.where(a[k] != b[k], b[k], a[k]), theta[k]
+    step1[k] = (a * theta + b * (1 - theta)) * ts
+    step2[k] = (a * theta ** 2 / 2 + a * theta * (1 - theta) + b * (1 - theta) ** 2 / 2) * ts ** 2
     bad = ~(np.isfinite(v[:-1]) & np.isfinite(v[1:]))
     step1[bad], step2[bad] = 0.0, 0.0   # keep the sums finite; those samples are NaN below
     S1 = np.concatenate([[0.0], np.cumsum(step1)])
@@ -302,9 +292,18 @@ def coulomb_integrals(v: np.ndarray, ts: float, rate: float = 0.0,
     return friction_integrals(v, drive[0], drive[1], drive[2], rate, ts)
 
 
+def held_missed(held: np.ndarray, s: FilterSettings) -> np.ndarray:
+    """The share of a held drive's velocity (`held` [rad/s^2] on [t_k, t_k+1)) that the chain
+    misses, H1 - D(lowpass(H2)) (H1, H2 its first and second integrals; `kink_corrected`).
+    Linear in `held`: a chain makes it once for the held torque and scales it by 1 / J."""
+    h = np.asarray(held, dtype=float)
+    h = h - np.mean(h)   # a constant's share passes the chain whole; its t^2 trips filtfilt
+    return held_integrals(h, s.ts)[0] - seen_velocity(held_double_integral(h, s.ts), s)
+
+
 def kink_corrected(v: np.ndarray, rate: float, s: FilterSettings, iterations: int = 3,
                    held: np.ndarray | None = None, drive: Drive | None = None,
-                   inside: bool = True) -> np.ndarray:
+                   inside: bool = True, missed: np.ndarray | None = None) -> np.ndarray:
     """The band-limited velocity v = D(lowpass(q)) with its zero crossings put back where the
     unfiltered velocity has them, for a Coulomb friction of `rate` = FS / J [rad/s^2].
 
@@ -322,16 +321,15 @@ def kink_corrected(v: np.ndarray, rate: float, s: FilterSettings, iterations: in
     zero-order-hold drive). Its steps at every sample are the velocity's other kinks: a stiff
     velocity loop answers a reversal within a sample, and the filter averages that answer
     into the crossing too. Its share the chain misses, H1 - D(lowpass(H2)) (H1, H2 its first
-    and second integrals), is added like the friction's. `drive`: the friction's share taken with its stick phases
+    and second integrals), is added like the friction's (`held_missed`; `missed`: that share
+    already made, in place of `held`). `drive`: the friction's share taken with its stick phases
     (`coulomb_integrals`). `inside` False: the crossings placed linearly between samples (a
     plant that switches its friction once a sample, `regressors.joint_motor`)."""
     v = np.asarray(v, dtype=float)
     base = np.nan_to_num(v)
     if held is not None:
-        h = np.asarray(held, dtype=float)
-        h = h - np.mean(h)   # a constant's share passes the chain whole; its t^2 trips filtfilt
-        H1 = held_integrals(h, s.ts)[0]
-        missed = H1 - seen_velocity(held_double_integral(h, s.ts), s)
+        missed = held_missed(held, s)
+    if missed is not None:
         base = base + np.nan_to_num(missed)
     u = base
     for _ in range(iterations):
@@ -389,20 +387,34 @@ def stencil_gain(w_ts: np.ndarray, stencil: int = 5) -> np.ndarray:
     return np.where(x == 0, 1.0, g)
 
 
-def as_acceleration_sees(x: np.ndarray, ts: float, order: int, stencil: int = 5) -> np.ndarray:
+@lru_cache(maxsize=32)
+def _mirrored_gain(n: int, stencil: int, order: int) -> np.ndarray:
+    """`as_acceleration_sees`' gain g(w_k Ts)^(2 - order) at w_k Ts = pi k / n, k < n (the
+    mirrored record's bins), made once per length (read-only: shared)."""
+    gain = stencil_gain(np.pi * np.arange(n) / n, stencil) ** (2 - order)
+    gain.setflags(write=False)
+    return gain
+
+
+def as_acceleration_sees(x: np.ndarray, ts: float, order: int | Sequence[int],
+                         stencil: int = 5) -> np.ndarray:
     """A column that holds derivative `order` (0 or 1) of a sampled signal x as the second
     stencil derivative sees the acceleration: the stencil's second derivative of samples is the
     acceleration weighted over its span, the gain G = g(w Ts)^2 (g = `stencil_gain`), so an
     equation Jm qm'' = tau - K (qm - q) - FV qm' holds between samples only with the other
     terms weighted alike: x times g^(2 - order) (order 1: x is already a stencil derivative,
     gain g). At 20 Hz and the paper's rate, 1 - G is 0.1 % (0.4 % at 28 Hz), the size of the Jm
-    excess it leaves. Zero phase (FFT of the mirrored record); NaN where x is."""
+    excess it leaves. Zero phase: the gain applied to the mirrored record [x, x reversed] (no
+    jump at the ends), whose discrete Fourier transform at w_k Ts = pi k / n is x's DCT-II
+    times exp(i w_k Ts / 2): a DCT-II, the gain and the inverse transform, of half the
+    mirrored record's length. NaN where x is. x may hold several signals, one a row, each
+    with its `order` (a sequence): transformed together."""
     x = np.asarray(x, dtype=float)
     bad = ~np.isfinite(x)
     y = np.where(bad, 0.0, x)
-    ext = np.concatenate([y, y[::-1]])
-    w = 2 * np.pi * np.fft.rfftfreq(len(ext), ts)
-    out = np.fft.irfft(np.fft.rfft(ext) * stencil_gain(w * ts, stencil) ** (2 - order),
-                       len(ext))[:len(x)]
+    n = y.shape[-1]
+    gain = (_mirrored_gain(n, stencil, order) if np.ndim(order) == 0 else
+            np.stack([_mirrored_gain(n, stencil, k) for k in order]))
+    out = scipy_fft.idct(scipy_fft.dct(y, type=2, axis=-1) * gain, type=2, axis=-1)
     out[bad] = np.nan
     return out

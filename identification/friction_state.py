@@ -19,10 +19,20 @@ parameters; the velocities are measured). It returns the first and second integr
 turns into the regressor's column (`filtering.stencil_view`), as `filtering.sign_integrals`
 does for sign(v).
 
+The law is stepped SUBSTEPS times an interval (`_slip_stick`, the definition). An interval
+that moves one way is a linear recurrence with a drive linear in the sub-step, whose end
+has a closed form (`_powers`), so only the intervals that may leave their sign (reversals,
+stick phases: a few % of a log with feed-forward) are followed, phase by phase between
+their events (`_phases`), and only those, with the ones after them, go through the passes
+(`_one_way_every_pass`); the numbers are the sub-steps' to rounding (tests/unit/
+test_friction_state.py).
+
 Pure numpy.
 """
 
 from __future__ import annotations
+
+from functools import lru_cache
 
 import numpy as np
 
@@ -30,39 +40,24 @@ SUBSTEPS = 32       # sub-steps a sample interval: a reversal placed to 1/32 of 
 MATCH_PASSES = 2    # passes shifting the drive onto the next sample's velocity
 
 
-def _interval(u: np.ndarray, d0: np.ndarray, d1: np.ndarray, visc: float, rate: float,
-              ts: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """One pass over every interval at once from velocities u: the first and second
-    integrals of the friction state over the interval (from its start) and the end velocity.
-    An interval that moves one way throughout has the state sign(u) at every sub-step: its
-    velocity is stepped alone, the integrals are those of a constant sign (the same
-    operations as `_slip_stick`'s, so the same numbers), and `_slip_stick` runs on the rest."""
-    h = ts / SUBSTEPS
-    sg = np.sign(u)
-    free = u.copy()
-    one_way = sg != 0
-    slope, friction = d1 - d0, rate * sg
-    d, acc, same = np.empty_like(u), np.empty_like(u), np.empty(len(u), dtype=bool)
-    for j in range(SUBSTEPS):   # in place, the operations of `_slip_stick`'s free step
-        np.multiply(slope, j + 0.5, out=d)
-        np.divide(d, SUBSTEPS, out=d)
-        np.add(d0, d, out=d)
-        np.multiply(free, visc, out=acc)
-        np.subtract(d, acc, out=acc)
-        np.subtract(acc, friction, out=acc)
-        np.multiply(acc, h, out=acc)
-        np.add(free, acc, out=free)
-        np.equal(np.sign(free, out=acc), sg, out=same)
-        one_way &= same
-    p1, p2 = _unit_integrals(ts)
-    I1, I2, end = sg * p1, sg * p2, free
-    rest = np.flatnonzero(~one_way)
-    if len(rest):
-        J1, J2, e = _slip_stick(u[rest], d0[rest], d1[rest], visc, rate, ts)
-        I1[rest], I2[rest], end[rest] = J1, J2, e
-    return I1, I2, end
+@lru_cache(maxsize=64)
+def _powers(visc: float, ts: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(P, G0, G1) over m = 0 ... SUBSTEPS for the free sub-step u' = a u + h e_j (h = ts /
+    SUBSTEPS, a = 1 - h visc, e_j the drive less the friction at sub-step j): P[m] = a^m,
+    G0[m] = sum_{l<m} a^(m-1-l), G1[m] = sum_{l<m} a^(m-1-l) l, so that m free sub-steps from
+    sub-step j0 with e_j = alpha + beta j end at a^m u + h ((alpha + beta j0) G0[m] + beta G1[m])
+    (a linear recurrence with a drive linear in the sub-step: geometric sums). Made once per
+    (visc, ts)."""
+    a = 1.0 - ts / SUBSTEPS * visc
+    P, G0, G1 = np.ones(SUBSTEPS + 1), np.zeros(SUBSTEPS + 1), np.zeros(SUBSTEPS + 1)
+    for m in range(SUBSTEPS):
+        P[m + 1], G0[m + 1], G1[m + 1] = P[m] * a, G0[m] * a + 1.0, G1[m] * a + m
+    for x in (P, G0, G1):
+        x.setflags(write=False)   # cached: shared by every call with these rates
+    return P, G0, G1
 
 
+@lru_cache(maxsize=64)
 def _unit_integrals(ts: float) -> tuple[float, float]:
     """The first and second integrals of a state of +1 over an interval, summed over its
     sub-steps as `_slip_stick` sums them (of -1: their negatives)."""
@@ -76,34 +71,178 @@ def _unit_integrals(ts: float) -> tuple[float, float]:
 
 def _surely_one_way(u: np.ndarray, d0: np.ndarray, d1: np.ndarray, visc: float, rate: float,
                     ts: float) -> np.ndarray:
-    """Intervals that `_interval` finds moving one way throughout, known without stepping
-    them: with w = sign(u) v, each free sub-step gives w' >= w (1 - h visc) - h (D + rate)
-    (D the larger |drive| at the interval's ends, which bound it inside), so at every
-    sub-step w >= |u| (1 - ts visc) - ts (D + rate) (Bernoulli: (1 - h visc)^j >= 1 - j h
-    visc for h visc <= 1). Where that bound stays above 1 % of ts (D + rate) the velocity
-    keeps its sign, rounding included (a few ulps over 32 sub-steps)."""
+    """Intervals that `_slip_stick` finds moving one way throughout, known without stepping
+    them: with w = sign(u) v, each free sub-step gives w' = a w + h (sign(u) d - rate) >= a w -
+    h E, where E = max(0, rate - min(sign(u) d0, sign(u) d1)) is how far the friction can
+    exceed the drive along the motion (the drive lies between its values at the interval's
+    ends), so at every sub-step w >= |u| (1 - ts visc) - ts E (Bernoulli: a^j >= 1 - j h visc
+    for h visc <= 1). Where that bound stays above 1 % of ts (D + rate) (D the larger |drive|
+    at the ends) the velocity keeps its sign, rounding included (a few ulps over 32
+    sub-steps)."""
     k = min(1.0, 1.0 - ts * visc)
+    sg = np.sign(u)
+    excess = np.maximum(rate - np.minimum(sg * d0, sg * d1), 0.0)
     reach = ts * (np.maximum(np.abs(d0), np.abs(d1)) + rate)
-    return (u != 0) & (k > 0) & (np.abs(u) * k > 1.01 * reach)
+    return (u != 0) & (k > 0) & (np.abs(u) * k - ts * excess > 0.01 * reach)
 
 
-def _integrals(u: np.ndarray, d0: np.ndarray, d1: np.ndarray, visc: float, rate: float,
-               ts: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """`_interval`'s integrals, stepping only the intervals `_surely_one_way` leaves in
-    doubt (each interval is computed on its own: the same numbers); their end velocity is
-    NaN where not stepped (a one-way interval never ends at rest)."""
-    sure = _surely_one_way(u, d0, d1, visc, rate, ts)
-    doubt = np.flatnonzero(~sure)
-    if len(doubt) == len(u):
-        return _interval(u, d0, d1, visc, rate, ts)
+def _interval(u: np.ndarray, d0: np.ndarray, d1: np.ndarray, visc: float, rate: float,
+              ts: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`_slip_stick`'s first and second integrals of the friction state over every interval
+    (from its start) and its end velocity, from velocities u, each interval on its own. An
+    interval `_surely_one_way` has the state sign(u) at every sub-step: its integrals are
+    those of a constant sign (the same numbers as the sub-steps'), its end velocity the free
+    recurrence's closed form (`_powers`); the others go through `_phases`."""
+    h = ts / SUBSTEPS
+    P, G0, G1 = _powers(visc, ts)
+    if not P[1] > 0:   # h visc >= 1: no closed form worth its name, every sub-step stepped
+        return _slip_stick(u, d0, d1, visc, rate, ts)
+    sg = np.sign(u)
     p1, p2 = _unit_integrals(ts)
-    sg = np.sign(u[sure])
-    J1, J2, J3 = np.empty(len(u)), np.empty(len(u)), np.full(len(u), np.nan)
-    J1[sure], J2[sure] = sg * p1, sg * p2
+    slope = (d1 - d0) / SUBSTEPS
+    alpha = d0 + (d1 - d0) * 0.5 / SUBSTEPS - rate * sg
+    I1, I2 = sg * p1, sg * p2
+    end = P[-1] * u + h * (alpha * G0[-1] + slope * G1[-1])
+    doubt = np.flatnonzero(~_surely_one_way(u, d0, d1, visc, rate, ts))
     if len(doubt):
-        J1[doubt], J2[doubt], J3[doubt] = _interval(u[doubt], d0[doubt], d1[doubt], visc,
-                                                    rate, ts)
-    return J1, J2, J3
+        I1[doubt], I2[doubt], end[doubt] = _phases(u[doubt], d0[doubt], d1[doubt], visc, rate,
+                                                   ts)
+    return I1, I2, end
+
+
+def _event(u: np.ndarray, free: np.ndarray, d: np.ndarray, rate: float, h: float
+           ) -> tuple[np.ndarray, np.ndarray]:
+    """`_slip_stick`'s sub-step for an axis at rest or reaching rest within it (u moving to
+    `free` of the other sign, or u = 0) under the drive d: its state s and the velocity
+    after it."""
+    sg = np.sign(u)
+    cross = sg != 0
+    share = np.zeros(len(u))
+    share[cross] = np.clip(u[cross] / (u[cross] - free[cross]), 0.0, 1.0)
+    stuck = np.abs(d) <= rate
+    after = np.where(stuck, d / rate, np.sign(d))
+    s = sg * share + after * (1.0 - share)
+    new = h * (1.0 - share) * (d - rate * np.sign(d))
+    return s, np.where(~stuck & (np.sign(new) == np.sign(d)), new, 0.0)
+
+
+def _phases(u: np.ndarray, d0: np.ndarray, d1: np.ndarray, visc: float, rate: float,
+            ts: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`_slip_stick` phase by phase instead of sub-step by sub-step, for every interval at
+    once: a moving phase follows the free recurrence in closed form (`_powers`) to the first
+    sub-step whose free step changes the velocity's sign (a reversal: `_event`); a phase at
+    rest holds s = drive / rate up to the first sub-step where |drive| > rate (a breakaway:
+    `_event`; none where the drive is inside the band at the phase's first and last
+    sub-steps, the drive being linear). Each phase ends in an event or at the interval's end,
+    so the loop runs once per event of the busiest interval. The decisions are
+    `_slip_stick`'s on the same drive; the velocities agree with its sub-steps to rounding,
+    and so do the integrals, I1 = h sum_j s_j and I2 = h^2 sum_j s_j (SUBSTEPS - j - 1/2)
+    (an interval that never leaves its sign: a constant sign's, as `_slip_stick` sums
+    them)."""
+    n, N, h = len(u), SUBSTEPS, ts / SUBSTEPS
+    free, weight, ahead, mid, mid_w = _tables(visc, ts)
+    j = np.arange(N)
+    diff = d1 - d0
+    slope = diff / N
+    start = d0 + diff * 0.5 / N                         # the drive at sub-step 0
+    I1, I2, end = np.zeros(n), np.zeros(n), np.zeros(n)
+    at, v = np.zeros(n, dtype=int), u.astype(float)     # each interval's phase: start, velocity
+    active, one_way = np.ones(n, dtype=bool), np.zeros(n, dtype=bool)
+    while True:
+        rows = np.flatnonzero(active & (v != 0))        # moving phases
+        if len(rows):
+            sg, a0 = np.sign(v[rows]), at[rows]
+            # the velocity at the start of sub-step a0 + m, m = 0 ... SUBSTEPS
+            c = start[rows] - rate * sg + slope[rows] * a0
+            U = np.column_stack([v[rows], c, slope[rows]]) @ free
+            flip = U[:, 1:] * sg[:, None] <= 0          # the free step leaves the sign
+            later = a0.any()
+            if later:
+                flip &= j < (N - a0)[:, None]           # sub-steps inside the interval
+            r = np.argmax(flip, axis=1)
+            hit = flip[np.arange(len(rows)), r]
+            stop = np.where(hit, a0 + r, N)
+            I1[rows] += sg * (h * (stop - a0))
+            I2[rows] += sg * (ahead[stop] - ahead[a0])
+            through = ~hit
+            end[rows[through]] = U[through, N - a0[through]]
+            one_way[rows[through]] = a0[through] == 0
+            active[rows[through]] = False
+            rh, k = np.flatnonzero(hit), r[hit]
+            _step(rows[hit], stop[hit], U[rh, k], U[rh, k + 1], d0, d1, rate, h, weight,
+                  I1, I2, at, v, end, active)
+        rows = np.flatnonzero(active & (v == 0))        # phases at rest
+        if len(rows):
+            a0 = at[rows]
+            first = d0[rows] + diff[rows] * (a0 + 0.5) / N
+            last = d0[rows] + diff[rows] * (N - 0.5) / N
+            held = (np.abs(first) <= rate) & (np.abs(last) <= rate)
+            done, a = rows[held], a0[held]
+            # s = drive / rate to the end: sums of the linear drive over sub-steps a ... N - 1
+            I1[done] += h / rate * (d0[done] * (N - a) + slope[done] * mid[a])
+            I2[done] += (d0[done] * (ahead[N] - ahead[a]) + slope[done] * mid_w[a]) / rate
+            active[done] = False
+            rows, a0 = rows[~held], a0[~held]
+        if len(rows):
+            drive = d0[rows, None] + diff[rows, None] * (j + 0.5) / N
+            after = j >= a0[:, None]
+            away = after & (np.abs(drive) > rate)
+            hit = away.any(axis=1)
+            stop = np.where(hit, np.argmax(away, axis=1), N)
+            state = np.where(after & (j < stop[:, None]), drive / rate, 0.0)
+            I1[rows] += h * np.sum(state, axis=1)
+            I2[rows] += np.sum(state * weight, axis=1)
+            active[rows[~hit]] = False                  # at rest to the end
+            rows, stop = rows[hit], stop[hit]
+            zero = np.zeros(len(rows))
+            _step(rows, stop, zero, zero, d0, d1, rate, h, weight, I1, I2, at, v, end, active)
+        if not active.any():
+            break
+    p1, p2 = _unit_integrals(ts)
+    sg = np.sign(u[one_way])
+    I1[one_way], I2[one_way] = sg * p1, sg * p2
+    return I1, I2, end
+
+
+@lru_cache(maxsize=64)
+def _tables(visc: float, ts: float) -> tuple[np.ndarray, ...]:
+    """`_phases`' tables for m = 0 ... SUBSTEPS: the rows P, h G0, h G1 (`_powers`), which
+    give m free sub-steps of velocity u with the drive less the friction c + slope j from
+    sub-step j0 as (u, c + slope j0, slope) times them; the weights
+    h^2 (SUBSTEPS - j - 1/2) of the states s_j in I2 and their sums over sub-steps before j
+    (`ahead`); the sums from sub-step a to the end of (j + 1/2) (`mid`) and of (j + 1/2) times
+    the weight (`mid_w`), which sum a drive linear in j. Made once per (visc, ts)."""
+    N, h = SUBSTEPS, ts / SUBSTEPS
+    P, G0, G1 = _powers(visc, ts)
+    j = np.arange(N)
+    weight = h * h * (N - j - 0.5)
+    ahead = np.concatenate([[0.0], np.cumsum(weight)])
+    mid = np.concatenate([np.cumsum((j + 0.5)[::-1])[::-1], [0.0]])
+    mid_w = np.concatenate([np.cumsum(((j + 0.5) * weight)[::-1])[::-1], [0.0]])
+    out = (np.stack([P, h * G0, h * G1]), weight, ahead, mid, mid_w)
+    for x in out:
+        x.setflags(write=False)
+    return out
+
+
+def _step(rows: np.ndarray, at: np.ndarray, u: np.ndarray, free: np.ndarray,
+          d0: np.ndarray, d1: np.ndarray, rate: float, h: float, weight: np.ndarray,
+          I1: np.ndarray, I2: np.ndarray, j0: np.ndarray, v: np.ndarray, end: np.ndarray,
+          active: np.ndarray) -> None:
+    """`_phases`' event at sub-step `at` of intervals `rows` (`_event`, the drive
+    `_slip_stick`'s), added to their integrals and written into the next phase's start j0
+    and velocity v (the end velocity, and no longer active, after the interval's last
+    sub-step)."""
+    if not len(rows):
+        return
+    d = d0[rows] + (d1[rows] - d0[rows]) * (at + 0.5) / SUBSTEPS
+    s, new = _event(u, free, d, rate, h)
+    I1[rows] += s * h
+    I2[rows] += s * weight[at]
+    j0[rows], v[rows] = at + 1, new
+    last = rows[at + 1 == SUBSTEPS]
+    end[last] = v[last]
+    active[last] = False
 
 
 def _slip_stick(u: np.ndarray, d0: np.ndarray, d1: np.ndarray, visc: float, rate: float,
@@ -132,34 +271,87 @@ def _slip_stick(u: np.ndarray, d0: np.ndarray, d1: np.ndarray, visc: float, rate
     return I1, I2, u
 
 
+def _one_way_every_pass(u0: np.ndarray, u1: np.ndarray, d0: np.ndarray, d1: np.ndarray,
+                        visc: float, rate: float, ts: float) -> np.ndarray:
+    """Intervals `_surely_one_way` in every pass of `friction_integrals`, whatever the shifts:
+    while an interval moves one way its end is the free recurrence's closed form (`_powers`),
+    end_0 in the first pass, and its shifts are shift_1 = delta = (u1 - end_0) / ts and
+    shift_2 = delta (2 - G0 / SUBSTEPS) (or unchanged where the end does not move as
+    measured), so |shift| <= 2 |delta|; `_surely_one_way`'s bound with the drive moved by
+    that much (1 % more, for the rounding of the shifts) holds in every pass."""
+    k = min(1.0, 1.0 - ts * visc)
+    if not k > 0:
+        return np.zeros(len(u0), dtype=bool)
+    P, G0, G1 = _powers(visc, ts)
+    h = ts / SUBSTEPS
+    sg = np.sign(u0)
+    slope = (d1 - d0) / SUBSTEPS
+    alpha = d0 + (d1 - d0) * 0.5 / SUBSTEPS - rate * sg
+    end = P[-1] * u0 + h * (alpha * G0[-1] + slope * G1[-1])   # `_interval`'s
+    moved = 2.02 * np.abs(u1 - end)                            # ts |shift| at most
+    excess = np.maximum(rate - np.minimum(sg * d0, sg * d1), 0.0)
+    reach = ts * (np.maximum(np.abs(d0), np.abs(d1)) + rate)
+    return (u0 != 0) & (np.abs(u0) * k - ts * excess - moved > 0.01 * (reach + moved))
+
+
+def _matched(u0: np.ndarray, u1: np.ndarray, d0: np.ndarray, d1: np.ndarray, after: np.ndarray,
+             visc: float, rate: float, ts: float) -> tuple[np.ndarray, np.ndarray]:
+    """`friction_integrals`' passes over intervals (`_interval`): `after` marks those whose
+    preceding interval is among them (the others follow one that moves one way)."""
+    shift = np.zeros(len(u0))
+    I1, I2, end = _interval(u0, d0, d1, visc, rate, ts)
+    # an axis that ended the last interval at rest with the drive still inside the band stays
+    # at rest (Karnopp): the velocity measured there is creep or the reconstruction's error,
+    # and starting from it would slip for part of the interval, which biases Jm (each
+    # interval is integrated on its own: only those whose start changes again)
+    rest = np.r_[False, end[:-1] == 0] & after
+    held = np.flatnonzero(rest & (np.abs(d0) <= rate) & (u0 != 0))
+    u0 = u0.copy()
+    u0[held] = 0.0
+    if len(held):
+        I1[held], I2[held], end[held] = _interval(u0[held], d0[held], d1[held], visc, rate, ts)
+    for _ in range(MATCH_PASSES):
+        # only where the axis ends the interval moving as measured: an interval that ends at
+        # rest says nothing of the drive (any drive inside the band holds it), and shifting it
+        # onto a creeping or noisy velocity would invent a breakaway; the intervals whose
+        # shift stays are not integrated again
+        moving = (np.sign(end) == np.sign(u1)) & (end != 0)
+        new = shift + np.where(moving, (u1 - end) / ts, 0.0)
+        again = np.flatnonzero(new != shift)
+        shift = new
+        I1[again], I2[again], end[again] = _interval(u0[again], d0[again] + shift[again],
+                                                     d1[again] + shift[again], visc, rate, ts)
+    return I1, I2
+
+
+def _finite(x: np.ndarray) -> np.ndarray:
+    """np.nan_to_num(x), or x itself when every value is finite (not written into)."""
+    x = np.asarray(x, dtype=float)
+    return x if np.isfinite(x).all() else np.nan_to_num(x)
+
+
 def friction_integrals(v: np.ndarray, drive0: np.ndarray, drive1: np.ndarray, visc: float,
                        rate: float, ts: float) -> tuple[np.ndarray, np.ndarray]:
     """Samples of the first and second integrals of the friction state s(t) in [-1, 1]
     (module docstring), for velocity samples v [rad/s], the drive [rad/s^2] at the start
     (drive0[k]) and end (drive1[k]) of interval k, the viscous rate visc = FV / J [1/s] and
-    rate = FS / J [rad/s^2] > 0. The second is NaN where v is."""
+    rate = FS / J [rad/s^2] > 0. The second is NaN where v is. Only the intervals that may
+    leave their sign in some pass, and those after them (which may start held), go through
+    the passes (`_matched`); the others have a constant sign's integrals in every pass."""
     v = np.asarray(v, dtype=float)
-    u0, u1 = np.nan_to_num(v[:-1]), np.nan_to_num(v[1:])
-    d0 = np.nan_to_num(np.asarray(drive0, dtype=float)[:-1])
-    d1 = np.nan_to_num(np.asarray(drive1, dtype=float)[:-1])
-    shift = np.zeros(len(u0))
-    # the integrals of this first pass are not used: only where it ends at rest
-    _, _, end = _integrals(u0, d0, d1, visc, rate, ts)
-    # an axis that ended the last interval at rest with the drive still inside the band stays
-    # at rest (Karnopp): the velocity measured there is creep or the reconstruction's error,
-    # and starting from it would slip for part of the interval, which biases Jm
-    held = np.r_[False, end[:-1] == 0] & (np.abs(d0) <= rate)
-    u0 = np.where(held, 0.0, u0)
-    I1, I2, end = _interval(u0, d0, d1, visc, rate, ts)
-    for i in range(MATCH_PASSES):
-        # only where the axis ends the interval moving as measured: an interval that ends at
-        # rest says nothing of the drive (any drive inside the band holds it), and shifting it
-        # onto a creeping or noisy velocity would invent a breakaway
-        moving = (np.sign(end) == np.sign(u1)) & (end != 0)
-        shift = shift + np.where(moving, (u1 - end) / ts, 0.0)
-        # the last pass's end velocity is not used
-        step = _integrals if i == MATCH_PASSES - 1 else _interval
-        I1, I2, end = step(u0, d0 + shift, d1 + shift, visc, rate, ts)
+    finite = np.nan_to_num(v)
+    u0, u1 = finite[:-1], finite[1:]
+    d0, d1 = _finite(drive0)[:-1], _finite(drive1)[:-1]
+    p1, p2 = _unit_integrals(ts)
+    sg = np.sign(u0)
+    I1, I2 = sg * p1, sg * p2
+    doubt = ~_one_way_every_pass(u0, u1, d0, d1, visc, rate, ts)
+    doubt[1:] |= doubt[:-1]
+    rows = np.flatnonzero(doubt)
+    if len(rows):
+        after = np.r_[False, rows[1:] == rows[:-1] + 1]
+        I1[rows], I2[rows] = _matched(u0[rows], u1[rows], d0[rows], d1[rows], after, visc,
+                                      rate, ts)
     S1 = np.concatenate([[0.0], np.cumsum(I1)])
     S2 = np.concatenate([[0.0], np.cumsum(S1[:-1] * ts + I2)])
     S2[~np.isfinite(v)] = np.nan

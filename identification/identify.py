@@ -285,7 +285,9 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
             Z = None
             notes.append("least squares: instruments switched off")
         ran += ["instruments"] if Z is not None else []
-        ls = block_weighted(reg.W, reg.y, reg.names, reg.block, time=reg.index, instruments=Z)
+        # with the reversal passes, only the last pass's corrected covariance is used
+        ls = block_weighted(reg.W, reg.y, reg.names, reg.block, time=reg.index, instruments=Z,
+                            corrected="reversals" not in wanted)
         if "reversals" in wanted:
             reg, ls, placed = _place_reversals(log, chain, reg, ls, Z, notes,
                                                "stick_phases" in wanted)
@@ -377,21 +379,27 @@ def _place_reversals(log: Log, chain: regressors.JointMotorChain, reg: regressor
     by an amount that grows with FS / J, and Jm with them. `stick` False: the reversals
     alone (the rates), no stick phases. Also returns the corrections that ran (names of
     CORRECTIONS)."""
+    def corrected(reg: regressors.Regressor, ls: LSResult) -> LSResult:
+        """`ls` with its corrected covariance (the passes before the last skip it)."""
+        return ls if ls.hac is not None else block_weighted(
+            reg.W, reg.y, reg.names, reg.block, time=reg.index, instruments=Z)
+
     rates = (0.0, 0.0)
     stuck = False
-    for _ in range(REVERSAL_PASSES):
+    for i in range(REVERSAL_PASSES):
         p = {n: ls.value(n) for n in ls.names if n not in ls.unidentifiable}
         rates = reversal_rates(p)
         if not any(rates):
-            return reg, ls, ()
+            return reg, corrected(reg, ls), ()
         stuck = stick and rates[0] > 0 and p.get("K", 0.0) > 0   # `_friction_models`' rule
         again = exclude_clipped(chain.regressor(p if stick else rates), log)
         if not np.array_equal(again.index, reg.index):   # NaN rows moved: keep the first pass
-            return reg, ls, ()
+            return reg, corrected(reg, ls), ()
         reg = again
-        ls = block_weighted(reg.W, reg.y, reg.names, reg.block, time=reg.index, instruments=Z)
+        ls = block_weighted(reg.W, reg.y, reg.names, reg.block, time=reg.index, instruments=Z,
+                            corrected=i == REVERSAL_PASSES - 1)
     if not any(rates):
-        return reg, ls, ()
+        return reg, corrected(reg, ls), ()
     notes.append(f"Coulomb reversals placed by the identified FSm / Jm = {rates[0]:.4g} and "
                  f"FS / JL = {rates[1]:.4g} (the filtered velocity's zero crossings come late "
                  f"by the friction's kink; {REVERSAL_PASSES} passes)")
@@ -417,9 +425,12 @@ def _instruments(log: Log, reg: regressors.Regressor, f1_hz: float | None,
     Z = regressors.JointMotorChain(inst, reg.settings,
                                    made.get("lowpass", lowpass)).regressor()
     # the same rows (block, sample) as the regressor's, which may have lost clipped ones
-    rows = {key: i for i, key in enumerate(zip(Z.block.tolist(), Z.index.tolist()))}
-    pick = [rows.get(key) for key in zip(reg.block.tolist(), reg.index.tolist())]
-    if any(i is None for i in pick):
+    span = int(max(Z.index.max(initial=0), reg.index.max(initial=0))) + 1
+    keys, wanted = Z.block * span + Z.index, reg.block * span + reg.index
+    order = np.argsort(keys, kind="stable")
+    at = np.minimum(np.searchsorted(keys, wanted, sorter=order), len(keys) - 1)
+    pick = order[at] if len(keys) else at
+    if not (len(keys) and np.array_equal(keys[pick], wanted)):
         notes.append("least squares: the instruments do not cover the regressor's rows")
         return None
     notes.append("instrumental variables: the regressor rebuilt from q_ref's predictions")

@@ -34,18 +34,28 @@ def segment_length(rate_hz: float, f1_hz: float | None, n: int) -> int | None:
     return nper if MIN_SEGMENTS * nper <= n else None
 
 
-def predicted(x: np.ndarray, ref: np.ndarray, rate_hz: float, nperseg: int) -> np.ndarray:
+def predicted(x: np.ndarray, ref: np.ndarray, rate_hz: float, nperseg: int,
+              spectra: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """x as the reference predicts it: the inverse FFT of H(f) Ref(f), H = S(ref, x) / S(ref,
-    ref) (Welch, interpolated on the record's bins), plus x's mean."""
+    ref) (Welch, interpolated on the record's bins), plus x's mean. `spectra`: what depends on
+    the reference alone (`reference_spectra`), when already made."""
     x = np.asarray(x, dtype=float)
-    ref = np.asarray(ref, dtype=float) - np.mean(ref)
+    ref, s_rr, R = spectra or reference_spectra(ref, rate_hz, nperseg)
     f, s_rx = signal.csd(ref, x, fs=rate_hz, nperseg=nperseg)
-    _, s_rr = signal.welch(ref, fs=rate_hz, nperseg=nperseg)
     with np.errstate(divide="ignore", invalid="ignore"):
         H = np.where(s_rr > 0, s_rx / s_rr, 0.0)
     F = np.fft.rfftfreq(len(x), 1.0 / rate_hz)
     Hi = np.interp(F, f, H.real) + 1j * np.interp(F, f, H.imag)
-    return np.fft.irfft(Hi * np.fft.rfft(ref), len(x)) + np.mean(x)
+    return np.fft.irfft(Hi * R, len(x)) + np.mean(x)
+
+
+def reference_spectra(ref: np.ndarray, rate_hz: float, nperseg: int
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`predicted`'s reference without its mean, its Welch spectrum S(ref, ref) and its FFT:
+    the same for every signal predicted from it."""
+    ref = np.asarray(ref, dtype=float) - np.mean(ref)
+    _, s_rr = signal.welch(ref, fs=rate_hz, nperseg=nperseg)
+    return ref, s_rr, np.fft.rfft(ref)
 
 
 def instrument_log(log: Log, f1_hz: float | None = None) -> Log | None:
@@ -58,9 +68,10 @@ def instrument_log(log: Log, f1_hz: float | None = None) -> Log | None:
     nper = segment_length(rate, f1_hz, len(log.t))
     if nper is None:
         return None
+    spectra = reference_spectra(log.q_ref, rate, nper)
 
     def pred(x: np.ndarray | None) -> np.ndarray | None:
-        return None if x is None else predicted(x, log.q_ref, rate, nper)
+        return None if x is None else predicted(x, log.q_ref, rate, nper, spectra)
 
     # the joint-motor regressor's columns hold positions only: the torque is y, kept
     return replace(log, q_m=pred(log.q_m), q=pred(log.q))

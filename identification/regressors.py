@@ -23,8 +23,9 @@ import numpy as np
 
 from jointbench.identification.filtering import (Drive, FilterSettings, as_acceleration_sees,
                                                  coulomb_integrals, decimate,
-                                                 decimate_parallel, derivatives, kink_corrected,
-                                                 lowpass, stencil_view, zoh_align)
+                                                 decimate_parallel, derivatives, held_missed,
+                                                 kink_corrected, lowpass, stencil_view,
+                                                 zoh_align)
 from jointbench.identification.log import Log, LogError
 from jointbench.identification.parameters import JOINT_MOTOR, MOTOR_ONLY, MOTOR_ONLY_CORRECTED, RIGID
 
@@ -57,7 +58,7 @@ def _filtered(x: np.ndarray, s: FilterSettings, nd: int, lp: Callable = lowpass
 
 def _sign(x: np.ndarray, s: FilterSettings, rate: float = 0.0,
           held: np.ndarray | None = None, drive: Drive | None = None,
-          inside: bool = True) -> np.ndarray:
+          inside: bool = True, missed: np.ndarray | None = None) -> np.ndarray:
     """sign(x) at the samples (the paper's chain), or as the 5-point stencil sees it (the
     `stencil_view` of `coulomb_integrals`: each reversal placed between samples, weighted as
     its acceleration).
@@ -65,9 +66,10 @@ def _sign(x: np.ndarray, s: FilterSettings, rate: float = 0.0,
     kink has them (`kink_corrected`, with the held drive `held` = tau / J when given) and
     placed between samples with that kink (`crossing_share`); with `drive`, the friction's
     state with its stick phases (`coulomb_integrals`) in place of sign(x). `inside` False:
-    the reversals placed linearly between samples."""
+    the reversals placed linearly between samples. `missed`: the held drive's share
+    (`filtering.held_missed`) already made, in place of `held`."""
     if rate > 0:
-        x = kink_corrected(x, rate, s, held=held, drive=drive, inside=inside)
+        x = kink_corrected(x, rate, s, held=held, drive=drive, inside=inside, missed=missed)
     if s.stencil == 5:
         return stencil_view(coulomb_integrals(x, s.ts, rate if inside else 0.0, drive)[1],
                             s.ts, 5)
@@ -138,24 +140,32 @@ class JointMotorChain:
         self.tau = _torque(log, s, lp=lp)
         self.defl = defl = qm[0] - q[0]
         g = log.gravity
-        seen = _as_seen(s)
-        self._columns = {"qm''": qm[2], "qm'": seen(qm[1], 1), "spring": seen(defl, 0),
-                         "q''": q[2], "g cos q": seen(g * np.cos(q[0]), 0),
-                         "g sin q": seen(g * np.sin(q[0]), 0), "q'": seen(q[1], 1),
-                         "tau": self.tau}
+        # the spring is one column in both equations: filtered once; all five together
+        spring, vm, gc, gs, v = _as_seen(s)(
+            [defl, qm[1], g * np.cos(q[0]), g * np.sin(q[0]), q[1]], (0, 1, 0, 0, 1))
+        self._columns = {"qm''": qm[2], "qm'": vm, "spring": spring, "q''": q[2],
+                         "g cos q": gc, "g sin q": gs, "q'": v, "tau": self.tau}
         fine = {k: np.isfinite(c) for k, c in self._columns.items()}
         # where the block's columns that do not depend on the friction (and y) are defined
         self._valid = (fine["qm''"] & fine["qm'"] & fine["spring"] & fine["tau"],
                        fine["spring"] & fine["q''"] & fine["g cos q"] & fine["g sin q"]
                        & fine["q'"])
         self._decimated: dict[tuple[str, int, int], np.ndarray] = {}
+        self._held_missed: np.ndarray | None = None   # `filtering.held_missed` of tau
 
     def regressor(self, friction: tuple[float, float] | Mapping[str, float] = (0.0, 0.0)
                   ) -> Regressor:
         """`joint_motor(log, s, friction)` from the chain's columns."""
         s = self.s
         motor, link = _friction_models(self.log, friction, self.defl)
-        y1, W1, i1 = self._decimate(0, _sign(self.qm[1], s, *motor))
+        if len(motor) == 3:   # the held torque tau / Jm: its missed share made once, scaled
+            if self._held_missed is None:
+                self._held_missed = held_missed(self.log.tau_m, s)
+            rate, _, drive = motor
+            m = _sign(self.qm[1], s, rate, drive=drive, missed=self._held_missed / friction["Jm"])
+        else:
+            m = _sign(self.qm[1], s, *motor)
+        y1, W1, i1 = self._decimate(0, m)
         y2, W2, i2 = self._decimate(1, _sign(self.q[1], s, *link))
         return Regressor("joint-motor", JOINT_MOTOR, np.concatenate([y1, y2]),
                          np.vstack([W1, W2]),
@@ -206,10 +216,10 @@ class JointMotorChain:
 def _as_seen(s: FilterSettings):
     """The 5-point chain's pairing of the columns that are not second derivatives with the
     acceleration (`as_acceleration_sees`), or as they are with eq. (22)'s chain (the paper's,
-    kept as printed)."""
+    kept as printed): a function of the columns and their derivative orders."""
     if s.stencil != 5:
-        return lambda x, order: x
-    return lambda x, order: as_acceleration_sees(x, s.ts, order, s.stencil)
+        return lambda xs, orders: list(xs)
+    return lambda xs, orders: list(as_acceleration_sees(np.stack(xs), s.ts, orders, s.stencil))
 
 
 def _friction_models(log: Log, friction: tuple[float, float] | Mapping[str, float],
