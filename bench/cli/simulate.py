@@ -12,7 +12,7 @@ from pathlib import Path
 from jointbench.bench.cli.common import (UsageError, check_output_file, finite, parse_config,
                                          positive, seed)
 from jointbench.bench.cli.resources import check_memory
-from jointbench.bench.sim.defaults import PHYSICS_STEP, amplitude_help
+from jointbench.bench.sim.defaults import MIN_SUBSTEPS, PHYSICS_STEP, amplitude_help
 
 # The library `run` imports, loaded by the dispatcher before it traps the signals: a virtual
 # experiment needs no scipy (start-up, README "Speed"); the replay identifies and does.
@@ -54,8 +54,8 @@ def add_arguments(s: argparse.ArgumentParser) -> None:
     s.add_argument("--amplitude", type=positive, help=amplitude_help())
     s.add_argument("--substeps", type=int, default=None,
                    help=f"physics steps per control tick (default: the fewest that keep the "
-                        f"step within {1e3 * PHYSICS_STEP:g} ms, at least 4; with --replay: "
-                        f"the log's own, else 1)")
+                        f"step within {1e3 * PHYSICS_STEP:g} ms, at least {MIN_SUBSTEPS}; with "
+                        "--replay: the log's own, else 1)")
     s.add_argument("--rate", type=_rate, default=None, metavar="HZ|auto",
                    help="sample (control and log) rate in Hz (default 350.87, the paper's); "
                         "auto: twice the Fs of eq. (29) for the axis' first mode, about 105 f1")

@@ -35,6 +35,11 @@ from jointbench.identification.log.schema import (PLANT_INTEGRATOR_KEY, PLANT_ST
 SOFT_ERROR_MAX = 0.01   # friction error RMS over the torque RMS above which the model is warned
 
 
+# A time constant read from an MJCF that MuJoCo wrote carries 6 significant digits (5e-6
+# relative): within this share over two physics steps it is taken as two steps.
+TWO_STEPS_SLACK = 1e-5
+
+
 @dataclass(frozen=True)
 class FrictionBand:
     """The velocity band [rad/s or m/s] below which a dof's Coulomb friction is a ramp, unless
@@ -64,7 +69,7 @@ def friction_bands(model: mujoco.MjModel, motor_dof: int, link_dof: int) -> list
         dmax = float(model.dof_solimp[dof][1])
         h = float(model.opt.timestep)
         dead_beat = (int(model.opt.integrator) != int(mujoco.mjtIntegrator.mjINT_RK4)
-                     and h <= tc <= 2 * h * (1 + 1e-9))
+                     and h <= tc <= 2 * h * (1 + TWO_STEPS_SLACK))
         out.append(FrictionBand(name, fs * dmax * tc / (2 * float(M[dof, dof])), tc, fs,
                                 dead_beat))
     return out

@@ -36,6 +36,7 @@ import numpy as np
 
 from jointbench.bench.effects import LoopEffects
 from jointbench.bench.sim.controller import Gains, PositionGains, make_controller
+from jointbench.bench.sim.friction import TWO_STEPS_SLACK
 from jointbench.bench.sim.sensors import Sensors
 from jointbench.models import Axis
 
@@ -131,7 +132,7 @@ class CoulombSwitch:
             d for d in dict.fromkeys(dofs)
             if euler and model.dof_frictionloss[d] > 0 and 0 < model.dof_solref[d][0]
             and (max(model.dof_solref[d][0], 2 * h) if refsafe else model.dof_solref[d][0])
-            <= 2 * h * (1 + 1e-9))
+            <= 2 * h * (1 + TWO_STEPS_SLACK))
         self._spec = mujoco.mjtState.mjSTATE_INTEGRATION
         self._state = np.empty(mujoco.mj_stateSize(model, self._spec))
         self._unit = np.zeros((1, model.nv))

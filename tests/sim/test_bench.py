@@ -73,7 +73,7 @@ def test_substep_convergence():
     the physics). The default bounds the step (bench.sim.defaults): the dead-beat friction's
     semi-implicit Euler is first order in h, so one step a period is not converged (1 against
     2 steps: q_m 0.13 %, tau_m 1.1 %, prototype); at the default the difference is
-    under 0.05 % (measured at 20 s: q_m 5e-5, q 7e-5, tau_m 4e-4 relative RMS)."""
+    under 0.05 % (measured at 20 s: q_m 2e-5, q 6e-5, tau_m 1.8e-4 relative RMS)."""
     n = default_substeps(SAMPLE_RATE_HZ)
     one = run_experiment("prototype", duration=20.0, seed=0, sensors=Sensors.ideal(), substeps=n)
     two = run_experiment("prototype", duration=20.0, seed=0, sensors=Sensors.ideal(),

@@ -17,9 +17,9 @@ from jointbench.identification.paper_tables import to_json
 
 ARM = tuple(f"axis{j}" for j in range(1, 7))
 # joint-motor K, Jm, JL at 350.87 Hz with defaults (seed 1, 60 s), over 0.5 %: none measured.
-# axis2's Jm is the closest, -0.39 % (sigma 0.24 %) at the default physics step; an ideal
-# Coulomb plant (the step -> 0) gives about -0.49 %, so this bar is about 2 sigma there
-# (docs/design-notes.md, "The held torque on the leapfrog grid")
+# axis2's Jm is the closest, -0.31 % (sigma 0.24 %) at the default physics step; it grows
+# toward about -0.49 % as the step shrinks (an ideal Coulomb plant), so this bar is about
+# 2 sigma there (docs/design-notes.md, "The default physics step")
 JOINT_MOTOR_OVER: dict[str, str] = {}
 # motor-only (the link reconstructed from q_m) beyond 3 corrected sigma, seed 1: none (the bench
 # steps its physics inside the sample interval, and the link is reconstructed as a continuous
