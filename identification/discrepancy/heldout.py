@@ -111,24 +111,71 @@ def scores(nom: Nominal, folds: np.ndarray, y: np.ndarray, W: np.ndarray) -> Sco
     the rounding of a minimum-norm solution."""
     A, b, scale = _scaled(nom, y, W)
     dead = ~np.any(A != 0, axis=0)
-    k = int(folds.max()) + 1
-    parts = [np.flatnonzero(folds == f) for f in range(k)]
-    # per fold: its Gram matrix, A^T b and b^T b; a fit on the others subtracts them
-    grams = [(A[i].T @ A[i], A[i].T @ b[i], float(b[i] @ b[i])) for i in parts]
-    G, c, bb = (sum(g[j] for g in grams) for j in range(3))
-    x = np.linalg.lstsq(G, c, rcond=None)[0]
-    x[dead] = 0.0
-    full = _rss(G, c, bb, x)
-    train, xs = np.empty(k), np.empty((k, len(x)))
-    for f, (Gf, cf, bf) in enumerate(grams):
-        xs[f] = np.linalg.lstsq(G - Gf, c - cf, rcond=None)[0]
-        xs[f][dead] = 0.0
-        train[f] = _rss(G - Gf, c - cf, bb - bf, xs[f])
+    order, bounds = _fold_order(nom, folds)
+    As, bs = A[order], b[order]
+    k = len(bounds) - 1
+    # per fold (its rows contiguous in `order`): its Gram matrix, A^T b and b^T b; a fit on
+    # the others subtracts them
+    cuts = [slice(bounds[f], bounds[f + 1]) for f in range(k)]
+    Gf = np.stack([As[i].T @ As[i] for i in cuts])
+    cf = np.stack([As[i].T @ bs[i] for i in cuts])
+    bf = np.array([float(bs[i] @ bs[i]) for i in cuts])
+    G, c, bb = Gf.sum(axis=0), cf.sum(axis=0), float(bf.sum())
+    # the full fit and the k fold fits, one batched solve; the dead columns' parameters 0
+    Gs, cs = np.concatenate([G[None], G - Gf]), np.concatenate([c[None], c - cf])
+    xs = np.zeros(cs.shape)
+    live = ~dead
+    xs[:, live] = _min_norm(Gs[:, live][:, :, live], cs[:, live])
+    rss = _rss_many(Gs, cs, np.r_[bb, bb - bf], xs)
+    x, full, train, xs = xs[0], float(rss[0]), rss[1:], xs[1:]
     # each row by its fold's fit, elementwise (no BLAS thread wake-up), all folds at once
-    errors = b - (A * xs[folds]).sum(axis=1)
-    held = np.array([float(errors[i] @ errors[i]) for i in parts])
+    errors = b - np.einsum("ij,ij->i", A, xs[folds])
+    held = np.bincount(folds, errors * errors, minlength=k)
     return Scores(full=full, X=x / scale, train=train, held=held, errors=errors,
                   fold_X=xs / scale)
+
+
+def _fold_order(nom: Nominal, folds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The rows sorted by fold (stable: each fold's rows in their order) and where each
+    fold's rows start in that order (k + 1 bounds); kept on `nom` for these very folds."""
+    kept = nom.memo.get("fold_order")
+    if kept is not None and kept[0] is folds:
+        return kept[1], kept[2]
+    order = np.argsort(folds, kind="stable")
+    bounds = np.r_[0, np.cumsum(np.bincount(folds, minlength=int(folds.max()) + 1))]
+    nom.memo["fold_order"] = (folds, order, bounds)
+    return order, bounds
+
+
+# The smallest ratio of the Cholesky factor's diagonal entries at which a batch of normal
+# equations is solved directly: its square bounds the condition number from below, so a
+# ratio over 1e-6 leaves the solve many orders of magnitude from lstsq's cut (eps max(M, N),
+# 2e-15), where the two agree to rounding; below it (a column almost dead on a fold's
+# training rows), lstsq's minimum-norm solution by SVD.
+DIRECT = 1e-6
+
+
+def _min_norm(G: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """The minimum-norm solutions x of G x = c for a stack of symmetric positive
+    semi-definite G (np.linalg.lstsq's, with its default cut: singular values under
+    eps max(M, N) of the largest count as 0): one batched solve where every G is well
+    conditioned (DIRECT), one batched SVD otherwise."""
+    if G.shape[-1] == 0:
+        return np.zeros(c.shape)
+    try:
+        d = np.diagonal(np.linalg.cholesky(G), axis1=-2, axis2=-1)
+        if np.all(d.min(axis=-1) > DIRECT * d.max(axis=-1)):
+            return np.linalg.solve(G, c[..., None])[..., 0]
+    except np.linalg.LinAlgError:
+        pass
+    p = G.shape[-1]
+    return (np.linalg.pinv(G, rcond=np.finfo(float).eps * p) @ c[..., None])[..., 0]
+
+
+def _rss_many(G: np.ndarray, c: np.ndarray, bb: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """_rss of a stack of fits."""
+    return (bb - 2 * np.einsum("fi,fi->f", x, c)
+            + np.einsum("fi,fij,fj->f", x, G, x))
 
 
 def fitted_rss(nom: Nominal, y: np.ndarray, W: np.ndarray) -> float:
