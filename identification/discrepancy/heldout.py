@@ -105,12 +105,14 @@ def scores(nom: Nominal, folds: np.ndarray, y: np.ndarray, W: np.ndarray) -> Sco
     """Fit `y = W X` on all rows and on each fold's complement (the nominal's weights), by
     the normal equations of the column-scaled design (the Gram matrix, less the fold's for a
     fold fit): the designs are well conditioned once scaled (condition numbers 5 to 40 on
-    the bench axes), and one small solve per fit is what makes the folds affordable. A
-    column that is zero (a term the data does not excite, such as gravity on a horizontal
-    axis) is not identifiable: its parameter is exactly 0, as in the nominal's `solve`, not
-    the rounding of a minimum-norm solution."""
-    A, b, scale = _scaled(nom, y, W)
-    dead = ~np.any(A != 0, axis=0)
+    the bench axes), and one small solve per fit is what makes the folds affordable. The
+    scales are the weighted columns' norms, the square roots of the Gram matrix's diagonal;
+    the scaled design's normal equations are G / (s s^T) and A^T b / s. A column that is
+    zero (a term the data does not excite, such as gravity on a horizontal axis) is not
+    identifiable: its parameter is exactly 0, as in the nominal's `solve`, not the rounding
+    of a minimum-norm solution."""
+    w = nom.weights
+    A, b = W * w[:, None], y * w
     order, bounds = _fold_order(nom, folds)
     As, bs = A[order], b[order]
     k = len(bounds) - 1
@@ -121,18 +123,23 @@ def scores(nom: Nominal, folds: np.ndarray, y: np.ndarray, W: np.ndarray) -> Sco
     cf = np.stack([As[i].T @ bs[i] for i in cuts])
     bf = np.array([float(bs[i] @ bs[i]) for i in cuts])
     G, c, bb = Gf.sum(axis=0), cf.sum(axis=0), float(bf.sum())
-    # the full fit and the k fold fits, one batched solve; the dead columns' parameters 0
-    Gs, cs = np.concatenate([G[None], G - Gf]), np.concatenate([c[None], c - cf])
+    scale = np.sqrt(np.diagonal(G))
+    dead = scale == 0
+    scale = np.where(dead, 1.0, scale)
+    # the full fit and the k fold fits, scaled, in one batched solve; dead columns' 0
+    Gs = np.concatenate([G[None], G - Gf]) / np.outer(scale, scale)
+    cs = np.concatenate([c[None], c - cf]) / scale
     xs = np.zeros(cs.shape)
     live = ~dead
     xs[:, live] = _min_norm(Gs[:, live][:, :, live], cs[:, live])
     rss = _rss_many(Gs, cs, np.r_[bb, bb - bf], xs)
-    x, full, train, xs = xs[0], float(rss[0]), rss[1:], xs[1:]
-    # each row by its fold's fit, elementwise (no BLAS thread wake-up), all folds at once
-    errors = b - np.einsum("ij,ij->i", A, xs[folds])
+    X = xs / scale
+    # each row by its fold's fit, in fold order, then back in row order
+    errors = np.empty(len(b))
+    errors[order] = np.concatenate([bs[i] - As[i] @ X[1 + f] for f, i in enumerate(cuts)])
     held = np.bincount(folds, errors * errors, minlength=k)
-    return Scores(full=full, X=x / scale, train=train, held=held, errors=errors,
-                  fold_X=xs / scale)
+    return Scores(full=float(rss[0]), X=X[0], train=rss[1:], held=held, errors=errors,
+                  fold_X=X[1:])
 
 
 def _fold_order(nom: Nominal, folds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -147,11 +154,12 @@ def _fold_order(nom: Nominal, folds: np.ndarray) -> tuple[np.ndarray, np.ndarray
     return order, bounds
 
 
-# The smallest ratio of the Cholesky factor's diagonal entries at which a batch of normal
-# equations is solved directly: its square bounds the condition number from below, so a
-# ratio over 1e-6 leaves the solve many orders of magnitude from lstsq's cut (eps max(M, N),
-# 2e-15), where the two agree to rounding; below it (a column almost dead on a fold's
-# training rows), lstsq's minimum-norm solution by SVD.
+# The smallest ratio of the Cholesky factor's diagonal entries (the pivots' square roots)
+# at which a batch of normal equations is solved directly. The design is column-scaled, so a
+# system near lstsq's cut (singular values under eps max(M, N), 2e-15, of the largest: a
+# column almost dead on a fold's training rows, or almost a combination of the others) shows
+# a pivot that small or fails the factorisation; away from it the direct solve and lstsq's
+# SVD agree to rounding.
 DIRECT = 1e-6
 
 
@@ -174,8 +182,7 @@ def _min_norm(G: np.ndarray, c: np.ndarray) -> np.ndarray:
 
 def _rss_many(G: np.ndarray, c: np.ndarray, bb: np.ndarray, x: np.ndarray) -> np.ndarray:
     """_rss of a stack of fits."""
-    return (bb - 2 * np.einsum("fi,fi->f", x, c)
-            + np.einsum("fi,fij,fj->f", x, G, x))
+    return bb - np.einsum("fi,fi->f", x, 2 * c - (G @ x[..., None])[..., 0])
 
 
 def fitted_rss(nom: Nominal, y: np.ndarray, W: np.ndarray) -> float:
