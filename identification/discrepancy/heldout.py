@@ -105,41 +105,39 @@ def scores(nom: Nominal, folds: np.ndarray, y: np.ndarray, W: np.ndarray) -> Sco
     """Fit `y = W X` on all rows and on each fold's complement (the nominal's weights), by
     the normal equations of the column-scaled design (the Gram matrix, less the fold's for a
     fold fit): the designs are well conditioned once scaled (condition numbers 5 to 40 on
-    the bench axes), and one small solve per fit is what makes the folds affordable. The
-    scales are the weighted columns' norms, the square roots of the Gram matrix's diagonal;
-    the scaled design's normal equations are G / (s s^T) and A^T b / s. A column that is
-    zero (a term the data does not excite, such as gravity on a horizontal axis) is not
-    identifiable: its parameter is exactly 0, as in the nominal's `solve`, not the rounding
-    of a minimum-norm solution."""
-    w = nom.weights
-    A, b = W * w[:, None], y * w
+    the bench axes), and one small solve per fit is what makes the folds affordable (the
+    fold fits in one batched solve). A column that is zero (a term the data does not excite,
+    such as gravity on a horizontal axis) is not identifiable: its parameter is exactly 0, as
+    in the nominal's `solve`, not the rounding of a minimum-norm solution."""
+    A, b, scale = _scaled(nom, y, W)
+    dead = ~np.any(A != 0, axis=0)
     order, bounds = _fold_order(nom, folds)
     As, bs = A[order], b[order]
     k = len(bounds) - 1
     # per fold (its rows contiguous in `order`): its Gram matrix, A^T b and b^T b; a fit on
     # the others subtracts them
     cuts = [slice(bounds[f], bounds[f + 1]) for f in range(k)]
-    Gf = np.stack([As[i].T @ As[i] for i in cuts])
-    cf = np.stack([As[i].T @ bs[i] for i in cuts])
-    bf = np.array([float(bs[i] @ bs[i]) for i in cuts])
-    G, c, bb = Gf.sum(axis=0), cf.sum(axis=0), float(bf.sum())
-    scale = np.sqrt(np.diagonal(G))
-    dead = scale == 0
-    scale = np.where(dead, 1.0, scale)
-    # the full fit and the k fold fits, scaled, in one batched solve; dead columns' 0
-    Gs = np.concatenate([G[None], G - Gf]) / np.outer(scale, scale)
-    cs = np.concatenate([c[None], c - cf]) / scale
+    # (a copy on the right: two distinct operands make this the general product it was on
+    # each fold's gathered rows, not numpy's symmetric rank-k update, so the sums below, and
+    # every search's comparisons of them, are unchanged to the last digit)
+    grams = [(As[i].T @ As[i].copy(), As[i].T @ bs[i], float(bs[i] @ bs[i])) for i in cuts]
+    G, c, bb = (sum(g[j] for g in grams) for j in range(3))
+    # the fit on all rows by lstsq: a search's trials compare this RSS, to the last digit
+    x = np.linalg.lstsq(G, c, rcond=None)[0]
+    x[dead] = 0.0
+    full = _rss(G, c, bb, x)
+    Gs = G - np.stack([g[0] for g in grams])
+    cs = c - np.stack([g[1] for g in grams])
     xs = np.zeros(cs.shape)
     live = ~dead
     xs[:, live] = _min_norm(Gs[:, live][:, :, live], cs[:, live])
-    rss = _rss_many(Gs, cs, np.r_[bb, bb - bf], xs)
-    X = xs / scale
+    train = _rss_many(Gs, cs, bb - np.array([g[2] for g in grams]), xs)
     # each row by its fold's fit, in fold order, then back in row order
     errors = np.empty(len(b))
-    errors[order] = np.concatenate([bs[i] - As[i] @ X[1 + f] for f, i in enumerate(cuts)])
+    errors[order] = np.concatenate([bs[i] - As[i] @ xs[f] for f, i in enumerate(cuts)])
     held = np.bincount(folds, errors * errors, minlength=k)
-    return Scores(full=float(rss[0]), X=X[0], train=rss[1:], held=held, errors=errors,
-                  fold_X=X[1:])
+    return Scores(full=full, X=x / scale, train=train, held=held, errors=errors,
+                  fold_X=xs / scale)
 
 
 def _fold_order(nom: Nominal, folds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
