@@ -117,9 +117,10 @@ def scores(nom: Nominal, folds: np.ndarray, y: np.ndarray, W: np.ndarray) -> Sco
     # per fold (its rows contiguous in `order`): its Gram matrix, A^T b and b^T b; a fit on
     # the others subtracts them
     cuts = [slice(bounds[f], bounds[f + 1]) for f in range(k)]
-    # (a copy on the right: two distinct operands make this the general product it was on
-    # each fold's gathered rows, not numpy's symmetric rank-k update, so the sums below, and
-    # every search's comparisons of them, are unchanged to the last digit)
+    # (the right operand a copy: with two distinct operands numpy forms the general product,
+    # the arithmetic of the fold's rows gathered on their own, not its symmetric rank-k
+    # update, which rounds differently: the sums below, and the comparisons a search makes
+    # of them, are the same to the last digit however the rows are gathered)
     grams = [(As[i].T @ As[i].copy(), As[i].T @ bs[i], float(bs[i] @ bs[i])) for i in cuts]
     G, c, bb = (sum(g[j] for g in grams) for j in range(3))
     # the fit on all rows by lstsq: a search's trials compare this RSS, to the last digit
