@@ -105,30 +105,83 @@ def scores(nom: Nominal, folds: np.ndarray, y: np.ndarray, W: np.ndarray) -> Sco
     """Fit `y = W X` on all rows and on each fold's complement (the nominal's weights), by
     the normal equations of the column-scaled design (the Gram matrix, less the fold's for a
     fold fit): the designs are well conditioned once scaled (condition numbers 5 to 40 on
-    the bench axes), and one small solve per fit is what makes the folds affordable. A
-    column that is zero (a term the data does not excite, such as gravity on a horizontal
-    axis) is not identifiable: its parameter is exactly 0, as in the nominal's `solve`, not
-    the rounding of a minimum-norm solution."""
+    the bench axes), and one small solve per fit is what makes the folds affordable (the
+    fold fits in one batched solve). A column that is zero (a term the data does not excite,
+    such as gravity on a horizontal axis) is not identifiable: its parameter is exactly 0, as
+    in the nominal's `solve`, not the rounding of a minimum-norm solution."""
     A, b, scale = _scaled(nom, y, W)
     dead = ~np.any(A != 0, axis=0)
-    k = int(folds.max()) + 1
-    parts = [np.flatnonzero(folds == f) for f in range(k)]
-    # per fold: its Gram matrix, A^T b and b^T b; a fit on the others subtracts them
-    grams = [(A[i].T @ A[i], A[i].T @ b[i], float(b[i] @ b[i])) for i in parts]
+    order, bounds = _fold_order(nom, folds)
+    As, bs = A[order], b[order]
+    k = len(bounds) - 1
+    # per fold (its rows contiguous in `order`): its Gram matrix, A^T b and b^T b; a fit on
+    # the others subtracts them
+    cuts = [slice(bounds[f], bounds[f + 1]) for f in range(k)]
+    # (the right operand a copy: with two distinct operands numpy forms the general product,
+    # the arithmetic of the fold's rows gathered on their own, not its symmetric rank-k
+    # update, which rounds differently: the sums below, and the comparisons a search makes
+    # of them, are the same to the last digit however the rows are gathered)
+    grams = [(As[i].T @ As[i].copy(), As[i].T @ bs[i], float(bs[i] @ bs[i])) for i in cuts]
     G, c, bb = (sum(g[j] for g in grams) for j in range(3))
+    # the fit on all rows by lstsq: a search's trials compare this RSS, to the last digit
     x = np.linalg.lstsq(G, c, rcond=None)[0]
     x[dead] = 0.0
     full = _rss(G, c, bb, x)
-    train, xs = np.empty(k), np.empty((k, len(x)))
-    for f, (Gf, cf, bf) in enumerate(grams):
-        xs[f] = np.linalg.lstsq(G - Gf, c - cf, rcond=None)[0]
-        xs[f][dead] = 0.0
-        train[f] = _rss(G - Gf, c - cf, bb - bf, xs[f])
-    # each row by its fold's fit, elementwise (no BLAS thread wake-up), all folds at once
-    errors = b - (A * xs[folds]).sum(axis=1)
-    held = np.array([float(errors[i] @ errors[i]) for i in parts])
+    Gs = G - np.stack([g[0] for g in grams])
+    cs = c - np.stack([g[1] for g in grams])
+    xs = np.zeros(cs.shape)
+    live = ~dead
+    xs[:, live] = _min_norm(Gs[:, live][:, :, live], cs[:, live])
+    train = _rss_many(Gs, cs, bb - np.array([g[2] for g in grams]), xs)
+    # each row by its fold's fit, in fold order, then back in row order
+    errors = np.empty(len(b))
+    errors[order] = np.concatenate([bs[i] - As[i] @ xs[f] for f, i in enumerate(cuts)])
+    held = np.bincount(folds, errors * errors, minlength=k)
     return Scores(full=full, X=x / scale, train=train, held=held, errors=errors,
                   fold_X=xs / scale)
+
+
+def _fold_order(nom: Nominal, folds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The rows sorted by fold (stable: each fold's rows in their order) and where each
+    fold's rows start in that order (k + 1 bounds); kept on `nom` for these very folds."""
+    kept = nom.memo.get("fold_order")
+    if kept is not None and kept[0] is folds:
+        return kept[1], kept[2]
+    order = np.argsort(folds, kind="stable")
+    bounds = np.r_[0, np.cumsum(np.bincount(folds, minlength=int(folds.max()) + 1))]
+    nom.memo["fold_order"] = (folds, order, bounds)
+    return order, bounds
+
+
+# The smallest ratio of the Cholesky factor's diagonal entries (the pivots' square roots)
+# at which a batch of normal equations is solved directly. The design is column-scaled, so a
+# system near lstsq's cut (singular values under eps max(M, N), 2e-15, of the largest: a
+# column almost dead on a fold's training rows, or almost a combination of the others) shows
+# a pivot that small or fails the factorisation; away from it the direct solve and lstsq's
+# SVD agree to rounding.
+DIRECT = 1e-6
+
+
+def _min_norm(G: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """The minimum-norm solutions x of G x = c for a stack of symmetric positive
+    semi-definite G (np.linalg.lstsq's, with its default cut: singular values under
+    eps max(M, N) of the largest count as 0): one batched solve where every G is well
+    conditioned (DIRECT), one batched SVD otherwise."""
+    if G.shape[-1] == 0:
+        return np.zeros(c.shape)
+    try:
+        d = np.diagonal(np.linalg.cholesky(G), axis1=-2, axis2=-1)
+        if np.all(d.min(axis=-1) > DIRECT * d.max(axis=-1)):
+            return np.linalg.solve(G, c[..., None])[..., 0]
+    except np.linalg.LinAlgError:
+        pass
+    p = G.shape[-1]
+    return (np.linalg.pinv(G, rcond=np.finfo(float).eps * p) @ c[..., None])[..., 0]
+
+
+def _rss_many(G: np.ndarray, c: np.ndarray, bb: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """_rss of a stack of fits."""
+    return bb - np.einsum("fi,fi->f", x, 2 * c - (G @ x[..., None])[..., 0])
 
 
 def fitted_rss(nom: Nominal, y: np.ndarray, W: np.ndarray) -> float:

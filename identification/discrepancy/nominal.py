@@ -201,16 +201,40 @@ class Nominal:
             W = W.copy()
         if tau is not None:
             y = stack(s, tau, None)
-        if deflection is not None or lead:
-            dk = hat(s.qm - s.q if deflection is None else deflection) if s.has_link else None
-            if dk is not None:
-                W[:, self.names.index("K")] = stack(s, _led(s, dk, lead), -dk)
+        if (deflection is not None or lead) and s.has_link:
+            if not lead:
+                dk = hat(s.qm - s.q if deflection is None else deflection)
+                W[:, self.names.index("K")] = stack(s, dk, -dk)
+            else:
+                dk, dk_d = self._led_parts("dk", deflection)
+                W[:, self.names.index("K")] = np.concatenate([dk + lead * dk_d, -dk])
         if lead:
             names = ("J", "FV", "FS") if not s.has_link else ("Jm", "FVm", "FSm")
-            for name, x in zip(names, (_led(s, s.qmdd, lead), s.qmd + lead * s.qmdd,
-                                       _led(s, sign0(s.qmd), lead))):
-                W[:, self.names.index(name)] = stack(s, x, None)
+            acc, acc_d = self._led_parts("qmdd")
+            sgn, sgn_d = self._led_parts("sign")
+            vel = self._led_parts("qmd")[0]
+            zero = np.zeros(len(s.index) if s.has_link else 0)
+            for name, x in zip(names, (acc + lead * acc_d, vel + lead * acc, sgn + lead * sgn_d)):
+                W[:, self.names.index(name)] = np.concatenate([x, zero])
         return y, W, self.names
+
+    def _led_parts(self, which: str,
+                   deflection: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """The decimated motor rows of a column x and of its 3-point derivative x' (_led's):
+        the decimation is linear, so a column led by T, x + T x', is dec(x) + T dec(x') for
+        every T a lag's search tries, and x, x' are decimated once. `which`: "qmdd", "qmd",
+        "sign" (sign0(qm')) or "dk" (the hat-paired spring deflection, qm - q or
+        `deflection`). Kept on the memo; a deflection's by the very array."""
+        kept = self.memo.setdefault("led", {})
+        hit = kept.get(which)
+        if hit is not None and hit[0] is deflection:
+            return hit[1], hit[2]
+        s = self.sig
+        x = {"qmdd": lambda: s.qmdd, "qmd": lambda: s.qmd, "sign": lambda: sign0(s.qmd),
+             "dk": lambda: hat(s.qm - s.q if deflection is None else deflection)}[which]()
+        parts = (s.dec(x), s.dec(np.nan_to_num(derivatives(x, s.ts, 1, 3)[1])))
+        kept[which] = (deflection, *parts)
+        return parts
 
     def fit(self, y: np.ndarray, W: np.ndarray) -> tuple[np.ndarray, float]:
         """Least squares of a design on these rows with the nominal's block weights."""

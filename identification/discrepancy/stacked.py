@@ -133,11 +133,16 @@ def _added(nom: Nominal, key: tuple) -> tuple[tuple[str, np.ndarray], ...] | Non
 def _keep_added(nom: Nominal, key: tuple, cols: tuple[tuple[str, np.ndarray], ...]) -> None:
     """Keep `cols` on `nom` for (effect, values); the least recently used go beyond _BYTES."""
     kept = nom.memo.setdefault("added", {})
+    old = kept.pop(key, None)
     kept[key] = cols
-    size = sum(c.nbytes for cs in kept.values() for _, c in cs)
+    size = nom.memo.get("added_bytes", 0) + _nbytes(cols) - (_nbytes(old) if old else 0)
     while size > _BYTES and len(kept) > 1:
-        cs = kept.pop(next(iter(kept)))
-        size -= sum(c.nbytes for _, c in cs)
+        size -= _nbytes(kept.pop(next(iter(kept))))
+    nom.memo["added_bytes"] = size
+
+
+def _nbytes(cols: tuple[tuple[str, np.ndarray], ...]) -> int:
+    return sum(c.nbytes for _, c in cols)
 
 
 def stacked(nom: Nominal, effects: Sequence[tuple[str, dict]]) -> Stacked:

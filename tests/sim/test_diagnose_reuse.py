@@ -4,7 +4,8 @@ log) gives exactly what computing again gives, bit for bit:
 - the nominal columns of a lagged or dead-band state (stacked._core), the decimated columns an
   effect adds at a given value (stacked._added), both kept on the very Nominal they came from;
 - a spring column's link row as the negative of its motor row (signals.stack);
-- every fold's held-out errors in one pass (heldout.scores), against the per-fold loop;
+- the fit on all rows of heldout.scores (what a search compares), against the per-fold
+  loop; its held-out errors, every fold's fit in one batched solve, to rounding;
 - the coupled-width refit's RSS from the normal equations (heldout.fitted_rss), against the
   SVD least squares to rounding.
 """
@@ -82,31 +83,44 @@ def test_a_spring_columns_link_row_is_exactly_the_decimated_negative(log):
 
 
 def _scores_by_fold(nom, folds, y, W):
-    """heldout.scores' held-out errors as it computed them before: fold by fold."""
+    """heldout.scores' fits as it computed them before, fold by fold (each fold's rows
+    gathered, one lstsq per fit): the fit on all rows (X, weighted RSS) and the held-out
+    errors."""
     w = nom.weights
     A, b = W * w[:, None], y * w
     scale = np.linalg.norm(A, axis=0)
     scale[scale == 0] = 1.0
     A = A / scale
     parts = [np.flatnonzero(folds == f) for f in range(int(folds.max()) + 1)]
-    grams = [(A[i].T @ A[i], A[i].T @ b[i]) for i in parts]
-    G, c = (sum(g[j] for g in grams) for j in range(2))
+    grams = [(A[i].T @ A[i], A[i].T @ b[i], float(b[i] @ b[i])) for i in parts]
+    G, c, bb = (sum(g[j] for g in grams) for j in range(3))
+    x = np.linalg.lstsq(G, c, rcond=None)[0]
+    x[~np.any(A != 0, axis=0)] = 0.0
     errors = np.empty(len(b))
-    for i, (Gf, cf) in zip(parts, grams):
+    for i, (Gf, cf, _) in zip(parts, grams):
         x_f = np.linalg.lstsq(G - Gf, c - cf, rcond=None)[0]
         errors[i] = b[i] - (A[i] * x_f).sum(axis=1)
-    return errors
+    return x / scale, float(bb - 2 * x @ c + x @ G @ x), errors
 
 
 def test_heldout_errors_in_one_pass_are_the_per_fold_ones(log):
     settings, _ = diagnosis_settings(log)
     nom = nominal(log, settings)
     folds = fold_of_rows(nom)
-    y, W, _ = st.apply(st.Stacked(nom), "hardening", {"deflection_rad": 1e-3})[1]
-    s = scores(nom, folds, y, W)
-    assert np.array_equal(s.errors, _scores_by_fold(nom, folds, y, W))
-    assert np.array_equal(s.held, [s.errors[folds == f] @ s.errors[folds == f]
-                                   for f in range(len(s.held))])
+    for name, fixed in TRIALS:
+        y, W, _ = st.apply(st.Stacked(nom), name, fixed)[1]
+        s = scores(nom, folds, y, W)
+        X, full, errors = _scores_by_fold(nom, folds, y, W)
+        # the fit on all rows, whose RSS a search compares between trials: bit for bit
+        assert np.array_equal(s.X, X) and s.full == full, name
+        # the fold fits in one batched solve against lstsq one by one, on the same normal
+        # equations (condition numbers under 1e3 here): both backward stable, the errors
+        # agree to ~1e3 eps of the weighted torque; 1e-10 of it leaves room for any BLAS
+        # and still fails on a wrong fold or scale
+        b = y * nom.weights
+        assert np.max(np.abs(s.errors - errors)) <= 1e-10 * np.max(np.abs(b)), name
+        assert s.held == pytest.approx([s.errors[folds == f] @ s.errors[folds == f]
+                                        for f in range(len(s.held))], rel=1e-12), name
 
 
 def test_fitted_rss_is_the_least_squares_rss(log):
