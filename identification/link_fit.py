@@ -30,7 +30,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import optimize
+from scipy import optimize, stats
 
 from jointbench.identification import regressors
 from jointbench.identification.estimate import LSResult, least_squares
@@ -46,6 +46,7 @@ ROUNDS = 3            # profile updates (link friction, gravity, reversals), eac
 ROUNDS_AGAIN = 1      # the same after the gravity is left out (from the converged point)
 GRAVITY_Z = 3.0       # MX or MY this many corrected sigma from zero keeps the gravity columns
 IV_PASSES = 2         # then passes with instruments
+IV_SETTLED = 0.99     # the last pass's step must lie inside this confidence region
 B_FLOOR = 1e-6        # FV / JL kept positive (the link's response needs some damping)
 
 
@@ -270,7 +271,8 @@ def _converge(rows: _Rows, log: Log, p: dict[str, float], rounds: int) -> dict[s
 
 def _final(rows: _Rows, log: Log, p: dict[str, float], Z) -> tuple:
     """IV_PASSES Gauss-Newton passes with the instruments `Z` (a function of the parameters,
-    or None: none), then the last linearised solve with the corrected covariance."""
+    or None: none), then the last linearised solve with the corrected covariance at the point
+    p returned (its step X - p says whether the passes settled, `_unsettled`)."""
     if Z is not None:
         for _ in range(IV_PASSES):
             rows.profiles(p)
@@ -280,6 +282,28 @@ def _final(rows: _Rows, log: Log, p: dict[str, float], Z) -> tuple:
     rows.profiles(p)
     ls, y, J, idx = _solve(rows, log, p, Z=None if Z is None else Z(p), corrected=True)
     return p, ls, y, J, idx
+
+
+def _unsettled(ls: LSResult, p: dict[str, float]) -> tuple[float, float] | None:
+    """The last Gauss-Newton step d = X - p of the instrumental passes against the
+    estimate's own covariance C (corrected, the paper's where that is missing), on the
+    parameters it covers: (d^T C^+ d, the chi-square quantile IV_SETTLED with as many degrees
+    of freedom) when the step leaves that confidence region, None when it is inside. A
+    converged iteration steps by much less than the estimate's uncertainty (X = p at its fixed
+    point); a last step outside the region means the passes have not converged: with a weak
+    instrument they oscillate or diverge, and where they stop is set by rounding."""
+    C = ls.cov_corrected if ls.cov_corrected is not None else ls.cov
+    if C is None:
+        return None
+    d = ls.X - np.array([p[n] for n in NAMES])
+    live = np.isfinite(d) & (np.nan_to_num(np.diag(C)) > 0)     # no column: NaN, left out
+    C = C[np.ix_(live, live)]
+    if not live.any() or not np.all(np.isfinite(C)):
+        return None
+    d = d[live]
+    q = float(d @ np.linalg.pinv(C) @ d)
+    bound = float(stats.chi2.ppf(IV_SETTLED, int(live.sum())))
+    return None if q <= bound else (q, bound)
 
 
 def _unphysical(ls: LSResult) -> list[str]:
@@ -300,21 +324,30 @@ def _unphysical(ls: LSResult) -> list[str]:
 
 def _final_checked(rows: _Rows, log: Log, p: dict[str, float], Z) -> tuple[tuple, str]:
     """`_final` with the instruments `Z`; when those give an unphysical estimate (a
-    negative inertia or viscous friction) from the physical least-squares point `p`, `_final`
-    without them, and a warning naming the cause ('' otherwise). The instruments are the
-    columns rebuilt from the reference's predicted motion; the link Coulomb column (the
-    reconstructed link's friction switching) is the weakest of them, and on a link whose
-    friction FS is zero it is hardly correlated with its instrument at all: without torque
-    noise to average over the switching, one instrumental pass can then leave the physical
-    region, while least squares is unbiased there (no noise to be correlated with)."""
+    negative inertia or viscous friction) from the physical least-squares point `p`, or when
+    their passes have not converged (`_unsettled`), `_final` without them, and a warning
+    naming the cause ('' otherwise). The instruments are the columns rebuilt from the
+    reference's predicted motion; the link Coulomb column (the reconstructed link's friction
+    switching) is the weakest of them, and on a link whose friction FS is zero it is hardly
+    correlated with its instrument at all: without torque noise to average over the
+    switching, the instrumental passes can then oscillate or leave the physical region, while
+    least squares is unbiased there (no noise to be correlated with)."""
     out = _final(rows, log, p, Z)
-    if Z is None or not _unphysical(out[1]) or not all(p[n] > 0 for n in ("Jm", "K", "a")):
+    if Z is None or not all(p[n] > 0 for n in ("Jm", "K", "a")):
         return out, ""
     ls = out[1]
-    got = ", ".join(_unphysical(ls))
+    bad, step = _unphysical(ls), _unsettled(ls, out[0])
+    if not bad and step is None:
+        return out, ""
+    if bad:
+        got = (f"gave an unphysical {', '.join(bad)} (Jm = {ls.value('Jm'):.4g}, K = "
+               f"{ls.value('K'):.4g}, FVm = {ls.value('FVm'):.4g})")
+    else:
+        got = (f"did not converge (the last pass moved the estimate by {step[0]:.3g} in "
+               f"chi-square against its own covariance, beyond the {IV_SETTLED:.0%} region's "
+               f"{step[1]:.3g}; Jm = {ls.value('Jm'):.4g}, K = {ls.value('K'):.4g})")
     warning = (f"motor-only: the instrumental-variable passes of the link reconstruction "
-               f"gave an unphysical {got} (Jm = {ls.value('Jm'):.4g}, K = "
-               f"{ls.value('K'):.4g}, FVm = {ls.value('FVm'):.4g}): the instrument of the link "
+               f"{got}: the instrument of the link "
                f"Coulomb friction column is weak (the link's friction switching is not in the "
                f"reference's predicted motion: a link without Coulomb friction, FS = "
                f"{p['Kc'] / p['a']:.3g} by least squares), so the least-squares link "
