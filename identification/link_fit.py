@@ -269,41 +269,48 @@ def _converge(rows: _Rows, log: Log, p: dict[str, float], rounds: int) -> dict[s
     return p
 
 
-def _final(rows: _Rows, log: Log, p: dict[str, float], Z) -> tuple:
+def _final(rows: _Rows, log: Log, p: dict[str, float], Z) -> tuple[tuple, dict | None]:
     """IV_PASSES Gauss-Newton passes with the instruments `Z` (a function of the parameters,
     or None: none), then the last linearised solve with the corrected covariance at the point
-    p returned (its step X - p says whether the passes settled, `_unsettled`)."""
+    p returned; and the point the last pass started from (None without instruments): the steps
+    X - p and p - that point say whether the passes converge (`_unsettled`)."""
+    before = None
     if Z is not None:
         for _ in range(IV_PASSES):
             rows.profiles(p)
             ls, *_ = _solve(rows, log, p, Z=Z(p))
+            before = p
             p = {n: float(v) if np.isfinite(v) else 0.0 for n, v in zip(NAMES, ls.X)}
             p["b"] = max(p["b"], B_FLOOR)
     rows.profiles(p)
     ls, y, J, idx = _solve(rows, log, p, Z=None if Z is None else Z(p), corrected=True)
-    return p, ls, y, J, idx
+    return (p, ls, y, J, idx), before
 
 
-def _unsettled(ls: LSResult, p: dict[str, float]) -> tuple[float, float] | None:
-    """The last Gauss-Newton step d = X - p of the instrumental passes against the
-    estimate's own covariance C (corrected, the paper's where that is missing), on the
-    parameters it covers: (d^T C^+ d, the chi-square quantile IV_SETTLED with as many degrees
-    of freedom) when the step leaves that confidence region, None when it is inside. A
-    converged iteration steps by much less than the estimate's uncertainty (X = p at its fixed
-    point); a last step outside the region means the passes have not converged: with a weak
-    instrument they oscillate or diverge, and where they stop is set by rounding."""
+def _unsettled(ls: LSResult, p: dict[str, float], before: dict[str, float]
+               ) -> tuple[float, float, float] | None:
+    """Whether the instrumental Gauss-Newton passes failed to converge: the last step
+    d = X - p and the one before it, p - `before`, each measured against the estimate's own
+    covariance C (corrected, the paper's where that is missing) as d^T C^+ d on the
+    parameters it covers. A converging iteration either steps by less than the estimate's
+    uncertainty (inside the confidence region IV_SETTLED: the chi-square quantile with as many
+    degrees of freedom; X = p at its fixed point) or still shrinks its steps; a last step
+    outside that region and no shorter than the one before means the passes oscillate or
+    diverge (a weak instrument), and where they stop is set by rounding. Returns (last step,
+    step before, the quantile) then, None otherwise."""
     C = ls.cov_corrected if ls.cov_corrected is not None else ls.cov
     if C is None:
         return None
-    d = ls.X - np.array([p[n] for n in NAMES])
-    live = np.isfinite(d) & (np.nan_to_num(np.diag(C)) > 0)     # no column: NaN, left out
+    x = np.array([p[n] for n in NAMES])
+    d, e = ls.X - x, x - np.array([before[n] for n in NAMES])
+    live = np.isfinite(d) & np.isfinite(e) & (np.nan_to_num(np.diag(C)) > 0)  # NaN: no column
     C = C[np.ix_(live, live)]
     if not live.any() or not np.all(np.isfinite(C)):
         return None
-    d = d[live]
-    q = float(d @ np.linalg.pinv(C) @ d)
+    P = np.linalg.pinv(C)
+    last, prev = float(d[live] @ P @ d[live]), float(e[live] @ P @ e[live])
     bound = float(stats.chi2.ppf(IV_SETTLED, int(live.sum())))
-    return None if q <= bound else (q, bound)
+    return (last, prev, bound) if last > bound and last >= prev else None
 
 
 def _unphysical(ls: LSResult) -> list[str]:
@@ -332,11 +339,11 @@ def _final_checked(rows: _Rows, log: Log, p: dict[str, float], Z) -> tuple[tuple
     correlated with its instrument at all: without torque noise to average over the
     switching, the instrumental passes can then oscillate or leave the physical region, while
     least squares is unbiased there (no noise to be correlated with)."""
-    out = _final(rows, log, p, Z)
+    out, before = _final(rows, log, p, Z)
     if Z is None or not all(p[n] > 0 for n in ("Jm", "K", "a")):
         return out, ""
     ls = out[1]
-    bad, step = _unphysical(ls), _unsettled(ls, out[0])
+    bad, step = _unphysical(ls), _unsettled(ls, out[0], before)
     if not bad and step is None:
         return out, ""
     if bad:
@@ -345,14 +352,15 @@ def _final_checked(rows: _Rows, log: Log, p: dict[str, float], Z) -> tuple[tuple
     else:
         got = (f"did not converge (the last pass moved the estimate by {step[0]:.3g} in "
                f"chi-square against its own covariance, beyond the {IV_SETTLED:.0%} region's "
-               f"{step[1]:.3g}; Jm = {ls.value('Jm'):.4g}, K = {ls.value('K'):.4g})")
+               f"{step[2]:.3g} and no less than the pass before, {step[1]:.3g}; Jm = "
+               f"{ls.value('Jm'):.4g}, K = {ls.value('K'):.4g})")
     warning = (f"motor-only: the instrumental-variable passes of the link reconstruction "
                f"{got}: the instrument of the link "
                f"Coulomb friction column is weak (the link's friction switching is not in the "
                f"reference's predicted motion: a link without Coulomb friction, FS = "
                f"{p['Kc'] / p['a']:.3g} by least squares), so the least-squares link "
                f"reconstruction is kept; it is unbiased only without closed-loop torque noise")
-    return _final(rows, log, p, None), warning
+    return _final(rows, log, p, None)[0], warning
 
 
 def fit(log: Log, s: FilterSettings, start: dict[str, float], f1_hz: float | None = None,
