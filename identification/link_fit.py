@@ -269,22 +269,25 @@ def _converge(rows: _Rows, log: Log, p: dict[str, float], rounds: int) -> dict[s
     return p
 
 
-def _final(rows: _Rows, log: Log, p: dict[str, float], Z) -> tuple[tuple, dict | None]:
+def _final(rows: _Rows, log: Log, p: dict[str, float], Z) -> tuple[tuple, dict | None, set]:
     """IV_PASSES Gauss-Newton passes with the instruments `Z` (a function of the parameters,
     or None: none), then the last linearised solve with the corrected covariance at the point
-    p returned; and the point the last pass started from (None without instruments): the steps
-    X - p and p - that point say whether the passes converge (`_unsettled`)."""
-    before = None
+    p returned; the point the last pass started from (None without instruments): the steps
+    X - p and p - that point say whether the passes converge (`_unsettled`); and the
+    parameters some pass put outside the physical region (`_unphysical`; the next pass
+    starts from the point with FV / JL floored at B_FLOOR)."""
+    before, stray = None, set()
     if Z is not None:
         for _ in range(IV_PASSES):
             rows.profiles(p)
             ls, *_ = _solve(rows, log, p, Z=Z(p))
+            stray.update(_unphysical(ls))
             before = p
             p = {n: float(v) if np.isfinite(v) else 0.0 for n, v in zip(NAMES, ls.X)}
             p["b"] = max(p["b"], B_FLOOR)
     rows.profiles(p)
     ls, y, J, idx = _solve(rows, log, p, Z=None if Z is None else Z(p), corrected=True)
-    return (p, ls, y, J, idx), before
+    return (p, ls, y, J, idx), before, stray
 
 
 def _unsettled(ls: LSResult, p: dict[str, float], before: dict[str, float]
@@ -331,24 +334,28 @@ def _unphysical(ls: LSResult) -> list[str]:
 
 def _final_checked(rows: _Rows, log: Log, p: dict[str, float], Z) -> tuple[tuple, str]:
     """`_final` with the instruments `Z`; when those give an unphysical estimate (a
-    negative inertia or viscous friction) from the physical least-squares point `p`, or when
-    their passes have not converged (`_unsettled`), `_final` without them, and a warning
+    negative inertia or viscous friction) from the physical least-squares point `p`, or pass
+    through one, or when their passes have not converged (`_unsettled`), `_final` without
+    them, and a warning
     naming the cause ('' otherwise). The instruments are the columns rebuilt from the
     reference's predicted motion; the link Coulomb column (the reconstructed link's friction
     switching) is the weakest of them, and on a link whose friction FS is zero it is hardly
     correlated with its instrument at all: without torque noise to average over the
     switching, the instrumental passes can then oscillate or leave the physical region, while
     least squares is unbiased there (no noise to be correlated with)."""
-    out, before = _final(rows, log, p, Z)
+    out, before, stray = _final(rows, log, p, Z)
     if Z is None or not all(p[n] > 0 for n in ("Jm", "K", "a")):
         return out, ""
     ls = out[1]
     bad, step = _unphysical(ls), _unsettled(ls, out[0], before)
-    if not bad and step is None:
+    if not bad and step is None and not stray:
         return out, ""
     if bad:
         got = (f"gave an unphysical {', '.join(bad)} (Jm = {ls.value('Jm'):.4g}, K = "
                f"{ls.value('K'):.4g}, FVm = {ls.value('FVm'):.4g})")
+    elif stray:
+        got = (f"passed through an unphysical {', '.join(sorted(stray))} on the way (ending "
+               f"at Jm = {ls.value('Jm'):.4g}, K = {ls.value('K'):.4g})")
     else:
         got = (f"did not converge (the last pass moved the estimate by {step[0]:.3g} in "
                f"chi-square against its own covariance, beyond the {IV_SETTLED:.0%} region's "
