@@ -30,7 +30,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import optimize
+from scipy import optimize, stats
 
 from jointbench.identification import regressors
 from jointbench.identification.estimate import LSResult, least_squares
@@ -46,6 +46,7 @@ ROUNDS = 3            # profile updates (link friction, gravity, reversals), eac
 ROUNDS_AGAIN = 1      # the same after the gravity is left out (from the converged point)
 GRAVITY_Z = 3.0       # MX or MY this many corrected sigma from zero keeps the gravity columns
 IV_PASSES = 2         # then passes with instruments
+IV_SETTLED = 0.99     # the last pass's step must lie inside this confidence region
 B_FLOOR = 1e-6        # FV / JL kept positive (the link's response needs some damping)
 
 
@@ -268,18 +269,51 @@ def _converge(rows: _Rows, log: Log, p: dict[str, float], rounds: int) -> dict[s
     return p
 
 
-def _final(rows: _Rows, log: Log, p: dict[str, float], Z) -> tuple:
+def _final(rows: _Rows, log: Log, p: dict[str, float], Z) -> tuple[tuple, dict | None, set]:
     """IV_PASSES Gauss-Newton passes with the instruments `Z` (a function of the parameters,
-    or None: none), then the last linearised solve with the corrected covariance."""
+    or None: none), then the last linearised solve with the corrected covariance at the point
+    p returned; the point the last pass started from (None without instruments): the steps
+    X - p and p - that point say whether the passes converge (`_unsettled`); and the
+    parameters some pass put outside the physical region (`_unphysical`; the next pass
+    starts from the point with FV / JL floored at B_FLOOR)."""
+    before, stray = None, set()
     if Z is not None:
         for _ in range(IV_PASSES):
             rows.profiles(p)
             ls, *_ = _solve(rows, log, p, Z=Z(p))
+            stray.update(_unphysical(ls))
+            before = p
             p = {n: float(v) if np.isfinite(v) else 0.0 for n, v in zip(NAMES, ls.X)}
             p["b"] = max(p["b"], B_FLOOR)
     rows.profiles(p)
     ls, y, J, idx = _solve(rows, log, p, Z=None if Z is None else Z(p), corrected=True)
-    return p, ls, y, J, idx
+    return (p, ls, y, J, idx), before, stray
+
+
+def _unsettled(ls: LSResult, p: dict[str, float], before: dict[str, float]
+               ) -> tuple[float, float, float] | None:
+    """Whether the instrumental Gauss-Newton passes failed to converge: the last step
+    d = X - p and the one before it, p - `before`, each measured against the estimate's own
+    covariance C (corrected, the paper's where that is missing) as d^T C^+ d on the
+    parameters it covers. A converging iteration either steps by less than the estimate's
+    uncertainty (inside the confidence region IV_SETTLED: the chi-square quantile with as many
+    degrees of freedom; X = p at its fixed point) or still shrinks its steps; a last step
+    outside that region and no shorter than the one before means the passes oscillate or
+    diverge (a weak instrument), and where they stop is set by rounding. Returns (last step,
+    step before, the quantile) then, None otherwise."""
+    C = ls.cov_corrected if ls.cov_corrected is not None else ls.cov
+    if C is None:
+        return None
+    x = np.array([p[n] for n in NAMES])
+    d, e = ls.X - x, x - np.array([before[n] for n in NAMES])
+    live = np.isfinite(d) & np.isfinite(e) & (np.nan_to_num(np.diag(C)) > 0)  # NaN: no column
+    C = C[np.ix_(live, live)]
+    if not live.any() or not np.all(np.isfinite(C)):
+        return None
+    P = np.linalg.pinv(C)
+    last, prev = float(d[live] @ P @ d[live]), float(e[live] @ P @ e[live])
+    bound = float(stats.chi2.ppf(IV_SETTLED, int(live.sum())))
+    return (last, prev, bound) if last > bound and last >= prev else None
 
 
 def _unphysical(ls: LSResult) -> list[str]:
@@ -300,26 +334,40 @@ def _unphysical(ls: LSResult) -> list[str]:
 
 def _final_checked(rows: _Rows, log: Log, p: dict[str, float], Z) -> tuple[tuple, str]:
     """`_final` with the instruments `Z`; when those give an unphysical estimate (a
-    negative inertia or viscous friction) from the physical least-squares point `p`, `_final`
-    without them, and a warning naming the cause ('' otherwise). The instruments are the
-    columns rebuilt from the reference's predicted motion; the link Coulomb column (the
-    reconstructed link's friction switching) is the weakest of them, and on a link whose
-    friction FS is zero it is hardly correlated with its instrument at all: without torque
-    noise to average over the switching, one instrumental pass can then leave the physical
-    region, while least squares is unbiased there (no noise to be correlated with)."""
-    out = _final(rows, log, p, Z)
-    if Z is None or not _unphysical(out[1]) or not all(p[n] > 0 for n in ("Jm", "K", "a")):
+    negative inertia or viscous friction) from the physical least-squares point `p`, or pass
+    through one, or when their passes have not converged (`_unsettled`), `_final` without
+    them, and a warning
+    naming the cause ('' otherwise). The instruments are the columns rebuilt from the
+    reference's predicted motion; the link Coulomb column (the reconstructed link's friction
+    switching) is the weakest of them, and on a link whose friction FS is zero it is hardly
+    correlated with its instrument at all: without torque noise to average over the
+    switching, the instrumental passes can then oscillate or leave the physical region, while
+    least squares is unbiased there (no noise to be correlated with)."""
+    out, before, stray = _final(rows, log, p, Z)
+    if Z is None or not all(p[n] > 0 for n in ("Jm", "K", "a")):
         return out, ""
     ls = out[1]
-    got = ", ".join(_unphysical(ls))
+    bad, step = _unphysical(ls), _unsettled(ls, out[0], before)
+    if not bad and step is None and not stray:
+        return out, ""
+    if bad:
+        got = (f"gave an unphysical {', '.join(bad)} (Jm = {ls.value('Jm'):.4g}, K = "
+               f"{ls.value('K'):.4g}, FVm = {ls.value('FVm'):.4g})")
+    elif stray:
+        got = (f"passed through an unphysical {', '.join(sorted(stray))} on the way (ending "
+               f"at Jm = {ls.value('Jm'):.4g}, K = {ls.value('K'):.4g})")
+    else:
+        got = (f"did not converge (the last pass moved the estimate by {step[0]:.3g} in "
+               f"chi-square against its own covariance, beyond the {IV_SETTLED:.0%} region's "
+               f"{step[2]:.3g} and no less than the pass before, {step[1]:.3g}; Jm = "
+               f"{ls.value('Jm'):.4g}, K = {ls.value('K'):.4g})")
     warning = (f"motor-only: the instrumental-variable passes of the link reconstruction "
-               f"gave an unphysical {got} (Jm = {ls.value('Jm'):.4g}, K = "
-               f"{ls.value('K'):.4g}, FVm = {ls.value('FVm'):.4g}): the instrument of the link "
+               f"{got}: the instrument of the link "
                f"Coulomb friction column is weak (the link's friction switching is not in the "
                f"reference's predicted motion: a link without Coulomb friction, FS = "
                f"{p['Kc'] / p['a']:.3g} by least squares), so the least-squares link "
                f"reconstruction is kept; it is unbiased only without closed-loop torque noise")
-    return _final(rows, log, p, None), warning
+    return _final(rows, log, p, None)[0], warning
 
 
 def fit(log: Log, s: FilterSettings, start: dict[str, float], f1_hz: float | None = None,
