@@ -12,7 +12,8 @@ from pathlib import Path
 from jointbench.bench.cli.common import (UsageError, check_output_file, finite, parse_config,
                                          positive, seed)
 from jointbench.bench.cli.resources import check_memory
-from jointbench.bench.sim.defaults import MIN_SUBSTEPS, PHYSICS_STEP, amplitude_help
+from jointbench.bench.sim.defaults import (MIN_SUBSTEPS, PAPER_RATE_HZ, PHYSICS_STEP,
+                                          amplitude_help)
 
 # The library `run` imports, loaded by the dispatcher before it traps the signals: a virtual
 # experiment needs no scipy (start-up, README "Speed"); the replay identifies and does.
@@ -57,7 +58,8 @@ def add_arguments(s: argparse.ArgumentParser) -> None:
                         f"step within {1e3 * PHYSICS_STEP:g} ms, at least {MIN_SUBSTEPS}; with "
                         "--replay: the log's own, else 1)")
     s.add_argument("--rate", type=_rate, default=None, metavar="HZ|auto",
-                   help="sample (control and log) rate in Hz (default 350.87, the paper's); "
+                   help=f"sample (control and log) rate in Hz (default {PAPER_RATE_HZ:g}, the "
+                        "paper's); "
                         "auto: twice the Fs of eq. (29) for the axis' first mode, about 105 f1")
     s.add_argument("--ideal-sensors", action="store_true", help="no quantisation, no torque noise")
     s.add_argument("--json", action="store_true", help="print a JSON summary")

@@ -28,7 +28,8 @@ def default_substeps(sample_rate_hz: float) -> int:
     return max(MIN_SUBSTEPS, math.ceil(1.0 / (sample_rate_hz * PHYSICS_STEP) - 1e-9))
 
 
-DEFAULT_SUBSTEPS = default_substeps(350.87)   # 12 at the paper's 350.87 Hz
+PAPER_RATE_HZ = 350.87     # the prototype's control and log rate (paper, section 4)
+DEFAULT_SUBSTEPS = default_substeps(PAPER_RATE_HZ)   # 12 at the paper's rate
 
 
 def amplitude_help() -> str:
