@@ -39,8 +39,8 @@ ARM_SHARE = 0.55   # the arm chirp's acceleration cap (tests/validation/test_arm
 # the corrections that act on each model's path (identification/corrections.py)
 ACTS_ON = {"joint-motor": ("zoh", "stencil5", "instruments", "reversals", "stick_phases",
                            "wide_band"),
-           "motor-only": ("zoh", "stencil5", "instruments", "motor_only_columns",
-                          "link_reconstruction")}
+           "motor-only": ("zoh", "stencil5", "instruments", "stick_phases",
+                          "motor_only_columns", "link_reconstruction")}
 
 
 def arm_log(duration: float, joint: str = "axis6") -> tuple[Log, object]:

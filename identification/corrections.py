@@ -21,7 +21,7 @@ from collections.abc import Iterable
 # - reversals: the Coulomb columns rebuilt from the previous pass's FS / J, the reversals
 #   placed where the friction's kink has them (`identify._place_reversals`);
 # - stick_phases: with reversals, the motor's Coulomb state in its stick phases
-#   (`friction_state`);
+#   (`friction_state`); in the motor-only link reconstruction too (`link_fit`);
 # - wide_band: a joint-motor fit in the wide band too, the more precise kept (`band_choice`);
 # - motor_only_columns: the columns eq. (18) as printed drops, and gravity (`regressors`);
 # - link_reconstruction: the motor-only parameters from the link reconstructed out of q_m

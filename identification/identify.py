@@ -333,9 +333,12 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
             sigma_corr = _motor_only_sigma_corrected(ls, log)
         eqs18_20 = dict(physical)
         if reg.model == "motor-only" and "link_reconstruction" in wanted:
+            stick = "stick_phases" in wanted
             physical, sigma, sigma_corr = _link_reconstructed(log, settings, physical, f1_hz,
-                                                              notes, warnings, lp)
+                                                              notes, warnings, lp, stick)
             ran.append("link_reconstruction")
+            if stick and physical.get("FSm", 0.0) > 0:   # `link_fit._Rows.profiles`' rule
+                ran.append("stick_phases")
     else:
         for n in ls.names:
             if n not in ls.unidentifiable:
@@ -439,13 +442,14 @@ def _instruments(log: Log, reg: regressors.Regressor, f1_hz: float | None,
 
 def _link_reconstructed(log: Log, settings: FilterSettings, start: dict[str, float],
                         f1_hz: float | None, notes: list[str], warnings: list[str],
-                        lp: Lowpassed | None = None
+                        lp: Lowpassed | None = None, stick: bool = True
                         ) -> tuple[dict[str, float], dict[str, float], dict[str, float]]:
     """The physical parameters of the motor-only model from the link reconstructed out of q_m
     (identification/link_fit.py), started from the eqs. (18)-(20) inversion `start` (or, when
     it gives no positive K and JL, from the best link antiresonance in the band): those
     columns hold the torque's derivatives, which the closed loop's torque noise biases. The
-    X's, Table 3 and the direct validation stay those of eqs. (18)-(20). Raises
+    X's, Table 3 and the direct validation stay those of eqs. (18)-(20). `stick`: the motor's
+    Coulomb column with its stick phases (`link_fit.fit`). Raises
     InversionError when neither start gives a positive stiffness."""
     if not (start.get("K", 0) > 0 and start.get("JL", 0) > 0):
         try:
@@ -455,7 +459,7 @@ def _link_reconstructed(log: Log, settings: FilterSettings, start: dict[str, flo
         notes.append("the link reconstruction started from the best link antiresonance in "
                      "the band")
     try:
-        result = link_fit.fit(log, settings, start, f1_hz, lp or Lowpassed())
+        result = link_fit.fit(log, settings, start, f1_hz, lp or Lowpassed(), stick)
     except ValueError as err:
         raise InversionError(str(err)) from err
     notes.extend(result.notes)

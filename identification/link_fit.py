@@ -17,7 +17,9 @@ column is a filtered motor position (no torque), as in the joint-motor model. a 
 by variable projection on the same rows (trust region on log a, log b; their columns
 dm/da = -H^2 U, dm/db = K H qm' - s H^2 U, U the input of d times K), from the eqs. (18)-(20)
 estimate; the link friction phi, the gravity terms and the motor reversals (placed as the
-joint-motor model places them) come from the previous round. The reference's instruments
+joint-motor model places them, with the motor's stick phases: `regressors._friction_models`
+with the drive (tau - K d) / Jm, d = qm - q on the reconstructed link) come from the previous
+round. The reference's instruments
 (identification/instruments.py) then replace least squares for the last passes. A gravity the
 data cannot tell from zero is left out (it trades with K). JL = K / a, FV = b JL, FS = c JL.
 The link's friction switches inside the sample interval (`simulate_link`), as a real axis'
@@ -75,8 +77,8 @@ class _Rows:
     dm/da and dm/db (`derivatives`) are summed in the frequency domain and decimated as the two
     columns they are, not as the nine responses they sum (the same numbers to rounding)."""
 
-    def __init__(self, log: Log, s: FilterSettings, lp: Callable = lowpass):
-        self.log, self.s = log, s
+    def __init__(self, log: Log, s: FilterSettings, lp: Callable = lowpass, stick: bool = True):
+        self.log, self.s, self.stick = log, s, stick
         self.qm = regressors._filtered(log.q_m, s, 2, lp)
         self.tau = regressors._torque(log, s, lp=lp)
         self.g = log.gravity
@@ -92,14 +94,21 @@ class _Rows:
     def profiles(self, p: dict[str, float]) -> None:
         """The link friction phi and gravity (link_sim with p's a, b, c, gx, gy) and the motor
         reversals (placed with p's FSm / Jm), kept until the next call (kept as they are
-        when those are the same)."""
+        when those are the same). With `stick`, the motor's Coulomb column is its friction
+        state with the stick phases (`friction_state`), driven by (tau - K d) / Jm with the
+        reconstructed deflection d = qm - q, as the joint-motor model's is by the measured
+        one: without torque noise or feed-forward the closed loop can hold the motor at rest
+        for long stretches (a heavy link on a small motor), where the friction balances the
+        drive instead of giving +-FSm, and a sign column biases Jm and FVm."""
         a, b, K = p["a"], p["b"], p["K"]
         # the columns are H(g cos q), H(g sin q): Kgx = K MX / JL, so g MX / JL = g Kgx / K
         c = max(p["Kc"] / K, 0.0) if K > 0 else 0.0
         gx, gy = ((self.g * p["Kgx"] / K, self.g * p["Kgy"] / K) if K > 0 and self.gravity
                   else (0.0, 0.0))
         rate = p["FSm"] / p["Jm"] if p["Jm"] > 0 and p["FSm"] > 0 else 0.0
-        key = (a, b, c, gx, gy, rate, self.gravity)
+        stick = self.stick and rate > 0 and K > 0
+        friction = ({n: p[n] for n in ("Jm", "FVm", "FSm", "K")} if stick else (rate, 0.0))
+        key = (a, b, c, gx, gy, rate, self.gravity) + ((p["Jm"], p["FVm"], K) if stick else ())
         if key == self._key:
             return
         q, phi = simulate_link(self.log.q_m, self.s.ts, a, b, c, gx, gy)
@@ -110,7 +119,7 @@ class _Rows:
         self.spectra = (s, np.vstack([self.motor_spectra[1], U]),
                         np.r_[self.motor_spectra[2], u0])
         # the reversals placed as the joint-motor chain places them
-        motor, _ = regressors._friction_models(self.log, (rate, 0.0), self.log.q_m)
+        motor, _ = regressors._friction_models(self.log, friction, self.log.q_m - q)
         self.sign = regressors._sign(self.qm[1], self.s, *motor)
         self._rows(self.sign)
         self._key, self._H = key, None
@@ -371,10 +380,11 @@ def _final_checked(rows: _Rows, log: Log, p: dict[str, float], Z) -> tuple[tuple
 
 
 def fit(log: Log, s: FilterSettings, start: dict[str, float], f1_hz: float | None = None,
-        lp: Callable = lowpass) -> LinkFit:
+        lp: Callable = lowpass, stick: bool = True) -> LinkFit:
     """The motor-only estimate from a starting point `start` (physical names: K, JL, Jm, FV,
     FVm, FSm and optionally FS, MX, MY); `lp`: the Butterworth (`lowpass`, or a
-    `filtering.Lowpassed` shared with the eqs. (18)-(20) fit). Raises ValueError when the
+    `filtering.Lowpassed` shared with the eqs. (18)-(20) fit); `stick`: the motor's Coulomb
+    column with its stick phases (`_Rows.profiles`), else its reversals alone. Raises ValueError when the
     start has no positive K and JL."""
     K, JL = start.get("K", 0.0), start.get("JL", 0.0)
     if not (K > 0 and JL > 0):
@@ -386,9 +396,9 @@ def fit(log: Log, s: FilterSettings, start: dict[str, float], f1_hz: float | Non
          "FSm": start.get("FSm", 0.0), "K": K, "Kc": a * start.get("FS", 0.0),
          "Kgx": a * start.get("MX", 0.0), "Kgy": a * start.get("MY", 0.0), "a": a,
          "b": max(start.get("FV", 0.0) / JL, B_FLOOR)}
-    rows = _Rows(log, s, lp)
+    rows = _Rows(log, s, lp, stick)
     p = _converge(rows, log, p, ROUNDS)
-    Z, why = _instruments(log, s, f1_hz)
+    Z, why = _instruments(log, s, f1_hz, stick)
     (p, ls, y, J, idx), warning = _final_checked(rows, log, p, Z)
     notes = [f"motor-only: link reconstructed from q_m through eq. (5) (stick-slip link "
              f"friction), variable projection from the eqs. (18)-(20) estimate, {ROUNDS} "
@@ -444,13 +454,13 @@ def start_from_band(log: Log, s: FilterSettings) -> dict[str, float]:
             "FV": p["b"] * JL}
 
 
-def _instruments(log: Log, s: FilterSettings, f1_hz: float | None):
+def _instruments(log: Log, s: FilterSettings, f1_hz: float | None, stick: bool = True):
     """A function of the parameters giving the instruments (the same columns from the
     reference's predicted motor angle), or None; and a note."""
     inst = instrument_log(log, f1_hz)
     if inst is None:
         return None, "least squares (no instruments: no q_ref, or the log is too short)"
-    rows = _Rows(inst, s)
+    rows = _Rows(inst, s, stick=stick)
 
     def Z(p: dict[str, float]) -> np.ndarray:
         rows.profiles(p)
