@@ -97,6 +97,10 @@ FORKS = """
             time.sleep(30)
             Path("child_survived").write_text("yes")
             os._exit(0)
+        # the child runs before the call returns (the campaign then contains it), whatever the
+        # machine's load: otherwise it can be killed before it wrote its pid
+        while not (Path("child.pid").exists() and Path("child.pid").read_text().strip()):
+            time.sleep(0.01)
         return {"K": 2.0e4}
 
     def sleeps(log):
