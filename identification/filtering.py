@@ -370,6 +370,14 @@ def decimate_parallel(y: np.ndarray, W: np.ndarray, settings: FilterSettings
         Wd = decimate(W[sl], settings.Nd, axis=0)
     else:
         yd, Wd = y[sl].copy(), W[sl].copy()
+    return kept_rows(yd, Wd, first, settings)
+
+
+def kept_rows(yd: np.ndarray, Wd: np.ndarray, first: int, settings: FilterSettings
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`decimate_parallel`'s rows of y_d, W_d decimated from the raw sample `first` on: the
+    `edge` rows spoiled by the filters dropped at both ends and any row with NaN; returns
+    (y_d, W_d, index) with the raw sample index of each kept row."""
     index = first + np.arange(len(yd)) * settings.Nd
     e = settings.edge
     keep = slice(e, len(yd) - e)

@@ -36,7 +36,8 @@ from scipy import optimize, stats
 
 from jointbench.identification import regressors
 from jointbench.identification.estimate import LSResult, least_squares
-from jointbench.identification.filtering import FilterSettings, decimate, lowpass, zoh_align
+from jointbench.identification.filtering import (FilterSettings, decimate, kept_rows, lowpass,
+                                                 zoh_align)
 from jointbench.identification.instruments import instrument_log
 from jointbench.identification.link_sim import inverse, simulate_link, spectra
 from jointbench.identification.log import Log
@@ -140,13 +141,10 @@ class _Rows:
             self._motor = self._decimate_span(np.column_stack([self.tau, self.qm[2],
                                                                self.qm[1]]))
         D = np.column_stack([self._motor, self._decimate_span(sign[:, None])])
-        e = self.s.edge
-        index = self.first + np.arange(len(D)) * self.s.Nd
-        D, index = D[e:len(D) - e], index[e:len(D) - e]
-        ok = np.all(np.isfinite(D), axis=1)
-        reg = exclude_clipped(regressors.Regressor("motor-only", NAMES[:3], D[ok, 0],
-                                                   D[ok, 1:], np.zeros(ok.sum(), int),
-                                                   index[ok], self.s), self.log)
+        yd, Wd, index = kept_rows(D[:, 0], D[:, 1:], self.first, self.s)
+        reg = exclude_clipped(regressors.Regressor("motor-only", NAMES[:3], yd, Wd,
+                                                   np.zeros(len(yd), int), index, self.s),
+                              self.log)
         self.y, self.motor, self.index = reg.y, reg.W, reg.index
 
     def _decimate_span(self, X: np.ndarray) -> np.ndarray:

@@ -24,8 +24,8 @@ import numpy as np
 from jointbench.identification.filtering import (Drive, FilterSettings, as_acceleration_sees,
                                                  coulomb_integrals, decimate,
                                                  decimate_parallel, derivatives, held_missed,
-                                                 kink_corrected, lowpass, stencil_view,
-                                                 zoh_align)
+                                                 kept_rows, kink_corrected, lowpass,
+                                                 stencil_view, zoh_align)
 from jointbench.identification.log import Log, LogError
 from jointbench.identification.parameters import JOINT_MOTOR, MOTOR_ONLY, MOTOR_ONLY_CORRECTED, RIGID
 
@@ -205,12 +205,7 @@ class JointMotorChain:
         yd = dec[-1] if block == 0 else np.zeros(len(Wd))
         varying = self.MOTOR_SIGN if block == 0 else self.LINK_SIGN
         Wd[:, varying] = decimate(sign[first:last], s.Nd) if s.Nd > 1 else sign[first:last]
-        index = first + np.arange(len(yd)) * s.Nd
-        e = s.edge
-        keep = slice(e, len(yd) - e)
-        yd, Wd, index = yd[keep], Wd[keep], index[keep]
-        ok = np.all(np.isfinite(Wd), axis=1) & np.isfinite(yd)
-        return yd[ok], Wd[ok], index[ok]
+        return kept_rows(yd, Wd, first, s)
 
 
 def _as_seen(s: FilterSettings):
