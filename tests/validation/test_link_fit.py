@@ -123,6 +123,16 @@ def test_start_needs_a_stiffness():
         link_fit.fit(log, choose_filter(log).settings, {"K": -1.0, "JL": 1.0})
 
 
+def _rows_at_the_truth(log):
+    """The link fit's parameters at the log's truth and its rows (`_Rows`) in the chooser's
+    band."""
+    truth, s = log.truth(), choose_filter(log).settings
+    a, b = link_params(log)[:2]
+    p = {"Jm": truth["Jm"], "FVm": truth["FVm"], "FSm": truth["FSm"], "K": truth["K"],
+         "Kc": a * truth["FS"], "Kgx": a * truth["MX"], "Kgy": a * truth["MY"], "a": a, "b": b}
+    return p, link_fit._Rows(log, s)
+
+
 def test_jacobian_columns_are_the_model_derivatives():
     """The Jacobian's dm/da and dm/db (`_Rows.design`: the responses' sums decimated once)
     against central differences of the decimated model m = (LINEAR columns) X in a and b, the
@@ -130,11 +140,7 @@ def test_jacobian_columns_are_the_model_derivatives():
     difference's truncation near the link's resonance; a missing term is of order 1)."""
     log = simulate(replace(FAMILIES["balanced"], MY=0.3), 1, 10.0, "linear", True,
                    ideal_sensors=True)
-    truth, s = log.truth(), choose_filter(log).settings
-    a, b = link_params(log)[:2]
-    p = {"Jm": truth["Jm"], "FVm": truth["FVm"], "FSm": truth["FSm"], "K": truth["K"],
-         "Kc": a * truth["FS"], "Kgx": a * truth["MX"], "Kgy": a * truth["MY"], "a": a, "b": b}
-    rows = link_fit._Rows(log, s)
+    p, rows = _rows_at_the_truth(log)
     rows.profiles(p)
     _, J, _ = rows.design(p)
     for col, name in ((link_fit.LINEAR, "a"), (link_fit.LINEAR + 1, "b")):
@@ -152,11 +158,8 @@ def test_rows_are_those_of_decimate_parallel():
     `link_response`; measured: the motor columns equal, the responses within 3e-14 of their
     largest value)."""
     log = simulate(replace(FAMILIES["balanced"], MY=0.3), 1, 10.0, "linear", True)
-    truth, s = log.truth(), choose_filter(log).settings
-    a, b = link_params(log)[:2]
-    p = {"Jm": truth["Jm"], "FVm": truth["FVm"], "FSm": truth["FSm"], "K": truth["K"],
-         "Kc": a * truth["FS"], "Kgx": a * truth["MX"], "Kgy": a * truth["MY"], "a": a, "b": b}
-    rows = link_fit._Rows(log, s)
+    p, rows = _rows_at_the_truth(log)
+    a, b, s = p["a"], p["b"], rows.s
     rows.profiles(p)
     y, L, idx = rows.linear(p)
     qm2, qm1 = np.nan_to_num(rows.qm[2]), np.nan_to_num(rows.qm[1])   # 0 at the ends
