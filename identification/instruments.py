@@ -15,6 +15,7 @@ import math
 from dataclasses import replace
 
 import numpy as np
+from scipy import fft as scipy_fft
 from scipy import signal
 
 from jointbench.identification.log import Log
@@ -46,7 +47,7 @@ def predicted(x: np.ndarray, ref: np.ndarray, rate_hz: float, nperseg: int,
         H = np.where(s_rr > 0, s_rx / s_rr, 0.0)
     F = np.fft.rfftfreq(len(x), 1.0 / rate_hz)
     Hi = np.interp(F, f, H.real) + 1j * np.interp(F, f, H.imag)
-    return np.fft.irfft(Hi * R, len(x)) + np.mean(x)
+    return scipy_fft.irfft(Hi * R, len(x)) + np.mean(x)
 
 
 def reference_spectra(ref: np.ndarray, rate_hz: float, nperseg: int
@@ -55,7 +56,7 @@ def reference_spectra(ref: np.ndarray, rate_hz: float, nperseg: int
     the same for every signal predicted from it."""
     ref = np.asarray(ref, dtype=float) - np.mean(ref)
     _, s_rr = signal.welch(ref, fs=rate_hz, nperseg=nperseg)
-    return ref, s_rr, np.fft.rfft(ref)
+    return ref, s_rr, scipy_fft.rfft(ref)
 
 
 def instrument_log(log: Log, f1_hz: float | None = None) -> Log | None:
