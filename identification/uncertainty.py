@@ -87,6 +87,24 @@ def autocovariances(v: np.ndarray, max_lag: int) -> np.ndarray:
     return G[: max_lag + 1]
 
 
+def kernel_sum(v: np.ndarray, k: np.ndarray) -> np.ndarray:
+    """S = k_0 Gamma_0 + sum_(l >= 1) k_l (Gamma_l + Gamma_l^T) (`autocovariances`, lags
+    0 ... len(k) - 1) in the frequency domain: with F_a the FFT of score a zero-padded to
+    N >= 2 n samples (no lag wraps around) and K the FFT of the lag weights k_|l| laid out
+    circularly (real: they are even), S_ab = (1 / N) sum_f K_f Re(F_a(f) conj(F_b(f))), one
+    FFT per score and one for the weights in place of one inverse FFT per pair of scores."""
+    v = np.asarray(v, dtype=float)
+    n, p = v.shape
+    nfft = 1 << int(np.ceil(np.log2(2 * n)))
+    w = np.zeros(nfft)
+    w[:len(k)] = k
+    w[nfft - len(k) + 1:] = k[:0:-1]
+    K = np.fft.rfft(w).real
+    K[1:(nfft + 1) // 2] *= 2.0   # the negative frequencies, conjugate to the positive ones
+    F = np.fft.rfft(v, n=nfft, axis=0)
+    return ((F.real * K[:, None]).T @ F.real + (F.imag * K[:, None]).T @ F.imag) / nfft
+
+
 def andrews_bandwidth(v: np.ndarray, kernel: str = "qs") -> float:
     """Andrews' (1991) plug-in bandwidth from AR(1) fits of each score component a,
     rho_a and innovation variance s_a^2 (unit weights; section 6 of the paper):
@@ -141,9 +159,7 @@ def long_run_covariance(v: np.ndarray, kernel: str = "qs", bandwidth: float | No
             v = x1 - x0 @ A.T
     b = andrews_bandwidth(v, kernel) if bandwidth is None else float(bandwidth)
     max_lag = len(v) - 1 if kernel == "qs" else int(np.floor(b))
-    G = autocovariances(v, max_lag)
-    k = kernel_weights(np.arange(len(G)), b, kernel)
-    S = k[0] * G[0] + np.einsum("l,lab->ab", k[1:], G[1:] + np.transpose(G[1:], (0, 2, 1)))
+    S = kernel_sum(v, kernel_weights(np.arange(min(max_lag, len(v) - 1) + 1), b, kernel))
     if A is not None:
         R = np.linalg.inv(np.eye(p) - A)
         S = R @ S @ R.T * (n / (n - 1))  # one score lost to the VAR(1)
@@ -162,9 +178,8 @@ def score_series(W: np.ndarray, rho: np.ndarray, time: np.ndarray | None = None
     if time.shape != (len(W),):
         raise ValueError(f"time has shape {time.shape}, expected ({len(W)},): one instant per row")
     uniq, inv = np.unique(time, return_inverse=True)
-    out = np.zeros((len(uniq), W.shape[1]))
-    np.add.at(out, inv, rows)
-    return out
+    # each instant's rows summed in row order, a column at a time (np.add.at's sums)
+    return np.column_stack([np.bincount(inv, weights=c, minlength=len(uniq)) for c in rows.T])
 
 
 def hac_covariance(W: np.ndarray, rho: np.ndarray, time: np.ndarray | None = None,

@@ -13,8 +13,8 @@ from jointbench.bench.cli import main
 from jointbench.identification.estimate import least_squares
 from jointbench.identification.identify import identify
 from jointbench.identification.log import write_log
-from jointbench.identification.uncertainty import (autocovariances, hac_covariance, kernel_weights,
-                                        score_series)
+from jointbench.identification.uncertainty import (autocovariances, hac_covariance, kernel_sum,
+                                                    kernel_weights, score_series)
 
 N = 2000          # rows of the synthetic regression
 PHI = 0.8         # AR(1) coefficient of its residuals
@@ -120,6 +120,12 @@ def test_autocovariances_and_kernels_are_the_textbook_ones():
         np.array([0.5]), 1.0, "qs")[0], qs1])
     with pytest.raises(ValueError, match="kernel"):
         kernel_weights(x, 1.0, "parzen")
+    # the kernel's sum in the frequency domain is the lags' sum, k_0 G_0 + sum k_l (G_l + G_l^T)
+    for k in (kernel_weights(np.arange(300), 7.3, "qs"), kernel_weights(np.arange(8), 7.3,
+                                                                          "bartlett")):
+        lags = [v[lag:].T @ v[: len(v) - lag] for lag in range(len(k))]
+        direct = k[0] * lags[0] + sum(w * (g + g.T) for w, g in zip(k[1:], lags[1:]))
+        np.testing.assert_allclose(kernel_sum(v, k), direct, rtol=1e-10, atol=1e-10)
     with pytest.raises(ValueError, match="one instant per row"):
         score_series(np.ones((4, 1)), np.ones(4), time=np.arange(3))
 
