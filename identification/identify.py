@@ -171,8 +171,9 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
         why = "eq. (22): 3 points (the 5-point stencil switched off)"
     settings = paper_chain(settings, wanted)
     f1 = mode.f1_hz if mode is not None and mode.found else None
-    # what both bands share, made once: the instruments' log, the Butterworth's outputs
-    made: dict = {"lowpass": Lowpassed()}
+    # what both bands share, made once: the instruments' log, the Butterworth's outputs,
+    # the chains' columns at each filter setting (the decimation apart)
+    made: dict = {"lowpass": Lowpassed(), "columns": regressors.ChainColumns()}
     result = _identify(log, model, settings, notes, f1, wanted, made)
     warnings += result.warnings
     if chooser and result.model == "joint-motor" and f1 is not None and "wide_band" in wanted:
@@ -251,9 +252,11 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
     """`identify` with the settings chosen and the corrections `wanted`; the joint-motor
     model is solved with the reference's instruments when the log has q_ref
     (`_instruments`). `made` keeps what does not depend on the band (the instruments' log,
-    the Butterworth's outputs: `filtering.Lowpassed`) for another band's fit of the log."""
+    the Butterworth's outputs: `filtering.Lowpassed`, the chains' undecimated columns per
+    filter setting: `regressors.ChainColumns`) for another band's fit of the log."""
     made = {} if made is None else made
     lp = made.setdefault("lowpass", Lowpassed())
+    columns = made.setdefault("columns", regressors.ChainColumns())
     if model == "auto":
         flexible = "joint-motor" if log.q is not None else "motor-only"
         try:
@@ -277,7 +280,7 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
     check_signals(log, model, settings, lp)
     ran = list(chain_corrections(settings))
     if model == "joint-motor":
-        chain = regressors.JointMotorChain(log, settings, lp)
+        chain = regressors.JointMotorChain(log, settings, lp, columns)
         reg = exclude_clipped(chain.regressor(), log)
         if "instruments" in wanted:
             Z = _instruments(log, reg, f1_hz, notes, made)
@@ -425,8 +428,8 @@ def _instruments(log: Log, reg: regressors.Regressor, f1_hz: float | None,
         notes.append(f"least squares: {why}; closed-loop torque noise may bias Jm up and K "
                      "down")
         return None
-    Z = regressors.JointMotorChain(inst, reg.settings,
-                                   made.get("lowpass", lowpass)).regressor()
+    Z = regressors.JointMotorChain(inst, reg.settings, made.get("lowpass", lowpass),
+                                   made.get("columns")).regressor()
     # the same rows (block, sample) as the regressor's, which may have lost clipped ones
     span = int(max(Z.index.max(initial=0), reg.index.max(initial=0))) + 1
     keys, wanted = Z.block * span + Z.index, reg.block * span + reg.index

@@ -122,7 +122,8 @@ class JointMotorChain:
     signal, differentiated after it, would start the filter differently in each column and
     break it there); the spring column, in both equations, is decimated once. `lp`: the
     Butterworth (`lowpass`, or a `filtering.Lowpassed` shared with other chains of the
-    log)."""
+    log). `shared`: a `ChainColumns` that keeps the undecimated columns per log and filter
+    setting, for another chain of the log at another decimation (the wide band's)."""
 
     MOTOR_SIGN, LINK_SIGN = 2, 8   # the sign columns of the motor and link blocks
     # the columns that do not depend on the friction, by block: (column, name in `_columns`);
@@ -130,28 +131,16 @@ class JointMotorChain:
     FIXED = (((0, "qm''"), (1, "qm'"), (3, "spring")),
              ((3, "-spring"), (4, "q''"), (5, "g cos q"), (6, "g sin q"), (7, "q'")))
 
-    def __init__(self, log: Log, s: FilterSettings, lp: Callable = lowpass):
+    def __init__(self, log: Log, s: FilterSettings, lp: Callable = lowpass,
+                 shared: ChainColumns | None = None):
         if log.q is None:
             raise LogError("the joint-motor model needs the link position column 'q'",
                            log.path, column="q")
         self.log, self.s = log, s
-        self.qm = qm = _filtered(log.q_m, s, 2, lp)
-        self.q = q = _filtered(log.q, s, 2, lp)
-        self.tau = _torque(log, s, lp=lp)
-        self.defl = defl = qm[0] - q[0]
-        g = log.gravity
-        # the spring is one column in both equations: filtered once; all five together
-        spring, vm, gc, gs, v = _as_seen(s)(
-            [defl, qm[1], g * np.cos(q[0]), g * np.sin(q[0]), q[1]], (0, 1, 0, 0, 1))
-        self._columns = {"qm''": qm[2], "qm'": vm, "spring": spring, "q''": q[2],
-                         "g cos q": gc, "g sin q": gs, "q'": v, "tau": self.tau}
-        fine = {k: np.isfinite(c) for k, c in self._columns.items()}
-        # where the block's columns that do not depend on the friction (and y) are defined
-        self._valid = (fine["qm''"] & fine["qm'"] & fine["spring"] & fine["tau"],
-                       fine["spring"] & fine["q''"] & fine["g cos q"] & fine["g sin q"]
-                       & fine["q'"])
+        made = (shared or ChainColumns()).columns(log, s, lp)
+        self.qm, self.q, self.tau, self.defl = made.qm, made.q, made.tau, made.defl
+        self._columns, self._valid, self._made = made.columns, made.valid, made
         self._decimated: dict[tuple[str, int, int], np.ndarray] = {}
-        self._held_missed: np.ndarray | None = None   # `filtering.held_missed` of tau
 
     def regressor(self, friction: tuple[float, float] | Mapping[str, float] = (0.0, 0.0)
                   ) -> Regressor:
@@ -159,10 +148,11 @@ class JointMotorChain:
         s = self.s
         motor, link = _friction_models(self.log, friction, self.defl)
         if len(motor) == 3:   # the held torque tau / Jm: its missed share made once, scaled
-            if self._held_missed is None:
-                self._held_missed = held_missed(self.log.tau_m, s)
+            if self._made.held_missed is None:
+                self._made.held_missed = held_missed(self.log.tau_m, s)
             rate, _, drive = motor
-            m = _sign(self.qm[1], s, rate, drive=drive, missed=self._held_missed / friction["Jm"])
+            m = _sign(self.qm[1], s, rate, drive=drive,
+                      missed=self._made.held_missed / friction["Jm"])
         else:
             m = _sign(self.qm[1], s, *motor)
         y1, W1, i1 = self._decimate(0, m)
@@ -206,6 +196,57 @@ class JointMotorChain:
         varying = self.MOTOR_SIGN if block == 0 else self.LINK_SIGN
         Wd[:, varying] = decimate(sign[first:last], s.Nd) if s.Nd > 1 else sign[first:last]
         return kept_rows(yd, Wd, first, s)
+
+
+class _Columns:
+    """`JointMotorChain`'s undecimated columns of one log at one filter setting (the
+    Butterworth, the stencil and the torque's alignment: `ChainColumns.setting`), read-only
+    once made, and `filtering.held_missed` of the torque, made when first needed."""
+
+    def __init__(self, log: Log, s: FilterSettings, lp: Callable):
+        self.qm = qm = _filtered(log.q_m, s, 2, lp)
+        self.q = q = _filtered(log.q, s, 2, lp)
+        self.tau = _torque(log, s, lp=lp)
+        self.defl = defl = qm[0] - q[0]
+        g = log.gravity
+        # the spring is one column in both equations: filtered once; all five together
+        spring, vm, gc, gs, v = _as_seen(s)(
+            [defl, qm[1], g * np.cos(q[0]), g * np.sin(q[0]), q[1]], (0, 1, 0, 0, 1))
+        self.columns = {"qm''": qm[2], "qm'": vm, "spring": spring, "q''": q[2],
+                        "g cos q": gc, "g sin q": gs, "q'": v, "tau": self.tau}
+        fine = {k: np.isfinite(c) for k, c in self.columns.items()}
+        # where the block's columns that do not depend on the friction (and y) are defined
+        self.valid = (fine["qm''"] & fine["qm'"] & fine["spring"] & fine["tau"],
+                      fine["spring"] & fine["q''"] & fine["g cos q"] & fine["g sin q"]
+                      & fine["q'"])
+        for x in [*qm, *q, defl, *self.columns.values(), *self.valid]:
+            x.setflags(write=False)   # shared by the chains of this setting
+        self.held_missed: np.ndarray | None = None
+
+
+class ChainColumns:
+    """`JointMotorChain`'s undecimated columns, made once per log and filter setting while
+    this object lives: the chooser's band and the wide one differ in the decimation alone
+    when they share the Butterworth and the stencil, so their chains (of the log and of the
+    instruments' log) filter, differentiate and weigh the same columns (`_as_seen`) once."""
+
+    def __init__(self) -> None:
+        self._kept: dict[tuple, tuple[Log, _Columns]] = {}
+
+    @staticmethod
+    def setting(s: FilterSettings) -> tuple:
+        """What the undecimated columns depend on: the Butterworth, the sample period, the
+        stencil and the torque's zero-order-hold alignment (not Nd, edge nor skip)."""
+        return (float(s.wn), float(s.ts), int(s.m), int(s.stencil), bool(s.zoh))
+
+    def columns(self, log: Log, s: FilterSettings, lp: Callable) -> _Columns:
+        key = (id(log),) + self.setting(s)
+        hit = self._kept.get(key)
+        if hit is not None and hit[0] is log:   # the log is held: its id is not reused
+            return hit[1]
+        made = _Columns(log, s, lp)
+        self._kept[key] = (log, made)
+        return made
 
 
 def _as_seen(s: FilterSettings):

@@ -28,7 +28,8 @@ from jointbench.identification.estimate import least_squares
 from jointbench.identification.log import Log, LogError
 from jointbench.identification.parameters import JOINT_MOTOR, MOTOR_ONLY, RIGID
 from jointbench.identification.physical import invert_motor_only, table3
-from jointbench.identification.regressors import joint_motor, motor_only, rigid
+from jointbench.identification.regressors import (ChainColumns, JointMotorChain, joint_motor,
+                                                  motor_only, rigid)
 
 RATE = 1000.0
 T = 1.0 / RATE
@@ -217,3 +218,26 @@ def test_a_stuck_motor_s_coulomb_column_balances_the_drive(stencil):
     assert np.max(np.abs(reg.y[motor] - p["FSm"] * col)) < 5e-3 * np.max(np.abs(reg.y[motor]))
     first = joint_motor(log, s)   # the first pass (sign(v)) keeps the same rows
     assert np.array_equal(first.index, reg.index)
+
+
+@pytest.mark.parametrize("stencil", [3, 5])
+def test_chains_sharing_their_columns_give_each_chain_s_own_numbers(axis_log, settings,
+                                                                     stencil):
+    """Two bands of one log that differ in the decimation alone (the chooser's and the wide
+    one) share the undecimated columns (`ChainColumns`): each chain's regressors, the first
+    pass's and a later pass's (the held torque's share made once for both), are those of
+    the chain built on its own, to the last bit."""
+    p = {"Jm": AXIS["Jm"], "FVm": 0.05, "FSm": 0.3, "K": AXIS["K"], "JL": AXIS["JL"],
+         "FV": 0.02, "FS": 0.1}
+    bands = [dataclasses.replace(settings, stencil=stencil, Nd=nd) for nd in (settings.Nd, 9)]
+    shared = ChainColumns()
+    chains = [JointMotorChain(axis_log, s, shared=shared) for s in bands]
+    assert chains[0].qm[1] is chains[1].qm[1]   # made once for both decimations
+    for s, chain in zip(bands, chains):
+        alone = JointMotorChain(axis_log, s)
+        for friction in ((0.0, 0.0), p):
+            a, b = chain.regressor(friction), alone.regressor(friction)
+            for field in ("y", "W", "block", "index"):
+                assert np.array_equal(getattr(a, field), getattr(b, field)), field
+    other = dataclasses.replace(bands[1], stencil=8 - stencil)   # another setting: its own
+    assert JointMotorChain(axis_log, other, shared=shared).qm[1] is not chains[0].qm[1]
