@@ -36,8 +36,8 @@ from scipy import optimize, stats
 
 from jointbench.identification import regressors
 from jointbench.identification.estimate import LSResult, least_squares
-from jointbench.identification.filtering import (FilterSettings, decimate, kept_rows, lowpass,
-                                                 zoh_align)
+from jointbench.identification.filtering import (FilterSettings, decimate, held_missed,
+                                                 kept_rows, lowpass, zoh_align)
 from jointbench.identification.instruments import instrument_log
 from jointbench.identification.link_sim import inverse, simulate_link, spectra
 from jointbench.identification.log import Log
@@ -91,6 +91,8 @@ class _Rows:
         self.finite = np.isfinite(self.tau) & np.isfinite(self.qm[1]) & ~self.bad
         self._span: tuple[int, int] | None = None
         self._H: tuple | None = None
+        self._s2 = self.motor_spectra[0] * self.motor_spectra[0]    # s^2 on the bins
+        self._missed: np.ndarray | None = None      # `filtering.held_missed` of the torque
 
     def profiles(self, p: dict[str, float]) -> None:
         """The link friction phi and gravity (link_sim with p's a, b, c, gx, gy) and the motor
@@ -119,9 +121,20 @@ class _Rows:
         s, U, u0 = spectra([self.phi, self.cos, self.sin], self.s.ts)
         self.spectra = (s, np.vstack([self.motor_spectra[1], U]),
                         np.r_[self.motor_spectra[2], u0])
-        # the reversals placed as the joint-motor chain places them
+        # the link inputs (`_link`): the first row, qm'' + b qm', is made for each b
+        self._ins = np.vstack([U[:1], U])
+        self._i0 = np.r_[0.0, u0]
+        self._live = np.r_[False, np.any(U != 0, axis=1) | (u0 != 0)]
+        # the reversals placed as the joint-motor chain places them; the held torque's share
+        # the chain misses is linear in the torque: made once, scaled by 1 / Jm
         motor, _ = regressors._friction_models(self.log, friction, self.log.q_m - q)
-        self.sign = regressors._sign(self.qm[1], self.s, *motor)
+        if len(motor) == 3:
+            if self._missed is None:
+                self._missed = held_missed(self.log.tau_m, self.s)
+            self.sign = regressors._sign(self.qm[1], self.s, motor[0], drive=motor[2],
+                                         missed=self._missed / p["Jm"])
+        else:
+            self.sign = regressors._sign(self.qm[1], self.s, *motor)
         self._rows(self.sign)
         self._key, self._H = key, None
 
@@ -165,10 +178,11 @@ class _Rows:
         the last two are), for the last (a, b) asked for."""
         if self._H is None or self._H[0] != (a, b):
             s, U, u0 = self.spectra     # of qm'', qm', phi, g cos q, g sin q
-            ins = np.vstack([U[0] + b * U[1], U[2:]])
-            i0 = np.r_[u0[0] + b * u0[1], u0[2:]]
-            live = np.any(ins != 0, axis=1) | (i0 != 0)
-            self._H = ((a, b), s, 1.0 / (s * s + b * s + a), ins, i0, live)
+            ins, i0, live = self._ins, self._i0, self._live
+            np.add(U[0], b * U[1], out=ins[0])
+            i0[0] = u0[0] + b * u0[1]
+            live[0] = np.any(ins[0] != 0) or i0[0] != 0
+            self._H = ((a, b), s, 1.0 / (self._s2 + b * s + a), ins, i0, live)
         return self._H[1:]
 
     def _responses(self, spec: np.ndarray, const: np.ndarray) -> np.ndarray:

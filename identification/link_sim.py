@@ -13,7 +13,9 @@ Three pieces:
 - `simulate_link`: one pass over the samples (the motor angle linear between samples, the
   linear part propagated exactly, the reversal or sticking instant placed inside the step by
   linear interpolation of the velocity), returning q and the friction phi averaged over each
-  step;
+  step; the pass (`_steps`) is plain scalar code, compiled by numba when it is installed (the
+  optional extra "fast": the link fit runs it at every parameter point it tries) and
+  interpreted otherwise, the same floating-point operations either way;
 - `link_response`: the linear part, d = H u with H = 1 / (s^2 + b s + a), applied in the
   frequency domain (exact for band-limited samples; the filtered derivatives the regressors
   use are), with its derivatives with respect to a and b for Gauss-Newton.
@@ -22,6 +24,8 @@ Three pieces:
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from functools import lru_cache
 
 import numpy as np
 from scipy import fft
@@ -50,7 +54,8 @@ def rest_angle(qm0: float, a: float, gx: float, gy: float) -> float:
 
 
 def simulate_link(qm: np.ndarray, ts: float, a: float, b: float, c: float = 0.0,
-                  gx: float = 0.0, gy: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+                  gx: float = 0.0, gy: float = 0.0, compiled: bool = True
+                  ) -> tuple[np.ndarray, np.ndarray]:
     """The link angle q [rad] at the samples of the motor angle `qm` [rad] (sample period `ts`
     [s]), from rest at the start, and the link friction phi = friction / FS averaged over each
     step (phi[k] over [t_k, t_k+1); the last is 0). Raises ValueError unless a > 0, b, c >= 0.
@@ -58,48 +63,69 @@ def simulate_link(qm: np.ndarray, ts: float, a: float, b: float, c: float = 0.0,
     Each step is x' = P x + U0 u_k + S0 u'_k + F0 f (`_transition`), the linear part
     P x + U0 u_k + S0 u'_k summed once and the friction and gravity f added to it (once more
     with the gravity at the step's middle angle, and once more when the velocity reaches zero
-    inside the step); the gravity is evaluated only where q moved."""
+    inside the step); the gravity is evaluated only where q moved. `compiled`: the steps
+    (`_steps`) compiled by numba when it is installed (the optional extra "fast"), else
+    interpreted; both do the same floating-point operations."""
     if not (a > 0 and b >= 0 and c >= 0):
         raise ValueError(f"the link needs a > 0, b >= 0, c >= 0 (got {a}, {b}, {c})")
-    (p00, p01, p10, p11), (u0q, u0v), (s0q, s0v), (f0q, f0v) = _transition(a, b, ts)
-    qm = np.asarray(qm, dtype=float)
-    cos, sin = math.cos, math.sin
-    q, v = rest_angle(float(qm[0]), a, gx, gy), 0.0
+    P, U0, S0, F0 = _transition(a, b, ts)
+    qm = np.ascontiguousarray(qm, dtype=float)
+    n = len(qm)
+    q0 = rest_angle(float(qm[0]), a, gx, gy)
+    slope = (qm[1:] - qm[:-1]) / ts
+    steps = _compiled_steps() if compiled else None
+    if steps is not None:
+        out_q, phi = np.empty(n), np.empty(n)
+        steps(qm, slope, out_q, phi, q0, float(a), float(c), float(gx), float(gy),
+              *P, *U0, *S0, *F0)
+        return out_q, phi
+    out_q, phi = [0.0] * n, [0.0] * n
+    _steps(qm.tolist(), slope.tolist(), out_q, phi, q0, a, c, gx, gy, *P, *U0, *S0, *F0)
+    return np.array(out_q), np.array(phi)
+
+
+def _steps(u, slope, out_q, phi, q: float, a: float, c: float, gx: float, gy: float,
+           p00: float, p01: float, p10: float, p11: float, u0q: float, u0v: float,
+           s0q: float, s0v: float, f0q: float, f0v: float) -> None:
+    """`simulate_link`'s pass over the samples u (the motor angle) with slopes `slope`,
+    writing q and phi into `out_q` and `phi` (lists, or arrays when compiled), from rest at
+    q. Plain scalar code, so that numba compiles it as it is."""
+    n = len(u)
+    v = 0.0
     stuck = c > 0
     gravity = gx != 0 or gy != 0
-    out_q, phi = [q], []
-    add_q, add_phi = out_q.append, phi.append
-    grav, grav_at = 0.0, None       # the gravity gx cos q + gy sin q, and the q it is of
-    u = qm.tolist()
-    for uk, uk1, slope in zip(u, u[1:], ((qm[1:] - qm[:-1]) / ts).tolist()):
+    grav, grav_at = 0.0, math.nan    # the gravity gx cos q + gy sin q, and the q it is of
+    out_q[0] = q
+    for k in range(n - 1):
+        uk, uk1, sl = u[k], u[k + 1], slope[k]
         if gravity and q != grav_at:
-            grav, grav_at = gx * cos(q) + gy * sin(q), q
+            grav, grav_at = gx * math.cos(q) + gy * math.sin(q), q
         if stuck:
             force = a * (uk1 - q) - grav
             if abs(force) <= c:                # the spring cannot move it yet
                 # the friction holds the spring's force: its mean over the step, not its end
                 # value (that would lead the motor by half a sample while the link sticks)
-                add_phi((a * (0.5 * (uk + uk1) - q) - grav) / c)
-                add_q(q)
+                phi[k] = (a * (0.5 * (uk + uk1) - q) - grav) / c
+                out_q[k + 1] = q
                 continue
             stuck = False
             sg = 1.0 if force > 0 else -1.0    # breaks away (at the sample)
         else:
             sg = 1.0 if v > 0 else -1.0
-        lin_q = p00 * q + p01 * v + u0q * uk + s0q * slope
-        lin_v = p10 * q + p11 * v + u0v * uk + s0v * slope
+        lin_q = p00 * q + p01 * v + u0q * uk + s0q * sl
+        lin_v = p10 * q + p11 * v + u0v * uk + s0v * sl
         f = -c * sg - grav
         qn = lin_q + f0q * f
         if gravity:
             # gravity at the step's middle angle: held at its start it would lag half a step,
             # a negative damping of g MY T / 2 (12 % of FV on the arm's axis 6)
             qh = 0.5 * (q + qn)
-            grav, grav_at = gx * cos(qh) + gy * sin(qh), None
+            grav, grav_at = gx * math.cos(qh) + gy * math.sin(qh), math.nan
             f = -c * sg - grav
             qn = lin_q + f0q * f
         vn = lin_v + f0v * f
         if vn * sg > 0 or c == 0:
-            add_phi(sg)
+            phi[k] = sg
             q, v = qn, vn
         else:
             # the velocity reaches zero inside the step, at the share th of it: the friction
@@ -118,11 +144,24 @@ def simulate_link(qm: np.ndarray, ts: float, a: float, b: float, c: float = 0.0,
             stuck = hold and abs(end) <= c
             if stuck:     # held to the step's end: the holding force's mean, as above
                 mean = sg * th + held / c * (1.0 - th)
-            add_phi(mean)
-            q, v = (qx if stuck else qn), (0.0 if stuck else vn)
-        add_q(q)
-    add_phi(0.0)
-    return np.array(out_q), np.array(phi)
+            phi[k] = mean
+            if stuck:
+                q, v = qx, 0.0
+            else:
+                q, v = qn, vn
+        out_q[k + 1] = q
+    phi[n - 1] = 0.0
+
+
+@lru_cache(maxsize=1)
+def _compiled_steps() -> Callable | None:
+    """`_steps` compiled by numba (cached on disk: later processes load it), or None when
+    numba is not installed."""
+    try:
+        import numba
+    except ImportError:
+        return None
+    return numba.njit(cache=True, nogil=True)(_steps)
 
 
 def spectra(signals: list[np.ndarray], ts: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -3,7 +3,8 @@ link of eq. (5) driven by a motor angle linear between samples, the linear part 
 exactly, the friction and the gravity (at the step's middle angle) added as a constant
 acceleration over the step, the reversal or sticking instant placed inside the step by linear
 interpolation of the velocity. Both do the same floating-point operations, so they agree to
-rounding (1e-12 of the deflection's rms; measured: equal)."""
+rounding (1e-12 of the deflection's rms; measured: equal), the stepper interpreted and, when
+numba is installed (the extra "fast"), compiled."""
 
 from __future__ import annotations
 
@@ -84,11 +85,14 @@ def motor_angle(seed: int, duration: float = 8.0) -> np.ndarray:
 @pytest.mark.parametrize("c, gx, gy", [(0.0, 0.0, 0.0), (2.0, 0.0, 0.0), (0.0, 0.1, -9.0),
                                        (2.0, 0.1, -9.0), (15.0, 0.0, 4.0)],
                          ids=["linear", "friction", "gravity", "both", "heavy-friction"])
-def test_stepper_equals_the_plain_steps(seed, c, gx, gy):
+@pytest.mark.parametrize("compiled", [False, True], ids=["interpreted", "compiled"])
+def test_stepper_equals_the_plain_steps(seed, c, gx, gy, compiled):
+    if compiled:
+        pytest.importorskip("numba")
     qm = motor_angle(seed)
     a, b = (2 * np.pi * 3.3) ** 2, 1.8
     q0, phi0 = plain_stepper(qm, TS, a, b, c, gx, gy)
-    q1, phi1 = simulate_link(qm, TS, a, b, c, gx, gy)
+    q1, phi1 = simulate_link(qm, TS, a, b, c, gx, gy, compiled=compiled)
     scale = np.std(qm - q0)
     np.testing.assert_allclose(q1, q0, rtol=0, atol=1e-12 * scale)
     np.testing.assert_allclose(phi1, phi0, rtol=0, atol=1e-12)
