@@ -21,6 +21,7 @@ from jointbench.identification.first_mode import (FirstMode, given_first_mode,
                                                   measure_first_mode)
 from jointbench.identification.filtering import FilterSettings, Lowpassed, lowpass
 from jointbench.identification.instruments import instrument_log
+from jointbench.identification.iv_check import iv_against_ls
 from jointbench.identification.log import Log, LogError
 from jointbench.identification.physical import InversionError, invert_motor_only, table3
 from jointbench.identification.saturation import exclude_clipped  # clipped torque rows out
@@ -174,7 +175,6 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
     # what both bands share, made once: the instruments' log, the Butterworth's outputs
     made: dict = {"lowpass": Lowpassed()}
     result = _identify(log, model, settings, notes, f1, wanted, made)
-    warnings += result.warnings
     if chooser and result.model == "joint-motor" and f1 is not None and "wide_band" in wanted:
         wide = wide_settings(log, settings)
         other = None
@@ -189,6 +189,7 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
         warnings += [band.warning] if band.warning else []
         result = replace(result, band=band, corrections=result.corrections + (
             ("wide_band",) if band.used == "wide" else ()))
+    warnings += result.warnings   # the kept fit's (the band's rule may have swapped it)
     if mode is not None and mode.found and mode.method != "given" and result.model != "rigid":
         mode, text = model_first_mode(result, mode)
         if text:
@@ -276,6 +277,7 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
     _check_length(log, settings, nd)
     check_signals(log, model, settings, lp)
     ran = list(chain_corrections(settings))
+    warnings: list[str] = []
     if model == "joint-motor":
         chain = regressors.JointMotorChain(log, settings, lp)
         reg = exclude_clipped(chain.regressor(), log)
@@ -292,6 +294,22 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
             reg, ls, placed = _place_reversals(log, chain, reg, ls, Z, notes,
                                                "stick_phases" in wanted)
             ran += placed
+        if Z is not None:
+            # the instruments held against least squares on the same rows (iv_check): a
+            # rejected pass falls back to the chain without them, with a warning
+            check = iv_against_ls(ls, block_weighted(reg.W, reg.y, reg.names, reg.block,
+                                                     time=reg.index))
+            if check is not None and check.fired:
+                warnings.append(check.warning())
+                notes.append("least squares: the instruments failed the check against it")
+                ran = [n for n in ran if n not in ("instruments", "reversals", "stick_phases")]
+                reg = exclude_clipped(chain.regressor(), log)
+                ls = block_weighted(reg.W, reg.y, reg.names, reg.block, time=reg.index,
+                                    corrected="reversals" not in wanted)
+                if "reversals" in wanted:
+                    reg, ls, placed = _place_reversals(log, chain, reg, ls, None, notes,
+                                                       "stick_phases" in wanted)
+                    ran += placed
     elif model == "motor-only" and "motor_only_columns" not in wanted:
         reg = exclude_clipped(regressors.motor_only(log, settings, corrected=False, lp=lp), log)
         ls = least_squares(reg.W, reg.y, reg.names)
@@ -312,7 +330,6 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
     sigma: dict[str, float] = {}
     t3: dict[str, float] = {}
     eqs18_20: dict[str, float] = {}
-    warnings: list[str] = []
     if model.startswith("motor-only"):
         X = {n: ls.value(n) for n in ls.names if n not in ls.unidentifiable}
         try:

@@ -1,0 +1,103 @@
+"""The instrumental-variable estimate held against least squares on the same rows.
+
+The joint-motor model is solved with instruments Z built from q_ref
+(identification/instruments.py): X_IV = (Z^T W)^-1 Z^T y. They remove the closed loop's
+torque-noise bias only when Z is uncorrelated with the equation error. A model error that
+follows the motion deterministically breaks that: where the motor sticks (no feed-forward, no
+torque noise to dither it) the Coulomb column's error is a function of the motion, and the
+reference's linear prediction of that motion is correlated with it as much as the motion is.
+Least squares projects the error orthogonally onto W; the instruments project it obliquely,
+through (Z^T W)^-1, and a direction that Z predicts poorly (on a frictionless link, the scale
+shared by K, JL and FV, which the link equation leaves free and only the motor equation's
+deflection column fixes) amplifies it. The reversal passes (`identify._place_reversals`) then
+build the motor's stick phases from that estimate, which makes the model error larger still.
+
+The test (`iv_against_ls`) is Hausman's (1978): both estimates come from the same rows, so
+when both are consistent their difference d = X_IV - X_LS is noise alone. Hausman's variance
+of d, V_IV - V_LS, holds only when least squares is efficient, which the filtered,
+decimated residuals' colour rules out (the reason for the corrected covariance,
+identification/uncertainty.py): with the two corrected sigmas nearly equal it shrinks to almost
+nothing, and clean logs would fail it. Whatever their correlation, though,
+sd(d) <= sigma_IV + sigma_LS (the triangle inequality for standard deviations), so
+
+    z_p = |X_IV,p - X_LS,p| / (sigma_IV,p + sigma_LS,p),   p in K, Jm, JL,
+
+exceeds the two-sided normal quantile z* = Phi^-1(1 - ALPHA / (2 m)) with probability at most
+ALPHA / m per parameter when both are consistent, and at most ALPHA for the largest of the
+m = 3 (Bonferroni). ALPHA is the stated false-alarm rate per fit. Least squares' own
+closed-loop bias (a few of its sigmas) stays well inside sigma_IV + sigma_LS; an instrument
+pass that is off by many of its own sigmas does not. Pure numerics.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from scipy.stats import norm
+
+from jointbench.identification.estimate import LSResult
+
+IV_PARAMS = ("K", "Jm", "JL")
+ALPHA = 1e-3   # false-alarm rate per fit when both estimates are consistent
+
+
+def z_threshold(alpha: float = ALPHA, m: int = len(IV_PARAMS)) -> float:
+    """The largest of m two-sided standard normal deviates exceeds this with probability at
+    most alpha: Phi^-1(1 - alpha / (2 m)) (Bonferroni). 3.59 for alpha = 1e-3, m = 3."""
+    if not 0 < alpha < 1 or m < 1:
+        raise ValueError(f"alpha must lie in (0, 1) and m be >= 1, got {alpha}, {m}")
+    return float(norm.isf(alpha / (2 * m)))
+
+
+@dataclass(frozen=True)
+class IVCheck:
+    """`iv_against_ls`'s outcome: the parameter `name` of IV_PARAMS whose two estimates lie
+    farthest apart, `z` that distance in units of sigma_IV + sigma_LS (corrected sigmas),
+    the two values and sigmas there, and the threshold z* of the stated ALPHA."""
+
+    name: str
+    z: float
+    iv: float
+    ls: float
+    sigma_iv: float
+    sigma_ls: float
+    threshold: float
+
+    @property
+    def fired(self) -> bool:
+        """True when the instrumental-variable estimate is off least squares' by more than
+        the bound allows at the stated false-alarm rate."""
+        return self.z > self.threshold
+
+    def warning(self) -> str:
+        """The warning that names the cause, for a fit that fell back to least squares."""
+        return (f"instruments from q_ref rejected: they put {self.name} at {self.iv:.4g} +- "
+                f"{self.sigma_iv:.2g}, least squares on the same rows at {self.ls:.4g} +- "
+                f"{self.sigma_ls:.2g}, {self.z:.1f} times the sum of their sigmas apart "
+                f"(at most {self.threshold:.2f} when both are consistent, false-alarm rate "
+                f"{ALPHA:g}): the instruments are correlated with the model's error (the "
+                "reference's prediction misses motion, such as a sticking motor's, that the "
+                "error follows too); least squares kept, the other corrections as they were")
+
+
+def iv_against_ls(iv: LSResult, ls: LSResult, params: tuple[str, ...] = IV_PARAMS,
+                  alpha: float = ALPHA) -> IVCheck | None:
+    """The largest z_p = |X_IV,p - X_LS,p| / (sigma_IV,p + sigma_LS,p) over `params` (module
+    docstring), with the corrected sigmas of both fits of the same rows, and the threshold
+    for `alpha`; None when a parameter is missing from either or a sigma is not finite
+    (nothing to test)."""
+    z, worst = -1.0, None
+    for p in params:
+        if p not in iv.names or p not in ls.names:
+            return None
+        a, b = iv.value(p), ls.value(p)
+        sa, sb = iv.std_corrected(p), ls.std_corrected(p)
+        if not all(math.isfinite(x) for x in (a, b, sa, sb)) or not sa + sb > 0:
+            return None
+        zp = abs(a - b) / (sa + sb)
+        if zp > z:
+            z, worst = zp, (p, a, b, sa, sb)
+    if worst is None:
+        return None
+    return IVCheck(worst[0], z, *worst[1:], z_threshold(alpha, len(params)))

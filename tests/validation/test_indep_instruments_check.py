@@ -1,0 +1,56 @@
+"""The joint-motor model with the reference's instruments on a log where they are not valid:
+the independent simulator's heavy_link with no link Coulomb friction (FS = 0), without
+velocity feed-forward, with ideal sensors (no torque noise, no quantisation).
+
+The motor sticks at most reversals and no noise dithers it, so the first pass's Coulomb
+column (sign of the velocity) is wrong over long stretches, and that error follows the motion
+as deterministically as the reference's prediction of it does: the instruments are
+correlated with it. Their oblique projection amplifies it along the scale that K, JL and FV
+share (the link equation leaves it free), and the reversal passes build the stick phases from
+that estimate; without the check the fit ends at K and JL about 0.28 times the truth, with
+no warning. Least squares on the same rows is within 0.01 %. The check
+(identification/iv_check.py) rejects the instruments and keeps least squares with a
+warning naming the cause; the bar is the issue's: K (and Jm, JL) within 3 %, or a warning
+naming the cause (both hold here)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import pytest
+
+from jointbench.identification.identify import identify
+from jointbench.testing import FAMILIES
+
+CAUSE = "instruments from q_ref rejected"
+
+
+@pytest.fixture(scope="module")
+def frictionless_link(indep_log):
+    return indep_log(replace(FAMILIES["heavy_link"], FS=0.0), seed=1, duration=60.0,
+                     sweep="linear", feedforward=False, ideal_sensors=True)
+
+
+def test_rejected_instruments_fall_back_to_least_squares(frictionless_link):
+    log = frictionless_link
+    result, truth = identify(log, "joint-motor"), log.truth()
+    warned = [w for w in result.warnings if CAUSE in w]
+    assert warned, result.warnings
+    assert "correlated with the model's error" in warned[0]
+    assert "instruments" not in result.corrections and not result.ls.instrumental
+    for p in ("K", "Jm", "JL"):
+        assert abs(result.physical[p] / truth[p] - 1) < 0.03, (p, result.physical[p])
+
+
+def test_fallback_is_the_chain_without_instruments(frictionless_link):
+    """What the check keeps is the fit with the instruments switched off, number for number
+    (the other corrections unchanged)."""
+    from jointbench.identification.corrections import CORRECTIONS
+
+    log = frictionless_link
+    kept = identify(log, "joint-motor")
+    plain_iv = identify(log, "joint-motor",
+                        corrections=tuple(c for c in CORRECTIONS if c != "instruments"))
+    assert kept.corrections == plain_iv.corrections
+    for p in ("K", "Jm", "JL", "FVm", "FSm", "FV"):
+        assert kept.physical[p] == pytest.approx(plain_iv.physical[p], rel=1e-12), p
