@@ -21,7 +21,7 @@ from jointbench.identification.first_mode import (FirstMode, given_first_mode,
                                                   measure_first_mode)
 from jointbench.identification.filtering import FilterSettings, Lowpassed, lowpass
 from jointbench.identification.instruments import instrument_log
-from jointbench.identification.iv_check import iv_against_ls
+from jointbench.identification.iv_check import compare
 from jointbench.identification.log import Log, LogError
 from jointbench.identification.physical import InversionError, invert_motor_only, table3
 from jointbench.identification.saturation import exclude_clipped  # clipped torque rows out
@@ -295,21 +295,8 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
                                                "stick_phases" in wanted)
             ran += placed
         if Z is not None:
-            # the instruments held against least squares on the same rows (iv_check): a
-            # rejected pass falls back to the chain without them, with a warning
-            check = iv_against_ls(ls, block_weighted(reg.W, reg.y, reg.names, reg.block,
-                                                     time=reg.index))
-            if check is not None and check.fired:
-                warnings.append(check.warning())
-                notes.append("least squares: the instruments failed the check against it")
-                ran = [n for n in ran if n not in ("instruments", "reversals", "stick_phases")]
-                reg = exclude_clipped(chain.regressor(), log)
-                ls = block_weighted(reg.W, reg.y, reg.names, reg.block, time=reg.index,
-                                    corrected="reversals" not in wanted)
-                if "reversals" in wanted:
-                    reg, ls, placed = _place_reversals(log, chain, reg, ls, None, notes,
-                                                       "stick_phases" in wanted)
-                    ran += placed
+            reg, ls, ran = _check_instruments(log, chain, reg, ls, Z, wanted, ran, notes,
+                                              warnings)
     elif model == "motor-only" and "motor_only_columns" not in wanted:
         reg = exclude_clipped(regressors.motor_only(log, settings, corrected=False, lp=lp), log)
         ls = least_squares(reg.W, reg.y, reg.names)
@@ -424,6 +411,50 @@ def _place_reversals(log: Log, chain: regressors.JointMotorChain, reg: regressor
                  f"FS / JL = {rates[1]:.4g} (the filtered velocity's zero crossings come late "
                  f"by the friction's kink; {REVERSAL_PASSES} passes)")
     return reg, ls, ("reversals", "stick_phases") if stuck else ("reversals",)
+
+
+def _check_instruments(log: Log, chain: regressors.JointMotorChain, reg: regressors.Regressor,
+                       ls: LSResult, Z: np.ndarray, wanted: frozenset[str], ran: list[str],
+                       notes: list[str], warnings: list[str]
+                       ) -> tuple[regressors.Regressor, LSResult, list[str]]:
+    """The instruments' fit `ls` (of rows `reg`, after the reversal passes) held against
+    least squares on the same rows (`iv_check.compare`). When the two agree, or when they
+    disagree but the instrument passes started from the chain without instruments (its
+    least-squares estimate, passes and all) end where they did, the instruments' fit is kept
+    unchanged (a disagreement then is least squares' own closed-loop bias, which grows in
+    sigmas with the log's length; a note says so). When the passes depend on their start, the
+    first pass's instruments were correlated with the model's error and the passes fed it
+    back: the chain without instruments is kept, with a warning naming the cause. Returns
+    the kept rows, fit and corrections that ran."""
+    check = compare(ls, block_weighted(reg.W, reg.y, reg.names, reg.block, time=reg.index))
+    if check is None or not check.fired:
+        return reg, ls, ran
+    stick = "stick_phases" in wanted
+    first = exclude_clipped(chain.regressor(), log)
+    plain_notes: list[str] = []
+    plain_reg, plain, placed = first, block_weighted(
+        first.W, first.y, first.names, first.block, time=first.index,
+        corrected="reversals" not in wanted), ()
+    if "reversals" in wanted:
+        plain_reg, plain, placed = _place_reversals(log, chain, first, plain, None,
+                                                    plain_notes, stick)
+        # the instrument passes again, from the chain without instruments
+        _, again, _ = _place_reversals(log, chain, plain_reg, plain, Z, [], stick)
+        restart = compare(ls, again)
+    else:
+        restart = None   # no passes: nothing fed back, the start cannot matter
+    if restart is None or not restart.fired:
+        notes.append(f"instruments kept: least squares on the same rows disagrees by "
+                     f"{check.z:.1f} times the sum of the two sigmas on {check.name} (at most "
+                     f"{check.threshold:.2f} when both are consistent), and the instrument "
+                     "passes started from least squares end at the same estimate: least "
+                     "squares' own closed-loop bias")
+        return reg, ls, ran
+    warnings.append(check.warning(restart.b))
+    notes.extend(plain_notes)
+    notes.append("least squares: the instruments failed the check against it")
+    kept = [n for n in ran if n not in ("instruments", "reversals", "stick_phases")]
+    return plain_reg, plain, kept + list(placed)
 
 
 def _instruments(log: Log, reg: regressors.Regressor, f1_hz: float | None,
