@@ -421,8 +421,9 @@ def _check_instruments(log: Log, chain: regressors.JointMotorChain, reg: regress
     least squares on the same rows (`iv_check.compare`). When the two agree, or when they
     disagree but the instrument passes started from the chain without instruments (its
     least-squares estimate, passes and all) end where they did, the instruments' fit is kept
-    unchanged (a disagreement then is least squares' own closed-loop bias, which grows in
-    sigmas with the log's length; a note says so). When the passes depend on their start, the
+    unchanged with a warning (least squares' own closed-loop bias, which grows in sigmas with
+    the log's length, or instruments invalid wherever they start). When the passes depend on
+    their start, the
     first pass's instruments were correlated with the model's error and the passes fed it
     back: the chain without instruments is kept, with a warning naming the cause. Returns
     the kept rows, fit and corrections that ran."""
@@ -444,11 +445,7 @@ def _check_instruments(log: Log, chain: regressors.JointMotorChain, reg: regress
     else:
         restart = None   # no passes: nothing fed back, the start cannot matter
     if restart is None or not restart.fired:
-        notes.append(f"instruments kept: least squares on the same rows disagrees by "
-                     f"{check.z:.1f} times the sum of the two sigmas on {check.name} (at most "
-                     f"{check.threshold:.2f} when both are consistent), and the instrument "
-                     "passes started from least squares end at the same estimate: least "
-                     "squares' own closed-loop bias")
+        warnings.append(check.kept_warning(None if restart is None else restart.b))
         return reg, ls, ran
     warnings.append(check.warning(restart.b))
     notes.extend(plain_notes)

@@ -33,7 +33,8 @@ its reversal passes), and the instruments are rejected only when the two instrum
 differ by the same test, that is when the passes' answer depends on their start, which is
 what a first pass correlated with the model's error and fed back does. Then least squares is
 kept with a warning naming the cause; otherwise the instruments' fit stays, unchanged, with a
-note. Pure numerics.
+warning that names both explanations (the test cannot tell least squares' bias from
+instruments invalid wherever they start). Pure numerics.
 """
 
 from __future__ import annotations
@@ -76,6 +77,21 @@ class Gap:
         """True when the two estimates are farther apart than the bound allows at the
         stated false-alarm rate."""
         return self.z > self.threshold
+
+    def kept_warning(self, restarted: float | None) -> str:
+        """The warning for an instrumental fit `a` kept against least squares `b`: its
+        passes started from least squares gave `restarted` (None: no passes)."""
+        again = ("" if restarted is None else
+                 f"; started from least squares' estimate the instrument passes give "
+                 f"{restarted:.4g}, so the gap is not their start")
+        return (f"instruments and least squares disagree: the instruments put {self.name} at "
+                f"{self.a:.4g} +- {self.sigma_a:.2g}, least squares on the same rows at "
+                f"{self.b:.4g} +- {self.sigma_b:.2g}, {self.z:.1f} times the sum of their "
+                f"sigmas apart (at most {self.threshold:.2f} when both are consistent, "
+                f"false-alarm rate {ALPHA:g}){again}: least squares' closed-loop bias (the "
+                "torque noise moves the positions; more sigmas the longer the log), or "
+                "instruments correlated with the model's error wherever they start; "
+                "instruments kept")
 
     def warning(self, restarted: float) -> str:
         """The warning that names the cause, for an instrumental fit `a` rejected against

@@ -71,3 +71,13 @@ def test_nothing_to_test_without_the_parameters():
     W, y, Z = _rows(rng, leak=0.0)
     names = ("a", "b", "c")
     assert compare(least_squares(W, y, names, instruments=Z), least_squares(W, y, names)) is None
+
+
+def test_warnings_name_the_values_and_the_rate():
+    rng = np.random.default_rng(21)
+    check = _check(*_rows(rng, leak=0.5))
+    kept, rejected = check.kept_warning(1.0), check.warning(1.0)
+    for text in (kept, rejected):
+        assert f"{check.a:.4g}" in text and f"{check.b:.4g}" in text and "0.001" in text
+    assert "instruments kept" in kept and "least squares kept" in rejected
+    assert "their start" not in check.kept_warning(None)

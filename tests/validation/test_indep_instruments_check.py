@@ -63,12 +63,14 @@ def test_least_squares_own_bias_keeps_the_instruments(bench_log):
     closed-loop bias (a fixed share of K while the sigmas shrink with the log's length) puts
     it 4.2 times the sum of the two sigmas from the instruments' K, over the first test's
     3.59; the instrument passes started from least squares end at the same estimate, so the
-    instruments' fit is kept, unchanged, with a note and no warning, within the arm's 0.5 %
-    (least squares alone: K -0.71 %, Jm +0.85 %)."""
+    instruments' fit is kept, unchanged, within the arm's 0.5 % (least squares alone: K
+    -0.71 %, Jm +0.85 %), with a warning that names both explanations."""
     log = bench_log("arm6", "axis3", duration=240.0, seed=1)
     result, truth = identify(log, "joint-motor"), log.truth()
     assert not any(CAUSE in w for w in result.warnings), result.warnings
-    assert any(n.startswith("instruments kept") for n in result.notes), result.notes
+    kept = [w for w in result.warnings if w.startswith("instruments and least squares disagree")]
+    assert kept and "closed-loop bias" in kept[0] and "instruments kept" in kept[0], \
+        result.warnings
     assert "instruments" in result.corrections and result.ls.instrumental
     for p in ("K", "Jm", "JL"):
         assert abs(result.physical[p] / truth[p] - 1) < 0.005, (p, result.physical[p])
