@@ -281,6 +281,7 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
     if model == "joint-motor":
         chain = regressors.JointMotorChain(log, settings, lp)
         reg = exclude_clipped(chain.regressor(), log)
+        mark = len(notes)
         if "instruments" in wanted:
             Z = _instruments(log, reg, f1_hz, notes, made)
         else:
@@ -296,7 +297,7 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
             ran += placed
         if Z is not None:
             reg, ls, ran = _check_instruments(log, chain, reg, ls, Z, wanted, ran, notes,
-                                              warnings)
+                                              warnings, mark)
     elif model == "motor-only" and "motor_only_columns" not in wanted:
         reg = exclude_clipped(regressors.motor_only(log, settings, corrected=False, lp=lp), log)
         ls = least_squares(reg.W, reg.y, reg.names)
@@ -415,7 +416,7 @@ def _place_reversals(log: Log, chain: regressors.JointMotorChain, reg: regressor
 
 def _check_instruments(log: Log, chain: regressors.JointMotorChain, reg: regressors.Regressor,
                        ls: LSResult, Z: np.ndarray, wanted: frozenset[str], ran: list[str],
-                       notes: list[str], warnings: list[str]
+                       notes: list[str], warnings: list[str], mark: int
                        ) -> tuple[regressors.Regressor, LSResult, list[str]]:
     """The instruments' fit `ls` (of rows `reg`, after the reversal passes) held against
     least squares on the same rows (`iv_check.compare`). When the two agree, or when they
@@ -423,9 +424,9 @@ def _check_instruments(log: Log, chain: regressors.JointMotorChain, reg: regress
     least-squares estimate, passes and all) end where they did, the instruments' fit is kept
     unchanged with a warning (least squares' own closed-loop bias, which grows in sigmas with
     the log's length, or instruments invalid wherever they start). When the passes depend on
-    their start, the
-    first pass's instruments were correlated with the model's error and the passes fed it
-    back: the chain without instruments is kept, with a warning naming the cause. Returns
+    their start, the first pass's instruments were correlated with the model's error and the
+    passes fed it back: the chain without instruments is kept, with a warning naming the
+    cause, and its notes replace those of the instruments' passes (`notes[mark:]`). Returns
     the kept rows, fit and corrections that ran."""
     check = compare(ls, block_weighted(reg.W, reg.y, reg.names, reg.block, time=reg.index))
     if check is None or not check.fired:
@@ -439,8 +440,12 @@ def _check_instruments(log: Log, chain: regressors.JointMotorChain, reg: regress
     if "reversals" in wanted:
         plain_reg, plain, placed = _place_reversals(log, chain, first, plain, None,
                                                     plain_notes, stick)
-        # the instrument passes again, from the chain without instruments
+        # the instrument passes again, from the chain without instruments (without friction
+        # to place they return its fit: the instruments on its rows then)
         _, again, _ = _place_reversals(log, chain, plain_reg, plain, Z, [], stick)
+        if not again.instrumental:
+            again = block_weighted(plain_reg.W, plain_reg.y, plain_reg.names, plain_reg.block,
+                                   time=plain_reg.index, instruments=Z)
         restart = compare(ls, again)
     else:
         restart = None   # no passes: nothing fed back, the start cannot matter
@@ -448,8 +453,9 @@ def _check_instruments(log: Log, chain: regressors.JointMotorChain, reg: regress
         warnings.append(check.kept_warning(None if restart is None else restart.b))
         return reg, ls, ran
     warnings.append(check.warning(restart.b))
+    del notes[mark:]
+    notes.append("least squares: the instruments failed the check against it (warnings)")
     notes.extend(plain_notes)
-    notes.append("least squares: the instruments failed the check against it")
     kept = [n for n in ran if n not in ("instruments", "reversals", "stick_phases")]
     return plain_reg, plain, kept + list(placed)
 
