@@ -62,7 +62,7 @@ def z_threshold(alpha: float = ALPHA, m: int = len(IV_PARAMS)) -> float:
 class Gap:
     """`compare`'s outcome: the parameter `name` of IV_PARAMS whose two estimates lie
     farthest apart, `z` that distance in units of sigma_a + sigma_b (corrected sigmas), the
-    two values `a`, `b` and sigmas there, and the threshold z* of the stated ALPHA."""
+    two values `a`, `b` and sigmas there, the false-alarm rate `alpha` and its threshold z*."""
 
     name: str
     z: float
@@ -71,6 +71,7 @@ class Gap:
     sigma_a: float
     sigma_b: float
     threshold: float
+    alpha: float = ALPHA
 
     @property
     def fired(self) -> bool:
@@ -88,7 +89,7 @@ class Gap:
                 f"{self.a:.4g} +- {self.sigma_a:.2g}, least squares on the same rows at "
                 f"{self.b:.4g} +- {self.sigma_b:.2g}, {self.z:.1f} times the sum of their "
                 f"sigmas apart (at most {self.threshold:.2f} when both are consistent, "
-                f"false-alarm rate {ALPHA:g}){again}: least squares' closed-loop bias (the "
+                f"false-alarm rate {self.alpha:g}){again}: least squares' closed-loop bias (the "
                 "torque noise moves the positions; more sigmas the longer the log), or "
                 "instruments correlated with the model's error wherever they start; "
                 "instruments kept")
@@ -100,7 +101,7 @@ class Gap:
                 f"{self.a:.4g} +- {self.sigma_a:.2g}, least squares on the same rows at "
                 f"{self.b:.4g} +- {self.sigma_b:.2g}, {self.z:.1f} times the sum of their "
                 f"sigmas apart (at most {self.threshold:.2f} when both are consistent, "
-                f"false-alarm rate {ALPHA:g}), and started from least squares' estimate the "
+                f"false-alarm rate {self.alpha:g}), and started from least squares' estimate the "
                 f"same passes give {restarted:.4g}: the instruments are correlated with the "
                 "model's error (the reference's prediction misses motion, such as a sticking "
                 "motor's, that the error follows too) and the reversal passes fed it back; "
@@ -126,4 +127,4 @@ def compare(a: LSResult, b: LSResult, params: tuple[str, ...] = IV_PARAMS,
             z, worst = zp, (p, va, vb, sa, sb)
     if worst is None:
         return None
-    return Gap(worst[0], z, *worst[1:], z_threshold(alpha, len(params)))
+    return Gap(worst[0], z, *worst[1:], z_threshold(alpha, len(params)), alpha)
