@@ -1,6 +1,7 @@
-"""identification/iv_check.py on synthetic rows (`compare`): the instrumental-variable estimate held against
-least squares of the same rows, z = |X_IV - X_LS| / (sigma_IV + sigma_LS) over K, Jm, JL
-against the Bonferroni normal quantile of the stated false-alarm rate."""
+"""identification/iv_check.py on synthetic rows (`compare`): the instrumental-variable
+estimate held against least squares of the same rows, z = |X_IV - X_LS| / (sigma_IV +
+sigma_LS) over K, Jm, JL against the Bonferroni normal quantile of the stated false-alarm
+rate."""
 
 from __future__ import annotations
 
