@@ -21,6 +21,7 @@ from jointbench.identification.first_mode import (FirstMode, given_first_mode,
                                                   measure_first_mode)
 from jointbench.identification.filtering import FilterSettings, Lowpassed, lowpass
 from jointbench.identification.instruments import instrument_log
+from jointbench.identification.iv_check import compare
 from jointbench.identification.log import Log, LogError
 from jointbench.identification.physical import InversionError, invert_motor_only, table3
 from jointbench.identification.saturation import exclude_clipped  # clipped torque rows out
@@ -175,7 +176,6 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
     # the chains' columns at each filter setting (the decimation apart)
     made: dict = {"lowpass": Lowpassed(), "columns": regressors.ChainColumns()}
     result = _identify(log, model, settings, notes, f1, wanted, made)
-    warnings += result.warnings
     if chooser and result.model == "joint-motor" and f1 is not None and "wide_band" in wanted:
         wide = wide_settings(log, settings)
         other = None
@@ -190,6 +190,7 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
         warnings += [band.warning] if band.warning else []
         result = replace(result, band=band, corrections=result.corrections + (
             ("wide_band",) if band.used == "wide" else ()))
+    warnings += result.warnings   # the kept fit's (the band's rule may have swapped it)
     if mode is not None and mode.found and mode.method != "given" and result.model != "rigid":
         mode, text = model_first_mode(result, mode)
         if text:
@@ -279,9 +280,11 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
     _check_length(log, settings, nd)
     check_signals(log, model, settings, lp)
     ran = list(chain_corrections(settings))
+    warnings: list[str] = []
     if model == "joint-motor":
         chain = regressors.JointMotorChain(log, settings, lp, columns)
         reg = exclude_clipped(chain.regressor(), log)
+        mark = len(notes)
         if "instruments" in wanted:
             Z = _instruments(log, reg, f1_hz, notes, made)
         else:
@@ -295,6 +298,9 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
             reg, ls, placed = _place_reversals(log, chain, reg, ls, Z, notes,
                                                "stick_phases" in wanted)
             ran += placed
+        if Z is not None:
+            reg, ls, ran = _check_instruments(log, chain, reg, ls, Z, wanted, ran, notes,
+                                              warnings, mark)
     elif model == "motor-only" and "motor_only_columns" not in wanted:
         reg = exclude_clipped(regressors.motor_only(log, settings, corrected=False, lp=lp), log)
         ls = least_squares(reg.W, reg.y, reg.names)
@@ -315,7 +321,6 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
     sigma: dict[str, float] = {}
     t3: dict[str, float] = {}
     eqs18_20: dict[str, float] = {}
-    warnings: list[str] = []
     if model.startswith("motor-only"):
         X = {n: ls.value(n) for n in ls.names if n not in ls.unidentifiable}
         try:
@@ -410,6 +415,52 @@ def _place_reversals(log: Log, chain: regressors.JointMotorChain, reg: regressor
                  f"FS / JL = {rates[1]:.4g} (the filtered velocity's zero crossings come late "
                  f"by the friction's kink; {REVERSAL_PASSES} passes)")
     return reg, ls, ("reversals", "stick_phases") if stuck else ("reversals",)
+
+
+def _check_instruments(log: Log, chain: regressors.JointMotorChain, reg: regressors.Regressor,
+                       ls: LSResult, Z: np.ndarray, wanted: frozenset[str], ran: list[str],
+                       notes: list[str], warnings: list[str], mark: int
+                       ) -> tuple[regressors.Regressor, LSResult, list[str]]:
+    """The instruments' fit `ls` (of rows `reg`, after the reversal passes) held against
+    least squares on the same rows (`iv_check.compare`). When the two agree, or when they
+    disagree but the instrument passes started from the chain without instruments (its
+    least-squares estimate, passes and all) end where they did, the instruments' fit is kept
+    unchanged with a warning (least squares' own closed-loop bias, which grows in sigmas with
+    the log's length, or instruments invalid wherever they start). When the passes depend on
+    their start, the first pass's instruments were correlated with the model's error and the
+    passes fed it back: the chain without instruments is kept, with a warning naming the
+    cause, and its notes replace those of the instruments' passes (`notes[mark:]`). Returns
+    the kept rows, fit and corrections that ran."""
+    check = compare(ls, block_weighted(reg.W, reg.y, reg.names, reg.block, time=reg.index))
+    if check is None or not check.fired:
+        return reg, ls, ran
+    stick = "stick_phases" in wanted
+    first = exclude_clipped(chain.regressor(), log)
+    plain_notes: list[str] = []
+    plain_reg, plain, placed = first, block_weighted(
+        first.W, first.y, first.names, first.block, time=first.index,
+        corrected="reversals" not in wanted), ()
+    if "reversals" in wanted:
+        plain_reg, plain, placed = _place_reversals(log, chain, first, plain, None,
+                                                    plain_notes, stick)
+        # the instrument passes again, from the chain without instruments (without friction
+        # to place they return its fit: the instruments on its rows then)
+        _, again, _ = _place_reversals(log, chain, plain_reg, plain, Z, [], stick)
+        if not again.instrumental:
+            again = block_weighted(plain_reg.W, plain_reg.y, plain_reg.names, plain_reg.block,
+                                   time=plain_reg.index, instruments=Z)
+        restart = compare(ls, again)
+    else:
+        restart = None   # no passes: nothing fed back, the start cannot matter
+    if restart is None or not restart.fired:
+        warnings.append(check.kept_warning(None if restart is None else restart.b))
+        return reg, ls, ran
+    warnings.append(check.warning(restart.b))
+    del notes[mark:]
+    notes.append("least squares: the instruments failed the check against it (warnings)")
+    notes.extend(plain_notes)
+    kept = [n for n in ran if n not in ("instruments", "reversals", "stick_phases")]
+    return plain_reg, plain, kept + list(placed)
 
 
 def _instruments(log: Log, reg: regressors.Regressor, f1_hz: float | None,
