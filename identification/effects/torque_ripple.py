@@ -60,7 +60,8 @@ def grid(rows: Rows) -> np.ndarray:
     refinement (candidates._search) brackets the best between its grid neighbours."""
     sig = rows.sig
     span = float(np.ptp(sig.qm[sig.sl]))
-    coarse = np.geomspace(max(span / SHORTEST, 1e-4), max(span, 2e-4), COARSE)
+    lo, hi, _ = _coarse_bounds(rows)
+    coarse = np.geomspace(lo, hi, COARSE)
     if span <= 0:
         return coarse
     step = np.pi / (2 * span)
@@ -68,6 +69,30 @@ def grid(rows: Rows) -> np.ndarray:
     fine = 2 * np.pi / np.concatenate([k - step, k, k + step]) if len(k) else np.empty(0)
     fine = fine[(fine > 0) & (fine >= coarse[0]) & (fine <= coarse[-1])]
     return np.unique(np.concatenate([coarse, fine]))
+
+
+def _coarse_bounds(rows: Rows) -> tuple[float, float, float]:
+    """The coarse grid's (grid) shortest period, longest and the ratio of its steps."""
+    sig = rows.sig
+    span = float(np.ptp(sig.qm[sig.sl]))
+    lo, hi = max(span / SHORTEST, 1e-4), max(span, 2e-4)
+    return lo, hi, (hi / lo) ** (1.0 / (COARSE - 1))
+
+
+def check(v: dict, rows: Rows) -> str:
+    """A period in the first step of its search grid (grid: encoder-scale steps) is where the
+    search ran to its bound, not a period the log identifies: the column sin(2 pi qm / p)
+    then stays in the band only where the motor creeps (its frequency |qm'| / p under the
+    band's cutoff), at the reversals, and there it takes up what the nominal's friction
+    law near zero speed and the position's resolution miss, a function of the angle at the
+    encoder's scale, not a ripple of the drive."""
+    p = v.get("ripple_period_rad", 0.0)
+    lo, _, r = _coarse_bounds(rows)
+    if not p or p >= lo * r:
+        return ""
+    return (f"period {p:.3g} rad in the first step of its search grid ({lo:.3g} to "
+            f"{lo * r:.3g} rad, encoder-scale steps): the search ran to its bound, a "
+            "function of the angle where the motor creeps, not a ripple")
 
 
 def params(v: dict, fixed: dict, rows: Rows) -> dict[str, float]:
@@ -82,4 +107,4 @@ EFFECT = Effect(
     "torque_ripple", "ripple_amplitude", "N m", "N",
     "torque ripple periodic in the motor angle (cogging, drive ripple)",
     needs_link=False, rigid_axis=True, block=0, k=3, design=design, params=params,
-    search="ripple_period_rad", grid=grid, period="ripple_period_rad")
+    search="ripple_period_rad", grid=grid, period="ripple_period_rad", check=check)
