@@ -60,8 +60,7 @@ def grid(rows: Rows) -> np.ndarray:
     refinement (candidates._search) brackets the best between its grid neighbours."""
     sig = rows.sig
     span = float(np.ptp(sig.qm[sig.sl]))
-    lo, hi, _ = _coarse_bounds(rows)
-    coarse = np.geomspace(lo, hi, COARSE)
+    coarse = _coarse(rows)
     if span <= 0:
         return coarse
     step = np.pi / (2 * span)
@@ -71,12 +70,11 @@ def grid(rows: Rows) -> np.ndarray:
     return np.unique(np.concatenate([coarse, fine]))
 
 
-def _coarse_bounds(rows: Rows) -> tuple[float, float, float]:
-    """The coarse grid's (grid) shortest period, longest and the ratio of its steps."""
+def _coarse(rows: Rows) -> np.ndarray:
+    """The coarse geometric grid of periods (grid): encoder-scale steps to the motion span."""
     sig = rows.sig
     span = float(np.ptp(sig.qm[sig.sl]))
-    lo, hi = max(span / SHORTEST, 1e-4), max(span, 2e-4)
-    return lo, hi, (hi / lo) ** (1.0 / (COARSE - 1))
+    return np.geomspace(max(span / SHORTEST, 1e-4), max(span, 2e-4), COARSE)
 
 
 def check(v: dict, rows: Rows) -> str:
@@ -87,11 +85,11 @@ def check(v: dict, rows: Rows) -> str:
     law near zero speed and the position's resolution miss, a function of the angle at the
     encoder's scale, not a ripple of the drive."""
     p = v.get("ripple_period_rad", 0.0)
-    lo, _, r = _coarse_bounds(rows)
-    if not p or p >= lo * r:
+    g = _coarse(rows)
+    if not p or p >= g[1]:
         return ""
-    return (f"period {p:.3g} rad in the first step of its search grid ({lo:.3g} to "
-            f"{lo * r:.3g} rad, encoder-scale steps): the search ran to its bound, a "
+    return (f"period {p:.3g} rad in the first step of its search grid ({g[0]:.3g} to "
+            f"{g[1]:.3g} rad, encoder-scale steps): the search ran to its bound, a "
             "function of the angle where the motor creeps, not a ripple")
 
 
