@@ -238,13 +238,20 @@ class Evidence:
 
 
 def evidence(e0: np.ndarray, e1: np.ndarray, n_times: int,
-             blocks: tuple[int, ...] = (), within: np.ndarray | None = None) -> Evidence:
+             blocks: tuple[int, ...] = (), within: np.ndarray | None = None,
+             instants: np.ndarray | None = None) -> Evidence:
     """Segment test of e1 removing more than MATERIAL of e0's squared error (module
     docstring); rows are stacked by block, `n_times` instants each. The share is over every
     row; the test over the rows of `blocks` (the equations the effect acts in; () all).
     `within` (a mask over the SEGMENTS segments, None for all) keeps the test and both
     shares to those segments: a band of the log chosen without its residual (lag_band's
-    large deflections)."""
+    large deflections). `instants` (a mask over the n_times instants, None for all) keeps
+    them to those instants: where the effect's column is not zero (lag_band: a hardening's
+    engaged spring), as `blocks` keeps them to the equations it acts in; elsewhere the two
+    models differ only by the shared parameters' refit."""
+    if instants is not None:
+        keep = np.tile(np.asarray(instants, bool), len(e0) // n_times)
+        e0, e1 = np.where(keep, e0, 0.0), np.where(keep, e1, 0.0)
     a0, a1 = (e ** 2 for e in (e0, e1))
     if within is not None:
         inside = np.tile(np.asarray(within, bool)[segment_of_rows(n_times)], len(a0) // n_times)

@@ -62,10 +62,17 @@ count as noise. Its second view is therefore in the wide band (more rows, the ha
 the segments where the deflection reaches the engagement only (`large_deflections`): segment
 s is kept when the largest |qm - q| on its rows exceeds the engagement that its fold's
 training rows chose (Candidate.fold_values[s mod FOLDS]), a choice made from the positions and
-the other folds, never from the held-out residual it is tested on. Under the null hypothesis
-the kept segments' log-ratios have a negative mean as every segment's do (the column adds
-only estimation variance), and the segment test counts their number in its degrees of freedom
-(heldout.dof): a view over few segments asks for a larger t. Its level is split with the
+the other folds, never from the held-out residual it is tested on; and within those segments
+over the instants where |qm - q| passes that engagement only (`engaged`), where the column
+Kh dz(qm - q, d) is not zero. Elsewhere the two models differ only by the shared parameters'
+refit, as the other equation does for an effect that acts in one (heldout.segment_log_ratios):
+those instants add nearly the same error to both sums and pull each segment's ratio towards 1
+by a share that changes from segment to segment with how long the spring stays engaged, which
+the successive differences count as noise. Under the null hypothesis the kept segments'
+log-ratios have a negative mean as every segment's do (the column adds only estimation
+variance, and it adds it on the very instants where the column is not zero), and the segment
+test counts their number in its degrees of freedom (heldout.dof): a view over few segments
+asks for a larger t. Its level is split with the
 chooser's band's test as the lag's is (t > 4.50 in either view in a first round of 8).
 
 The guard differs from the lag's. The wide view confirms only a hardening that the chooser's
@@ -157,6 +164,17 @@ def large_deflections(nom: Nominal, engagement: tuple[float, ...]) -> np.ndarray
     return top > np.asarray(engagement, float)[np.arange(SEGMENTS) % FOLDS]
 
 
+def engaged(nom: Nominal, engagement: tuple[float, ...]) -> np.ndarray | None:
+    """The instants (a mask over `nom`'s rows of one block) whose |qm - q| exceeds the
+    engagement `engagement[f]` of their fold f (large_deflections): where the hardening's
+    column Kh dz(qm - q, d) is not zero; None when the folds' values are not given."""
+    sig = nom.sig
+    if len(engagement) != FOLDS or sig.q is None:
+        return None
+    d = np.abs((sig.qm - sig.q)[sig.index])
+    return d > np.asarray(engagement, float)[segment_of_rows(len(d)) % FOLDS]
+
+
 def grid_step(nom: Nominal, value: float) -> float:
     """The step of the hardening's geometric search grid on `nom`'s rows at `value`:
     |value| (r - 1), r the grid's ratio."""
@@ -206,7 +224,8 @@ def _deflection_view(nom: Nominal, c: Candidate, w: Candidate, label: str) -> Se
     deflections when that engagement is in the first step of its search grid (module
     docstring: the guard)."""
     within = large_deflections(nom, w.fold_values)
-    ev = evidence(w.reference_errors, w.heldout_errors, len(nom.sig.index), w.acts, within)
+    ev = evidence(w.reference_errors, w.heldout_errors, len(nom.sig.index), w.acts, within,
+                  engaged(nom, w.fold_values))
     dc, dw = c.fixed["deflection_rad"], w.fixed["deflection_rad"]
     sc, sw = jackknife(c.fold_values), jackknife(w.fold_values)
     allowed = CONSISTENCY_Z * math.hypot(sc, sw) + grid_step(nom, max(dc, dw))

@@ -60,7 +60,7 @@ def grid(rows: Rows) -> np.ndarray:
     refinement (candidates._search) brackets the best between its grid neighbours."""
     sig = rows.sig
     span = float(np.ptp(sig.qm[sig.sl]))
-    coarse = np.geomspace(max(span / SHORTEST, 1e-4), max(span, 2e-4), COARSE)
+    coarse = _coarse(rows)
     if span <= 0:
         return coarse
     step = np.pi / (2 * span)
@@ -68,6 +68,29 @@ def grid(rows: Rows) -> np.ndarray:
     fine = 2 * np.pi / np.concatenate([k - step, k, k + step]) if len(k) else np.empty(0)
     fine = fine[(fine > 0) & (fine >= coarse[0]) & (fine <= coarse[-1])]
     return np.unique(np.concatenate([coarse, fine]))
+
+
+def _coarse(rows: Rows) -> np.ndarray:
+    """The coarse geometric grid of periods (grid): encoder-scale steps to the motion span."""
+    sig = rows.sig
+    span = float(np.ptp(sig.qm[sig.sl]))
+    return np.geomspace(max(span / SHORTEST, 1e-4), max(span, 2e-4), COARSE)
+
+
+def check(v: dict, rows: Rows) -> str:
+    """A period in the first step of its search grid (grid: encoder-scale steps) is where the
+    search ran to its bound, not a period the log identifies: the column sin(2 pi qm / p)
+    then stays in the band only where the motor creeps (its frequency |qm'| / p under the
+    band's cutoff), at the reversals, and there it takes up what the nominal's friction
+    law near zero speed and the position's resolution miss, a function of the angle at the
+    encoder's scale, not a ripple of the drive."""
+    p = v.get("ripple_period_rad", 0.0)
+    g = _coarse(rows)
+    if not p or p >= g[1]:
+        return ""
+    return (f"period {p:.3g} rad in the first step of its search grid ({g[0]:.3g} to "
+            f"{g[1]:.3g} rad, encoder-scale steps): the search ran to its bound, a "
+            "function of the angle where the motor creeps, not a ripple")
 
 
 def params(v: dict, fixed: dict, rows: Rows) -> dict[str, float]:
@@ -82,4 +105,4 @@ EFFECT = Effect(
     "torque_ripple", "ripple_amplitude", "N m", "N",
     "torque ripple periodic in the motor angle (cogging, drive ripple)",
     needs_link=False, rigid_axis=True, block=0, k=3, design=design, params=params,
-    search="ripple_period_rad", grid=grid, period="ripple_period_rad")
+    search="ripple_period_rad", grid=grid, period="ripple_period_rad", check=check)
