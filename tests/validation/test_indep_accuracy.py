@@ -75,28 +75,35 @@ def logs(indep_log):
             for name, fam in FAMILIES.items()}
 
 
+@pytest.fixture(scope="module")
+def joint_motor(logs):
+    """The joint-motor identification of each clean log with the defaults, made once for the
+    mode and the parameter checks (read only)."""
+    return {name: identify(log, "joint-motor") for name, log in logs.items()}
+
+
 def _xfail(request, table, name):
     if name in table:
         request.applymarker(pytest.mark.xfail(strict=True, reason=table[name]))
 
 
 @pytest.mark.parametrize("name", list(FAMILIES))
-def test_first_mode_within_2_percent(logs, name, request):
+def test_first_mode_within_2_percent(logs, joint_motor, name, request):
     """The reported f1: the identified two-mass model's (measured: -1.50 to -0.04 %), with
     the frequency response's estimate, which designed the band, in its note."""
     _xfail(request, F1_OVER, name)
     log = logs[name]
-    mode = identify(log, "joint-motor").first_mode
+    mode = joint_motor[name].first_mode
     assert mode.found and mode.method.startswith("identified two-mass model")
     assert "the frequency response gave" in mode.note
     assert abs(mode.f1_hz / log.truth()["f1_hz"] - 1) < 0.02, mode.f1_hz
 
 
 @pytest.mark.parametrize("name", list(FAMILIES))
-def test_joint_motor_with_defaults(logs, name, request):
+def test_joint_motor_with_defaults(logs, joint_motor, name, request):
     _xfail(request, JOINT_MOTOR_OVER, name)
     log = logs[name]
-    result, truth = identify(log, "joint-motor"), log.truth()
+    result, truth = joint_motor[name], log.truth()
     assert result.ls.instrumental
     band = identify_json(result, truth, [], [])["band"]   # what `identify --json` says
     assert band["used"] == result.band.used == BAND_USED[name], band["reason"]
