@@ -31,7 +31,7 @@ LAYERS = ("unit", "cli", "sim", "validation")
 HERE = Path(__file__).resolve().parent
 
 
-# The files that take longest (CPU seconds per file, pytest --durations summed), longest first.
+# The files that take longest (over 10 CPU seconds each, summed over their tests), longest first.
 # `make test` hands whole files to its processes in collection order (--no-loadscope-reorder):
 # these go first and the many short files fill in at the end, so that both processes finish
 # together. A file missing here only runs later; the list orders, it selects nothing.
@@ -50,8 +50,14 @@ LONGEST = (
     "sim/test_first_mode.py",
     "sim/test_debias.py",
     "sim/test_ros_bag_import.py",
+    "sim/test_diagnose_named_claims.py",
     "validation/test_lab_rig_holdback.py",
     "validation/test_indep_logsweep.py",
+    "sim/test_diagnose_clipped_limit.py",
+    "sim/test_survey.py",
+    "sim/test_diagnose_link_law.py",
+    "sim/test_replay.py",
+    "sim/test_validate.py",
 )
 
 
