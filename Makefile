@@ -18,9 +18,11 @@ demo: $(STAMP)
 	$(BIN)/jointbench demo --out demo_out
 
 # Test processes (pytest-xdist): one per core by default; `make test JOBS=0` runs in one process.
-# Each test file stays in one process (--dist loadfile), so its module fixtures run once.
+# Each test file stays in one process (--dist loadfile), so its module fixtures run once; the
+# files go out in collection order (--no-loadscope-reorder), which tests/conftest.py sets
+# longest first, so that the processes end together.
 JOBS ?= auto
-XDIST = -n $(JOBS) --dist loadfile
+XDIST = -n $(JOBS) --dist loadfile --no-loadscope-reorder
 
 # The edit loop: tests/unit and tests/cli without the tests marked slow (under a minute).
 check: $(STAMP)

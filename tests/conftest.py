@@ -1,7 +1,8 @@
 """Shared, session-scoped experiments: each virtual run is simulated once per test process.
-`make test` and `make check` run one process per core (pytest-xdist, `--dist loadfile`): every
-test file stays in one process, so its module fixtures run once, and two files that ask
-bench_log or indep_log for the same run share it when they land in the same process.
+`make test` and `make check` run one process per core (pytest-xdist, `--dist loadfile
+--no-loadscope-reorder`): every test file stays in one process, so its module fixtures run
+once, and two files that ask bench_log or indep_log for the same run share it when they land
+in the same process. The files go out longest first (LONGEST below).
 
 The folder a test lives in is its layer, and its marker (pyproject.toml declares them):
 
@@ -30,14 +31,60 @@ LAYERS = ("unit", "cli", "sim", "validation")
 HERE = Path(__file__).resolve().parent
 
 
+# The files that take longest (over 10 CPU seconds each, summed over their tests), longest first.
+# `make test` hands whole files to its processes in collection order (--no-loadscope-reorder):
+# these go first and the many short files fill in at the end, so that both processes finish
+# together. A file missing here only runs later; the list orders, it selects nothing.
+LONGEST = (
+    "validation/test_arm.py",
+    "sim/test_refine.py",
+    "validation/test_indep_accuracy.py",
+    "sim/test_extended_runs.py",
+    "validation/test_identification.py",
+    "validation/test_diagnose_model.py",
+    "validation/test_indep_frictionless_motor_only.py",
+    "validation/test_diagnose_heldout.py",
+    "sim/test_campaign.py",
+    "sim/test_methods.py",
+    "validation/test_diagnose.py",
+    "sim/test_first_mode.py",
+    "sim/test_debias.py",
+    "sim/test_ros_bag_import.py",
+    "sim/test_diagnose_named_claims.py",
+    "validation/test_lab_rig_holdback.py",
+    "validation/test_indep_logsweep.py",
+    "sim/test_diagnose_clipped_limit.py",
+    "sim/test_survey.py",
+    "sim/test_diagnose_link_law.py",
+    "sim/test_replay.py",
+    "sim/test_validate.py",
+)
+
+
+def _file_rank(parts: tuple[str, ...], slow: bool) -> tuple[int, int, int]:
+    """LONGEST first, in its order; then the layers, the slower first (validation, sim,
+    cli, unit), within a layer the files holding a test marked slow first; within a rank,
+    collection order (the sort is stable)."""
+    name = "/".join(parts)
+    if name in LONGEST:
+        return 0, LONGEST.index(name), 0
+    return 1, ("validation", "sim", "cli", "unit").index(parts[0]), 0 if slow else 1
+
+
 def pytest_collection_modifyitems(config, items):
-    """Mark every test with its folder's layer; a test outside the four folders is an error."""
+    """Mark every test with its folder's layer (a test outside the four folders is an
+    error), and put the longest files first."""
+    file_of, slow = {}, {}
     for item in items:
         parts = Path(str(item.fspath)).resolve().relative_to(HERE).parts
         if len(parts) < 2 or parts[0] not in LAYERS:
             raise pytest.UsageError(f"{item.nodeid}: a test file belongs in one of tests/"
                                     f"{{{','.join(LAYERS)}}}/")
         item.add_marker(getattr(pytest.mark, parts[0]))
+        file_of[item.nodeid] = parts
+        slow[parts] = slow.get(parts, False) or item.get_closest_marker("slow") is not None
+    rank = {parts: _file_rank(parts, s) for parts, s in slow.items()}
+    items.sort(key=lambda item: rank[file_of[item.nodeid]])
 
 
 @pytest.fixture(scope="session")

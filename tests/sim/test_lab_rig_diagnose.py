@@ -17,8 +17,14 @@ from jointbench.bench.sim import nominal as nominal_axes
 
 
 @pytest.fixture(scope="module")
-def diagnosis():
-    return diagnose(simulate_lab_rig(seed=9, duration=20.0))
+def lab_log():
+    """The lab rig, seed 9, 20 s (read only: the tests derive copies with replace)."""
+    return simulate_lab_rig(seed=9, duration=20.0)
+
+
+@pytest.fixture(scope="module")
+def diagnosis(lab_log):
+    return diagnose(lab_log)
 
 
 def test_horizontal_axis_has_exactly_zero_first_moments(diagnosis):
@@ -49,7 +55,7 @@ def test_a_link_mass_mujoco_refuses_is_a_clear_error():
                                    timestep=0.002)
 
 
-def test_without_a_controller_the_motor_driven_view_runs():
+def test_without_a_controller_the_motor_driven_view_runs(lab_log):
     """A vendor drive whose loop nobody knows: no controller metadata. The motor-driven view
     (q_m drives the model) judges the nominal model: the truth leaves the encoders' and the
     voltage noise's share, a stiffness 10 % off several times more."""
@@ -57,7 +63,7 @@ def test_without_a_controller_the_motor_driven_view_runs():
 
     from jointbench.identification.motor_driven import motor_driven_view
 
-    log = simulate_lab_rig(seed=9, duration=20.0)
+    log = lab_log
     bare = rep(log, meta={k: v for k, v in log.meta.items()
                           if k not in ("controller", "pid_kp", "feedback")})
     d = diagnose(bare)

@@ -45,11 +45,19 @@ def clean_prototype():
     return _log("prototype", None, 3)
 
 
+@pytest.fixture(scope="module")
+def clean_prototype_diagnosis(clean_prototype):
+    """diagnose(clean_prototype, forward=False), made once for the two tests that read it."""
+    return diagnose(clean_prototype, forward=False)
+
+
 @pytest.mark.parametrize("model,joint,seed", [("prototype", None, 3), ("prototype", None, 4),
                                               ("arm6", "axis1", 5), ("arm6", "axis6", 6)])
-def test_clean_logs_name_nothing_and_say_why(model, joint, seed, clean_prototype):
-    log = clean_prototype if seed == 3 else _log(model, joint, seed)
-    d = diagnose(log, forward=False)
+def test_clean_logs_name_nothing_and_say_why(model, joint, seed, request):
+    if seed == 3:
+        d = request.getfixturevalue("clean_prototype_diagnosis")
+    else:
+        d = diagnose(_log(model, joint, seed), forward=False)
     assert d.named_cause == NONE and d.causes == ()
     assert d.verdict == "none"
     # the reason names the best candidate and the bar it failed, with numbers
@@ -69,9 +77,8 @@ def test_independent_simulator_clean_logs_name_nothing(family):
     assert d.named_cause == NONE and d.causes == (), d.reason
 
 
-def test_link_coulomb_is_nominal(clean_prototype):
-    log = clean_prototype
-    d = diagnose(log, forward=False)
+def test_link_coulomb_is_nominal(clean_prototype, clean_prototype_diagnosis):
+    log, d = clean_prototype, clean_prototype_diagnosis
     lc = next(c for c in d.inverse.candidates if c.effect == "link_coulomb")
     assert not lc.testable and lc.reason == WHY_IN_NOMINAL
     assert "FS" in NOMINAL_TWO_MASS

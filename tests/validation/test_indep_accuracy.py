@@ -75,28 +75,35 @@ def logs(indep_log):
             for name, fam in FAMILIES.items()}
 
 
+@pytest.fixture(scope="module")
+def joint_motor(logs):
+    """The joint-motor identification of each clean log with the defaults, made once for the
+    mode and the parameter checks (read only)."""
+    return {name: identify(log, "joint-motor") for name, log in logs.items()}
+
+
 def _xfail(request, table, name):
     if name in table:
         request.applymarker(pytest.mark.xfail(strict=True, reason=table[name]))
 
 
 @pytest.mark.parametrize("name", list(FAMILIES))
-def test_first_mode_within_2_percent(logs, name, request):
+def test_first_mode_within_2_percent(logs, joint_motor, name, request):
     """The reported f1: the identified two-mass model's (measured: -1.50 to -0.04 %), with
     the frequency response's estimate, which designed the band, in its note."""
     _xfail(request, F1_OVER, name)
     log = logs[name]
-    mode = identify(log, "joint-motor").first_mode
+    mode = joint_motor[name].first_mode
     assert mode.found and mode.method.startswith("identified two-mass model")
     assert "the frequency response gave" in mode.note
     assert abs(mode.f1_hz / log.truth()["f1_hz"] - 1) < 0.02, mode.f1_hz
 
 
 @pytest.mark.parametrize("name", list(FAMILIES))
-def test_joint_motor_with_defaults(logs, name, request):
+def test_joint_motor_with_defaults(logs, joint_motor, name, request):
     _xfail(request, JOINT_MOTOR_OVER, name)
     log = logs[name]
-    result, truth = identify(log, "joint-motor"), log.truth()
+    result, truth = joint_motor[name], log.truth()
     assert result.ls.instrumental
     band = identify_json(result, truth, [], [])["band"]   # what `identify --json` says
     assert band["used"] == result.band.used == BAND_USED[name], band["reason"]
@@ -118,7 +125,7 @@ def test_motor_only_with_defaults(logs, name, request):
 
 
 @pytest.mark.parametrize("feedforward", [True, False], ids=["ff", "no-ff"])
-def test_joint_motor_without_noise(feedforward):
+def test_joint_motor_without_noise(indep_log, feedforward):
     """stiff_small (f1 = 20 Hz at 17.5 samples a period, motor Coulomb friction 1.6 % of the
     torque limit) with ideal sensors: no torque noise and no quantisation, so no statistical
     error is left and what remains is the method's own bias. The Coulomb columns with the
@@ -126,14 +133,14 @@ def test_joint_motor_without_noise(feedforward):
     phases (identification/friction_state.py) hold K, Jm, JL within 0.1 % (measured: within
     0.05 %, with and without feed-forward); with the reversals placed linearly between
     samples they were Jm +2.79 % and +3.63 %."""
-    log = simulate(FAMILIES["stiff_small"], seed=1, duration=60.0, sweep="linear",
-                   feedforward=feedforward, ideal_sensors=True)
+    log = indep_log(FAMILIES["stiff_small"], seed=1, duration=60.0, sweep="linear",
+                    feedforward=feedforward, ideal_sensors=True)
     result, truth = identify(log, "joint-motor"), log.truth()
     for p in ("K", "Jm", "JL"):
         assert abs(result.physical[p] / truth[p] - 1) < 0.001, (p, result.physical[p])
 
 
-def test_joint_motor_without_noise_or_feedforward_in_the_papers_band():
+def test_joint_motor_without_noise_or_feedforward_in_the_papers_band(indep_log):
     """soft (f1 = 4 Hz, within 20 % of the paper's 3.9 Hz, so the chooser gives the paper's
     band: wn 176 rad/s, Nd 26, eq. (22)'s 3 points) without feed-forward, ideal sensors: the
     motor sticks at most reversals (it creeps under 5 mrad/s 75 % of the time). The 3-point
@@ -142,8 +149,8 @@ def test_joint_motor_without_noise_or_feedforward_in_the_papers_band():
     at Nd 15, where the simulator's own friction state as the column gives +0.13 % (3 points)
     and +0.000 % (5 points). With the stick phases in both chains: K -0.02, Jm -0.07, JL
     +0.29 % (measured 2026-12-01); the issue's 0.5 %."""
-    log = simulate(FAMILIES["soft"], seed=1, duration=60.0, sweep="linear",
-                   feedforward=False, ideal_sensors=True)
+    log = indep_log(FAMILIES["soft"], seed=1, duration=60.0, sweep="linear",
+                    feedforward=False, ideal_sensors=True)
     result, truth = identify(log, "joint-motor"), log.truth()
     assert (result.settings.Nd, result.settings.stencil) == (26, 3)
     for p in ("K", "Jm", "JL"):
@@ -204,7 +211,7 @@ def _motor_equation_crb(log, settings, truth: dict, noise_std: float) -> float:
     return math.sqrt(var * np.linalg.inv(W.T @ W)[0, 0])
 
 
-def test_jm_sigma_without_feedforward_is_the_log_s_information():
+def test_jm_sigma_without_feedforward_is_the_log_s_information(indep_log):
     """soft without feed-forward (linear sweep, default sensors, seed 1): Jm's corrected
     sigma (1.55 %) is what the log holds, not a failing of the fit: the Cramer-Rao bound of
     the motor equation in the band used is 1.70 % (the wide band's 1.52 %: the excitation
@@ -213,7 +220,7 @@ def test_jm_sigma_without_feedforward_is_the_log_s_information():
     heavy_link seeds 1-5 +1.17 +- 2.95 % (2.31 %, bound 2.45 %): the issue's 0.5 % is under a
     third of one sigma of a 60 s log, so it is checked against the sigma instead: the truth
     within 3 corrected sigma, and the sigma within 25 % of the bound."""
-    log = simulate(FAMILIES["soft"], seed=1, duration=60.0, sweep="linear", feedforward=False)
+    log = indep_log(FAMILIES["soft"], seed=1, duration=60.0, sweep="linear", feedforward=False)
     result, truth = identify(log, "joint-motor"), log.truth()
     for p in ("K", "Jm", "JL"):
         z = (result.physical[p] - truth[p]) / result.physical_sigma_corrected[p]

@@ -19,18 +19,17 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pytest
 
-from jointbench.testing import FAMILIES, simulate
 from jointbench.identification.band_choice import (MODE_DISAGREEMENT, choose_band, mode_gap,
                                                    wide_settings)
 from jointbench.identification.filter_choice import PAPER_RATE, default_settings
 from jointbench.identification.identify import identify
 from jointbench.identification.log import Log
-from jointbench.testing import FAMILIES, simulate
+from jointbench.testing import FAMILIES
 
 
-def test_soft_axis_without_link_coulomb_nor_feedforward():
-    log = simulate(replace(FAMILIES["soft"], FS=0.0), seed=1, duration=60.0, sweep="linear",
-                   feedforward=False)
+def test_soft_axis_without_link_coulomb_nor_feedforward(indep_log):
+    log = indep_log(replace(FAMILIES["soft"], FS=0.0), seed=1, duration=60.0, sweep="linear",
+                    feedforward=False)
     result, truth = identify(log, "joint-motor"), log.truth()
     assert result.band.used == "wide", result.band.reason
     # Before the 3-point chain took the motor's stick phases (regressors.py) the chooser's band

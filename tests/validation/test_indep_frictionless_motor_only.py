@@ -68,10 +68,10 @@ def test_rounding_does_not_decide(noise_free, column, scale):
 
 @pytest.mark.parametrize("name, FS, ideal_sensors", [("soft", 0.0, False), ("soft", 4.0, True),
                                                    ("balanced", 0.0, False)])
-def test_instruments_kept_otherwise(name, FS, ideal_sensors):
+def test_instruments_kept_otherwise(indep_log, name, FS, ideal_sensors):
     """With the closed loop's torque noise, or with link Coulomb friction, the instrumental
     passes stay physical: no warning."""
-    log = simulate(replace(FAMILIES[name], FS=FS), seed=1, duration=60.0, sweep="linear",
-                   feedforward=False, ideal_sensors=ideal_sensors)
+    log = indep_log(replace(FAMILIES[name], FS=FS), seed=1, duration=60.0, sweep="linear",
+                    feedforward=False, ideal_sensors=ideal_sensors)
     result = identify(replace(log, q=None), "motor-only")
     assert not any(IV_WARNING in w for w in result.warnings), result.warnings
