@@ -21,6 +21,7 @@ import pytest
 
 from jointbench.identification.first_mode import measure_first_mode
 from jointbench.identification.identify import identify
+from jointbench.identification.physical import InversionError
 
 BARS_60S = {"K": 3.0, "Jm": 3.0, "JL": 8.0}   # percent, motor-only, 60 s logs
 
@@ -46,3 +47,14 @@ def test_short_prototype_log_motor_only(bench_log, duration, seed):
     for name, bar in BARS_60S.items():
         err = 100 * (result.physical[name] / truth[name] - 1)
         assert abs(err) < bar * scale, (name, err, result.warnings)
+
+
+def test_a_band_without_the_mode_is_named(bench_log):
+    """A first mode given above the axis' (26.7 Hz for 3.7 Hz: what the stray bins of a
+    four-segment motor response gave) puts the band far above the mode; eqs. (18)-(20)
+    then start the link reconstruction from K and JL orders of magnitude off, and it leaves
+    the physical region: the error says so and names the band and f1."""
+    log = replace(bench_log("prototype", duration=30.0, seed=2), q=None)
+    with pytest.raises(InversionError, match=r"left the physical region .*band that does not "
+                       r"hold the first mode \(wn = .*f1 26.7 Hz"):
+        identify(log, "motor-only", f1_hz=26.74)
