@@ -42,23 +42,14 @@ def grid(rows: Rows) -> np.ndarray:
     return np.r_[0.0, np.geomspace(0.2 * ts, 50 * ts, 40)]
 
 
-def check(v: dict, rows: Rows) -> str:
-    # A current loop slower than the first mode could not drive it: the lag's corner
-    # 1 / (2 pi T) must lie above the locked mode sqrt(K (1/Jm + 1/JL)) / 2 pi of the nominal
-    # (bench lags: 0.15-0.3 of 1 / (2 pi f1)). Without q (no K) nothing to compare with.
-    T = v.get("lag_s", 0.0)   # `check` sees the searched values too
-    if not rows.sig.has_link or not T:
-        return ""
-    K, Jm, JL = rows.value("K"), rows.value("Jm"), rows.value("JL")
-    if not (K > 0 and Jm > 0 and JL > 0):
-        return ""
-    w1 = float(np.sqrt(K * (1 / Jm + 1 / JL)))
-    return (f"lag {T:.3g} s: its corner {1 / (2 * np.pi * T):.3g} Hz lies below the first mode "
-            f"{w1 / (2 * np.pi):.3g} Hz" if w1 * T > 1 else "")
+# No physical-range check on T: a current loop slower than the first mode still drives the
+# axis (a voltage drive under a position loop lags with a corner below the locked mode
+# sqrt(K (1/Jm + 1/JL)) / 2 pi), so the corner's place against the mode is no prior; what
+# the data cannot support the held-out test, the wide view and the forward view reject.
 
 
 EFFECT = Effect(
     "torque_lag", "lag_s", "s", "s",
     "the applied torque lags the command (first-order current-loop lag)",
     needs_link=False, rigid_axis=True, block=0, k=1, design=design,
-    params=searched_value("lag_s"), check=check, search="lag_s", grid=grid)
+    params=searched_value("lag_s"), search="lag_s", grid=grid)
