@@ -25,9 +25,7 @@ from jointbench.identification.log import Log
 from jointbench.identification.spectra import Spectra
 
 COHERENCE_MIN = 0.5     # bins kept: coherence of the excitation with output and with torque
-COHERENCE_ALPHA = 0.05  # a noise bin passes it with at most this chance (`motor_segments`)
-SEGMENT_S = 8.0         # Welch segment length [s] (resolution 1 / 8 s = 0.125 Hz or finer,
-                        # on a record long enough: `segment_length`)
+SEGMENT_S = 8.0         # Welch segment length [s] (resolution 1 / 8 s = 0.125 Hz or finer)
 FMIN_HZ = 0.5           # below, friction dominates the response of a chirp experiment
 MIN_PEAK_RATIO = 2.0    # a resonance: |H| f^2 at the peak over its level across the band
 GAP_HZ = 1.0            # a gap this wide in the coherent bins ends the excited band
@@ -342,29 +340,6 @@ def _from_motor(log: Log, link: FirstMode, spectra: Spectra | None = None) -> Fi
                    note=f"{motor.note}; the link response q/tau_m: {link.note}")
 
 
-def segment_length(n: int, fs: float, segments: int) -> int:
-    """The Welch segment [samples] of a response on a record of `n` samples at `fs` [Hz]:
-    SEGMENT_S rounded up to a power of two, or the largest power of two that leaves at least
-    `segments` half-overlapping segments in the record (n_avg = 2 n / nperseg - 1: a short
-    record gets wider bins and more averages)."""
-    cap = 2 * n / (segments + 1)
-    return int(min(2 ** math.ceil(math.log2(SEGMENT_S * fs)), 2 ** math.floor(math.log2(cap))))
-
-
-def motor_segments() -> int:
-    """The Welch segments the motor response q_m / tau_m needs for its coherence test. The
-    coherence estimated over n independent segments of two uncorrelated signals exceeds c
-    with probability (1 - c)^(n - 1) (Carter, Knapp & Nuttall 1973): over three segments a
-    bin of noise passes COHERENCE_MIN one time in four, and above the excited band such bins
-    join it (gaps under GAP_HZ) with a scattered |H| f^2: above the antiresonance dip their
-    largest value can outbid the mode's peak (a 30 s prototype log: 20-27 Hz for 3.7 Hz),
-    and the motor response has
-    no other response to check its peak against (the link's is checked by q / q_m and by its
-    median level). n is the least that keeps that chance under COHERENCE_ALPHA at
-    COHERENCE_MIN (six); a 60 s log at the paper's rate has nine at SEGMENT_S."""
-    return 1 + math.ceil(math.log(COHERENCE_ALPHA) / math.log(1.0 - COHERENCE_MIN))
-
-
 def _measure(log: Log, motor: bool, spectra: Spectra | None = None) -> FirstMode:
     """`measure_first_mode` on one response: the motor's (`motor`) or the link's."""
     spectra = spectra or Spectra(log)
@@ -375,8 +350,7 @@ def _measure(log: Log, motor: bool, spectra: Spectra | None = None) -> FirstMode
     method = ("motor q_m/tau_m" if motor else "link q/tau_m") + \
         (", indirect via q_ref" if indirect else ", H1 (no q_ref)")
     n = len(log)
-    # the link response keeps three segments at least (its peak is checked by q / q_m)
-    nperseg = segment_length(n, fs, motor_segments() if motor else 3)
+    nperseg = int(min(2 ** math.ceil(math.log2(SEGMENT_S * fs)), 2 ** math.floor(math.log2(n / 2))))
     if nperseg < 64:
         return FirstMode(math.nan, math.nan, method, False, f"{n} samples are too few")
     df = fs / nperseg

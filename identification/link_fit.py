@@ -69,10 +69,6 @@ class LinkFit:
     warnings: tuple[str, ...] = ()
 
 
-class Unphysical(ValueError):
-    """A point with no link to simulate: K / JL not positive or FV / JL negative."""
-
-
 class _Rows:
     """The motor rows of one log for given (a, b) and given profiles (phi, gravity, reversal
     rate): the filtered motor derivatives and their spectra are computed once, the decimated
@@ -118,8 +114,6 @@ class _Rows:
         key = (a, b, c, gx, gy, rate, self.gravity) + ((p["Jm"], p["FVm"], K) if stick else ())
         if key == self._key:
             return
-        if not (a > 0 and b >= 0):
-            raise Unphysical(f"K / JL = {a:.4g}, FV / JL = {b:.4g}")
         q, phi = simulate_link(self.log.q_m, self.s.ts, a, b, c, gx, gy)
         self.phi = zoh_align(phi)            # the step means at the samples
         g = self.g if self.gravity else 0.0
@@ -403,32 +397,18 @@ def fit(log: Log, s: FilterSettings, start: dict[str, float], f1_hz: float | Non
     FVm, FSm and optionally FS, MX, MY); `lp`: the Butterworth (`lowpass`, or a
     `filtering.Lowpassed` shared with the eqs. (18)-(20) fit); `stick`: the motor's Coulomb
     column with its stick phases (`_Rows.profiles`), else its reversals alone. Raises ValueError when the
-    start has no positive K and JL, or when a pass leaves the physical region."""
+    start has no positive K and JL."""
     K, JL = start.get("K", 0.0), start.get("JL", 0.0)
     if not (K > 0 and JL > 0):
         raise ValueError(f"the link reconstruction needs a positive K and JL to start from "
                          f"(K = {K:.4g}, JL = {JL:.4g})")
+    g = log.gravity
     a = K / JL
     p = {"Jm": start.get("Jm", 0.0), "FVm": start.get("FVm", 0.0),
          "FSm": start.get("FSm", 0.0), "K": K, "Kc": a * start.get("FS", 0.0),
          "Kgx": a * start.get("MX", 0.0), "Kgy": a * start.get("MY", 0.0), "a": a,
          "b": max(start.get("FV", 0.0) / JL, B_FLOOR)}
     rows = _Rows(log, s, lp, stick)
-    try:
-        return _fit(log, s, p, f1_hz, rows, stick)
-    except Unphysical as err:
-        f1 = f"{f1_hz:.3g} Hz" if f1_hz is not None else "not found"
-        raise ValueError(
-            f"the link reconstruction left the physical region ({err}) from K = {K:.4g}, "
-            f"JL = {JL:.4g} (its start): a band that does not hold the first mode (wn = "
-            f"{s.wn:.4g} rad/s, decimated cutoff {s.decimated_cutoff_hz:.3g} Hz; f1 {f1}) "
-            "gives such a start") from err
-
-
-def _fit(log: Log, s: FilterSettings, p: dict[str, float], f1_hz: float | None, rows: _Rows,
-         stick: bool) -> LinkFit:
-    """`fit` from the point `p` on NAMES with the rows `rows`."""
-    g = log.gravity
     p = _converge(rows, log, p, ROUNDS)
     Z, why = _instruments(log, s, f1_hz, stick)
     (p, ls, y, J, idx), warning = _final_checked(rows, log, p, Z)
