@@ -4,14 +4,16 @@ from __future__ import annotations
 
 import os
 
+from jointbench.bench.sim.plant_keys import check
 from jointbench.identification.log import Log, read_log
 
 LogLike = Log | str | os.PathLike
 
 
 def as_log(log: LogLike) -> Log:
-    """`log` itself, or the log read from that file (LogError naming the file and line)."""
-    return log if isinstance(log, Log) else read_log(log)
+    """`log` itself, or the log read from that file; the simulated plant's keys checked
+    (LogError naming the file and line)."""
+    return check(log if isinstance(log, Log) else read_log(log))
 
 
 def log_name(log: LogLike, loaded: Log) -> str:

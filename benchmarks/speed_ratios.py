@@ -19,7 +19,8 @@ designed from it), the plain chain with f1 given (`--f1`, no measurement), and t
 eq. (13)'s chain cannot do without at the chooser's band (three Butterworth passes, q_m, q,
 tau_m, and the decimation of y and the ten columns of the two equations that are not zero,
 each a zero-phase order-8 Chebyshev pass); and the full joint-motor fit with one correction
-switched off at a time (what each costs). The verdict is read on the CPU-time ratio (the
+switched off at a time (what each costs); and diagnose without its forward view (the forward
+view's MuJoCo replays are what is left). The verdict is read on the CPU-time ratio (the
 machine is shared: wall times there swing with the other processes). The script prints
 figures and ratios and asserts nothing: timings depend on the machine and its load, and no
 unit test holds one.
@@ -124,6 +125,8 @@ def main() -> None:
         t[f"joint-motor without {c}"] = best_of(
             lambda: identify(log, "joint-motor", corrections=rest), SLOW_REPEATS)
     t["diagnose (forward view included)"] = best_of(lambda: diagnose(log), SLOW_REPEATS)
+    t["diagnose, inverse view alone"] = best_of(lambda: diagnose(log, forward=False),
+                                                SLOW_REPEATS)
     ident = identify(log, "joint-motor")
     w, c, rw, rc = debias_times(log, ident)
     t["debias 8"], t["its 8 replays"] = (w, c), (rw, rc)
@@ -151,6 +154,10 @@ def main() -> None:
           f"chain with f1 given is "
           f"{cpu['plain joint-motor, f1 given'] / cpu['five sosfiltfilt']:.1f}x five sosfiltfilt, "
           f"its filtering alone {filtering / cpu['five sosfiltfilt']:.1f}x")
+    replays = cpu["diagnose (forward view included)"] - cpu["diagnose, inverse view alone"]
+    print(f"diagnose's forward view (its MuJoCo replays of the log) alone is "
+          f"{replays / cpu['plain joint-motor']:.1f}x the plain chain; its inverse view "
+          f"{cpu['diagnose, inverse view alone'] / cpu['plain joint-motor']:.1f}x")
 
 
 if __name__ == "__main__":

@@ -36,8 +36,9 @@ from typing import Any, Callable, Mapping
 from jointbench.bench.campaign.settings import ID_MODELS, CampaignError
 from jointbench.bench.campaign.spec import PARAMS, CampaignSpec
 from jointbench.identification.log import Log
-from jointbench.identification.log.schema import (BOOLEAN_META, FORMAT_KEY, NUMERIC_META,
-                                                  PLANT_INTEGRATOR_KEY)
+from jointbench.bench.sim.plant_keys import (PLANT_INTEGRATOR_KEY, PLANT_STEPS_KEY,
+                                             PLANT_TIMECONST_KEY)
+from jointbench.identification.log.schema import BOOLEAN_META, FORMAT_KEY, NUMERIC_META
 from jointbench.identification.parameters import PARAMETERS
 
 # The names a campaign scores (those with ground truth in a virtual log): table columns
@@ -45,12 +46,12 @@ from jointbench.identification.parameters import PARAMETERS
 # names without a truth: accepted, not scored.
 SCORED = PARAMS["joint-motor"]
 # The metadata a plug-in sees (`blind`): what a drive's log of a measured axis holds, and the
-# simulated plant's keys that the built-in identification reads as well (so that a plug-in
-# wrapping jointbench.identify sees what the built-in sees).
+# simulated plant's keys that the built-in bias correction reads (so that a plug-in wrapping
+# jointbench.identify sees what the built-in sees).
 BLIND_META = frozenset(NUMERIC_META) | frozenset(BOOLEAN_META) | {
-    FORMAT_KEY, PLANT_INTEGRATOR_KEY, "joint", "axis", "motor_encoder_resolution_rad",
-    "link_encoder_resolution_rad", "torque_noise_std", "saturated_samples",
-    "actuator_clamped_samples"}
+    FORMAT_KEY, PLANT_STEPS_KEY, PLANT_INTEGRATOR_KEY, PLANT_TIMECONST_KEY, "joint", "axis",
+    "motor_encoder_resolution_rad", "link_encoder_resolution_rad", "torque_noise_std",
+    "saturated_samples", "actuator_clamped_samples"}
 DEFAULT_TIMEOUT_S = 60.0
 _LABEL = re.compile(r"[A-Za-z][A-Za-z0-9_-]*\Z")
 RESERVED = set(ID_MODELS) | set(ID_MODELS.values()) | {"truth", "run", "status", "reason"}

@@ -13,6 +13,7 @@ from jointbench.bench.sim.friction import log_substeps
 from jointbench.bench.sim.nominal import compile_axis, for_log
 from jointbench.bench.sim.replay import ReplayResult, forward_errors, replay
 from jointbench.identification.identify import identify
+from jointbench.bench.sim.plant_keys import check
 from jointbench.identification.log import Log, LogError, read_log
 
 
@@ -67,7 +68,7 @@ def replay_log_file(path, model: str | None = None, joint: str | None = None,
     says), or without a model on the nominal axis of its own identification
     (`identification.identify.identify(log, identify_model)`, then `bench.nominal.for_log`).
     """
-    log = read_log(path)
+    log = check(read_log(path))
     if log.q_ref is None:
         raise LogError("cannot replay: the log has no column 'q_ref' (the reference the "
                        "controller tracked)", log.path, column="q_ref")

@@ -29,8 +29,9 @@ import mujoco
 import numpy as np
 
 from jointbench.identification.log import format_meta_number
-from jointbench.identification.log.schema import (PLANT_INTEGRATOR_KEY, PLANT_STEPS_KEY,
-                                                   PLANT_TIMECONST_KEY, Log)
+from jointbench.bench.sim.plant_keys import (PLANT_INTEGRATOR_KEY, PLANT_STEPS_KEY,
+                                             PLANT_TIMECONST_KEY, plant_steps, plant_timeconst)
+from jointbench.identification.log.schema import Log
 
 SOFT_ERROR_MAX = 0.01   # friction error RMS over the torque RMS above which the model is warned
 
@@ -146,11 +147,8 @@ def log_substeps(log: Log, default: int) -> int:
     """MuJoCo steps per sample that simulate `log`'s plant as it was simulated: the log's own
     `substeps` (a jointbench log of a MuJoCo plant carries it), else `default`. A replica of
     the log (bias correction, refinement, replay) then has the log's discretisation."""
-    try:
-        steps = float(log.meta.get(PLANT_STEPS_KEY, ""))
-    except ValueError:
-        return default
-    return int(steps) if steps >= 1 and steps == int(steps) else default
+    steps = plant_steps(log)
+    return int(steps) if steps is not None and steps >= 1 and steps == int(steps) else default
 
 
 def timeconst_for_log(log: Log, default: float, given: float | None = None
@@ -162,7 +160,7 @@ def timeconst_for_log(log: Log, default: float, given: float | None = None
     LogError when the log's value is not a number."""
     if given is not None:
         return given, "given (--friction-timeconst)"
-    value = log.plant_timeconst()
+    value = plant_timeconst(log)
     if value is not None:
         return value, f"the log's {META_KEY} (the simulated model's)"
     return default, (f"default: the log has no {META_KEY}; a measured axis's Coulomb friction "

@@ -16,18 +16,12 @@ import numpy as np
 
 FORMAT_KEY = "jointbench-log"
 FORMAT_VERSION = "1"
-# The simulated plant's keys (docs/log-format.md "The simulated plant"): physics steps per
-# sample, MuJoCo's integrator, the rotor's friction time constant [s]. A measured log has none.
-PLANT_STEPS_KEY = "substeps"
-PLANT_INTEGRATOR_KEY = "integrator"
-PLANT_TIMECONST_KEY = "friction_timeconst_s"
 REQUIRED_COLUMNS = ("t", "q_m", "tau_m")
 OPTIONAL_COLUMNS = ("q", "q_ref")
 # Metadata the analyses read as numbers: key -> must the value be positive?
 NUMERIC_META = {"sample_rate_hz": True, "gravity": False, "kp": False, "kv": False,
-                "ki": False, "tau_max": True, "gear_ratio": True, PLANT_STEPS_KEY: True,
-                "pid_kp": False, "pid_ki": False, "pid_kd": False,
-                PLANT_TIMECONST_KEY: False}
+                "ki": False, "tau_max": True, "gear_ratio": True,
+                "pid_kp": False, "pid_ki": False, "pid_kd": False}
 BOOLEAN_META = ("velocity_feedforward",)
 # Metadata the replays read as numbers that cannot be negative (Sensors.from_log): a noise
 # level and the encoders' steps (0: an ideal sensor).
@@ -38,7 +32,6 @@ NONNEGATIVE_META = ("torque_noise_std", "motor_encoder_resolution_rad",
 META_UNITS = {"sample_rate_hz": ("Hz",), "gravity": ("m/s^2", "m/s2", "m s^-2", "m/s²"),
               "kp": ("1/s", "s^-1"), "kv": ("N m s/rad", "N s/m"),
               "ki": ("N m/rad", "N/m"), "tau_max": ("N m", "N"), "gear_ratio": (),
-              PLANT_STEPS_KEY: (), PLANT_TIMECONST_KEY: ("s",),
               "pid_kp": ("N m/rad", "N/m"), "pid_ki": ("N m/(rad s)", "N m/rad/s", "N/(m s)"),
               "pid_kd": ("N m s/rad", "N s/m")}
 # The metadata rate is used as it is when it agrees with `t` to this relative precision
@@ -166,24 +159,6 @@ class Log:
             return None
         return meta_number(key, self.meta[key], self.path, self.meta_lines.get(key))
 
-    def plant_timeconst(self) -> float | None:
-        """The simulated plant's friction time constant (PLANT_TIMECONST_KEY, MuJoCo's
-        solreffriction).
-
-        Returns
-        -------
-        float or None
-            The time constant [s]; None when the log has none or gives MuJoCo's direct form
-            (<= 0).
-
-        Raises
-        ------
-        LogError
-            The value is not a number (names the file and line).
-        """
-        value = self.meta_float(PLANT_TIMECONST_KEY)
-        return value if value is not None and value > 0 else None
-
     def meta_bool(self, key: str, default: bool) -> bool:
         """Metadata `key` as a boolean.
 
@@ -251,24 +226,27 @@ def _unit_key(text: str) -> str:
     return "".join(c for c in text if c not in " *.\u00b7")
 
 
-def meta_number(key: str, value: str, path, line: int | None) -> float:
+def meta_number(key: str, value: str, path, line: int | None,
+                units: tuple[str, ...] | None = None, positive: bool | None = None) -> float:
     """The first word of a metadata value as a number; the key's SI unit may follow
-    (`9.81 m/s^2`, META_UNITS), nothing else (`3 kN m` is refused, not read as 3)."""
+    (`9.81 m/s^2`: `units`, by default META_UNITS'), nothing else (`3 kN m` is refused, not
+    read as 3). `positive` (by default NUMERIC_META's) refuses a value <= 0."""
     words = value.split()
     number = float(words[0]) if words and is_number(words[0]) else None
     if number is None:
         raise LogError(f"metadata '{shown(key)}' must be a number, got '{shown(value)}'",
                        path, line)
     unit = _unit_key(" ".join(words[1:]))
-    if unit and unit not in [_unit_key(u) for u in META_UNITS.get(key, (unit,))]:
-        allowed = META_UNITS.get(key, ())
+    allowed = META_UNITS.get(key, (unit,)) if units is None else units
+    if unit and unit not in [_unit_key(u) for u in allowed]:
+        allowed = META_UNITS.get(key, ()) if units is None else units
         raise LogError(f"metadata '{shown(key)}' must be a plain number"
                        + (f" (optionally followed by its SI unit {allowed[0]})" if allowed
                           else "") + f", got '{shown(value)}'", path, line)
     if not math.isfinite(number):
         raise LogError(f"metadata '{shown(key)}' must be finite, got '{shown(value)}'", path,
                        line)
-    if NUMERIC_META.get(key) and number <= 0:
+    if (NUMERIC_META.get(key) if positive is None else positive) and number <= 0:
         raise LogError(f"metadata '{key}' must be positive, got '{shown(value)}'", path, line)
     if key in NONNEGATIVE_META and number < 0:
         raise LogError(f"metadata '{key}' must be >= 0 (0: an ideal sensor), got "

@@ -16,6 +16,7 @@ from jointbench.bench.cli import main
 from jointbench.bench.sim.defaults import DEFAULT_SUBSTEPS
 from jointbench.bench.sim.experiment import run_experiment
 from jointbench.bench.sim.friction import effective_timeconst, integrator_for_log
+from jointbench.bench.sim.plant_keys import plant_timeconst
 from jointbench.bench.sim.nominal import compile_axis, for_log, rigid_axis, two_mass_axis, write_xml
 from jointbench.bench.sim.replay import ReplayResult, forward_errors, replay, simulated_log
 from jointbench.bench.sim.sensors import Sensors
@@ -60,14 +61,14 @@ def test_nominal_options_are_the_prototypes(ideal_run):
     h = proto.opt.timestep
     assert log.ts / h == pytest.approx(int(log.meta["substeps"]), rel=1e-9)
     common = dict(timestep=h, integrator=integrator_for_log(log))
-    for spec in (two_mass_axis(**TABLE1, friction_timeconst=log.plant_timeconst(), **common),
+    for spec in (two_mass_axis(**TABLE1, friction_timeconst=plant_timeconst(log), **common),
                  rigid_axis(2.0, 1.0, 0.5, **common),
                  rigid_axis(95.0, 200.0, 20.0, prismatic=True, **common)):
         model = spec.compile()
         assert model.opt.integrator == proto.opt.integrator
         assert model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONTACT
         np.testing.assert_array_equal(model.dof_solimp[0], proto.dof_solimp[0])
-    model = two_mass_axis(**TABLE1, friction_timeconst=log.plant_timeconst(), **common).compile()
+    model = two_mass_axis(**TABLE1, friction_timeconst=plant_timeconst(log), **common).compile()
     assert effective_timeconst(model, 0) == pytest.approx(effective_timeconst(proto, 0),
                                                          rel=1e-9)
     assert effective_timeconst(proto, 0) == pytest.approx(2 * h, rel=1e-12)
@@ -132,7 +133,7 @@ def test_replay_reproduces_virtual_log_with_true_nominal(ideal_run):
     while a 0.1 % change of any parameter gives 0.06-0.1 % (K 0.1 % -> 0.098 %)."""
     log, truth = ideal_run.log, ideal_run.experiment.truth
     params = {k: getattr(truth, k) for k in TABLE1}
-    plant = dict(friction_timeconst=log.plant_timeconst(), integrator=integrator_for_log(log))
+    plant = dict(friction_timeconst=plant_timeconst(log), integrator=integrator_for_log(log))
     model, axis = compile_axis(two_mass_axis(**params, timestep=log.ts, tau_max=3000.0,
                                              gravity=truth.g, **plant))
     result = replay(model, axis, log)
@@ -152,7 +153,7 @@ def test_replay_through_written_xml(ideal_run, tmp_path):
     path = tmp_path / "nominal.xml"
     write_xml(two_mass_axis(**{k: getattr(truth, k) for k in TABLE1}, timestep=log.ts,
                             tau_max=3000.0, gravity=truth.g,
-                            friction_timeconst=log.plant_timeconst(),
+                            friction_timeconst=plant_timeconst(log),
                             integrator=integrator_for_log(log)), path)
     model, axes, _ = load_model(path)
     e = forward_errors(log, replay(model, axes[0], log))

@@ -35,7 +35,7 @@ from jointbench.identification.discrepancy.heldout import ALPHA, segment_sums, s
 from jointbench.identification.effects import EFFECTS
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.log import Log
-from jointbench.identification.log.schema import PLANT_INTEGRATOR_KEY, PLANT_STEPS_KEY
+from jointbench.bench.sim.plant_keys import PLANT_INTEGRATOR_KEY, plant_steps
 from jointbench.identification.saturation import CLIP_RELATIVE
 
 
@@ -89,7 +89,7 @@ def plant_substeps(log: Log) -> int:
     longer than the friction constraint's time constant, which a longer step does not resolve
     (the soft constraint then chatters through the stick phases)."""
     if _mujoco_plant(log):
-        steps = log.meta_float(PLANT_STEPS_KEY)
+        steps = plant_steps(log)
         if steps is not None and steps >= 1:
             return int(steps)
     return max(1, math.ceil(log.ts / friction_timeconst(log) - 1e-9))
