@@ -27,11 +27,13 @@ their events (`_phases`), and only those, with the ones after them, go through t
 (`_one_way_every_pass`); the numbers are the sub-steps' to rounding (tests/unit/
 test_friction_state.py).
 
-Pure numpy.
+Numpy; the phases, interval by interval, compiled by numba when it is installed (the optional
+extra "fast"; the same numbers as the array passes).
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from functools import lru_cache
 
 import numpy as np
@@ -127,7 +129,7 @@ def _event(u: np.ndarray, free: np.ndarray, d: np.ndarray, rate: float, h: float
 
 
 def _phases(u: np.ndarray, d0: np.ndarray, d1: np.ndarray, visc: float, rate: float,
-            ts: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+            ts: float, compiled: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """`_slip_stick` phase by phase instead of sub-step by sub-step, for every interval at
     once: a moving phase follows the free recurrence in closed form (`_powers`) to the first
     sub-step whose free step changes the velocity's sign (a reversal: `_event`); a phase at
@@ -138,9 +140,21 @@ def _phases(u: np.ndarray, d0: np.ndarray, d1: np.ndarray, visc: float, rate: fl
     `_slip_stick`'s on the same drive; the velocities agree with its sub-steps to rounding,
     and so do the integrals, I1 = h sum_j s_j and I2 = h^2 sum_j s_j (SUBSTEPS - j - 1/2)
     (an interval that never leaves its sign: a constant sign's, as `_slip_stick` sums
-    them)."""
+    them). `compiled`: interval by interval (`_steps`, the same operations in the same order,
+    so the same numbers) compiled by numba when it is installed (the optional extra "fast"),
+    else these array passes."""
     n, N, h = len(u), SUBSTEPS, ts / SUBSTEPS
     free, weight, ahead, mid, mid_w = _tables(visc, ts)
+    steps = _compiled_steps() if compiled else None
+    if steps is not None:
+        I1, I2, end = np.zeros(n), np.zeros(n), np.zeros(n)
+        one_way = np.zeros(n, dtype=np.bool_)
+        steps(np.asarray(u, dtype=float), d0, d1, rate, h, free, weight, ahead, mid, mid_w,
+              I1, I2, end, one_way)
+        p1, p2 = _unit_integrals(ts)
+        sg = np.sign(u[one_way])
+        I1[one_way], I2[one_way] = sg * p1, sg * p2
+        return I1, I2, end
     j = np.arange(N)
     diff = d1 - d0
     slope = diff / N
@@ -154,7 +168,7 @@ def _phases(u: np.ndarray, d0: np.ndarray, d1: np.ndarray, visc: float, rate: fl
             sg, a0 = np.sign(v[rows]), at[rows]
             # the velocity at the start of sub-step a0 + m, m = 0 ... SUBSTEPS
             c = start[rows] - rate * sg + slope[rows] * a0
-            U = np.column_stack([v[rows], c, slope[rows]]) @ free
+            U = v[rows, None] * free[0] + c[:, None] * free[1] + slope[rows, None] * free[2]
             flip = U[:, 1:] * sg[:, None] <= 0          # the free step leaves the sign
             later = a0.any()
             if later:
@@ -190,8 +204,8 @@ def _phases(u: np.ndarray, d0: np.ndarray, d1: np.ndarray, visc: float, rate: fl
             hit = away.any(axis=1)
             stop = np.where(hit, np.argmax(away, axis=1), N)
             state = np.where(after & (j < stop[:, None]), drive / rate, 0.0)
-            I1[rows] += h * np.sum(state, axis=1)
-            I2[rows] += np.sum(state * weight, axis=1)
+            I1[rows] += h * np.cumsum(state, axis=1)[:, -1]     # summed in order (`_steps`)
+            I2[rows] += np.cumsum(state * weight, axis=1)[:, -1]
             active[rows[~hit]] = False                  # at rest to the end
             rows, stop = rows[hit], stop[hit]
             zero = np.zeros(len(rows))
@@ -202,6 +216,132 @@ def _phases(u: np.ndarray, d0: np.ndarray, d1: np.ndarray, visc: float, rate: fl
     sg = np.sign(u[one_way])
     I1[one_way], I2[one_way] = sg * p1, sg * p2
     return I1, I2, end
+
+
+def _steps(u: np.ndarray, d0: np.ndarray, d1: np.ndarray, rate: float, h: float,
+           free: np.ndarray, weight: np.ndarray, ahead: np.ndarray, mid: np.ndarray,
+           mid_w: np.ndarray, I1: np.ndarray, I2: np.ndarray, end: np.ndarray,
+           one_way: np.ndarray) -> None:
+    """`_phases` interval by interval as plain scalar code (numba compiles it,
+    `_compiled_steps`): each interval's phases in the order `_phases` takes them (a moving
+    phase, then a phase at rest, each ending in an event (`_step`) or at the interval's end),
+    each value with `_phases`' operations in the same order, so the same numbers; a moving
+    phase stops at the first sub-step whose free step leaves the sign. Writes I1, I2, end and
+    one_way (the intervals that moved one way from their start to their end) in place."""
+    N = len(weight)
+    for i in range(len(u)):
+        diff = d1[i] - d0[i]
+        slope = diff / N
+        start = d0[i] + diff * 0.5 / N
+        at, v, active = 0, u[i], True
+        while active:
+            for phase in range(2):
+                event, eu, ef = -1, 0.0, 0.0
+                if phase == 0 and v != 0:            # moving
+                    sg, a0 = (1.0 if v > 0 else -1.0), at
+                    c = start - rate * sg + slope * a0
+                    now = v * free[0, 0] + c * free[1, 0] + slope * free[2, 0]
+                    nxt = now
+                    stop = N
+                    for m in range(N - a0):
+                        nxt = v * free[0, m + 1] + c * free[1, m + 1] + slope * free[2, m + 1]
+                        if nxt * sg <= 0:
+                            stop = a0 + m
+                            break
+                        now = nxt
+                    I1[i] += sg * (h * (stop - a0))
+                    I2[i] += sg * (ahead[stop] - ahead[a0])
+                    if stop == N:
+                        end[i] = nxt
+                        one_way[i] = a0 == 0
+                        active = False
+                    else:
+                        event, eu, ef = stop, now, nxt
+                elif phase == 1 and active and v == 0:   # at rest
+                    a0 = at
+                    first = d0[i] + diff * (a0 + 0.5) / N
+                    last = d0[i] + diff * (N - 0.5) / N
+                    if abs(first) <= rate and abs(last) <= rate:
+                        I1[i] += h / rate * (d0[i] * (N - a0) + slope * mid[a0])
+                        I2[i] += (d0[i] * (ahead[N] - ahead[a0]) + slope * mid_w[a0]) / rate
+                        active = False
+                    else:
+                        stop = N
+                        for j in range(a0, N):
+                            if abs(d0[i] + diff * (j + 0.5) / N) > rate:
+                                stop = j
+                                break
+                        s1 = s2 = 0.0
+                        for j in range(N):
+                            state = ((d0[i] + diff * (j + 0.5) / N) / rate if a0 <= j < stop
+                                     else 0.0)
+                            if j == 0:
+                                s1, s2 = state, state * weight[j]
+                            else:
+                                s1, s2 = s1 + state, s2 + state * weight[j]
+                        I1[i] += h * s1
+                        I2[i] += s2
+                        if stop == N:
+                            active = False
+                        else:
+                            event = stop
+                if event >= 0:                           # `_step`, `_event`
+                    d = d0[i] + (d1[i] - d0[i]) * (event + 0.5) / N
+                    sd = 1.0 if d > 0 else (-1.0 if d < 0 else 0.0)
+                    su = 1.0 if eu > 0 else (-1.0 if eu < 0 else 0.0)
+                    share = min(max(eu / (eu - ef), 0.0), 1.0) if su != 0 else 0.0
+                    stuck = abs(d) <= rate
+                    after = d / rate if stuck else sd
+                    state = su * share + after * (1.0 - share)
+                    new = h * (1.0 - share) * (d - rate * sd)
+                    sn = 1.0 if new > 0 else (-1.0 if new < 0 else 0.0)
+                    if stuck or sn != sd:
+                        new = 0.0
+                    I1[i] += state * h
+                    I2[i] += state * weight[event]
+                    at, v = event + 1, new
+                    if at == N:
+                        end[i] = v
+                        active = False
+
+
+def _one_way_steps(u0: np.ndarray, u1: np.ndarray, d0: np.ndarray, d1: np.ndarray,
+                   rate: float, ts: float, k: float, h: float, PN: float, G0N: float,
+                   G1N: float, N: int, out: np.ndarray) -> None:
+    """`_one_way_every_pass` sample by sample as plain scalar code (numba compiles it,
+    `_compiled_one_way`), each value with its operations in the same order: the same
+    decisions. Writes them into `out`."""
+    for i in range(len(u0)):
+        u, a, b = u0[i], d0[i], d1[i]
+        sg = 1.0 if u > 0 else (-1.0 if u < 0 else 0.0)
+        slope = (b - a) / N
+        alpha = a + (b - a) * 0.5 / N - rate * sg
+        end = PN * u + h * (alpha * G0N + slope * G1N)
+        moved = 2.02 * abs(u1[i] - end)
+        excess = max(rate - min(sg * a, sg * b), 0.0)
+        reach = ts * (max(abs(a), abs(b)) + rate)
+        out[i] = u != 0 and abs(u) * k - ts * excess - moved > 0.01 * (reach + moved)
+
+
+@lru_cache(maxsize=1)
+def _compiled_one_way() -> Callable | None:
+    """`_one_way_steps` compiled by numba (cached on disk), or None without numba."""
+    try:
+        import numba
+    except ImportError:
+        return None
+    return numba.njit(cache=True, nogil=True)(_one_way_steps)
+
+
+@lru_cache(maxsize=1)
+def _compiled_steps() -> Callable | None:
+    """`_steps` compiled by numba (cached on disk: later processes load it), or None when
+    numba is not installed."""
+    try:
+        import numba
+    except ImportError:
+        return None
+    return numba.njit(cache=True, nogil=True)(_steps)
 
 
 @lru_cache(maxsize=64)
@@ -272,18 +412,26 @@ def _slip_stick(u: np.ndarray, d0: np.ndarray, d1: np.ndarray, visc: float, rate
 
 
 def _one_way_every_pass(u0: np.ndarray, u1: np.ndarray, d0: np.ndarray, d1: np.ndarray,
-                        visc: float, rate: float, ts: float) -> np.ndarray:
+                        visc: float, rate: float, ts: float, compiled: bool = True
+                        ) -> np.ndarray:
     """Intervals `_surely_one_way` in every pass of `friction_integrals`, whatever the shifts:
     while an interval moves one way its end is the free recurrence's closed form (`_powers`),
     end_0 in the first pass, and its shifts are shift_1 = delta = (u1 - end_0) / ts and
     shift_2 = delta (2 - G0 / SUBSTEPS) (or unchanged where the end does not move as
     measured), so |shift| <= 2 |delta|; `_surely_one_way`'s bound with the drive moved by
-    that much (1 % more, for the rounding of the shifts) holds in every pass."""
+    that much (1 % more, for the rounding of the shifts) holds in every pass. `compiled`:
+    sample by sample (`_one_way_steps`, the same operations) compiled by numba when it is
+    installed, else these array operations."""
     k = min(1.0, 1.0 - ts * visc)
     if not k > 0:
         return np.zeros(len(u0), dtype=bool)
     P, G0, G1 = _powers(visc, ts)
     h = ts / SUBSTEPS
+    steps = _compiled_one_way() if compiled else None
+    if steps is not None:
+        out = np.zeros(len(u0), dtype=np.bool_)
+        steps(u0, u1, d0, d1, rate, ts, k, h, P[-1], G0[-1], G1[-1], SUBSTEPS, out)
+        return out
     sg = np.sign(u0)
     slope = (d1 - d0) / SUBSTEPS
     alpha = d0 + (d1 - d0) * 0.5 / SUBSTEPS - rate * sg

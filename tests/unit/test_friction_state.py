@@ -187,3 +187,48 @@ def test_friction_integrals_step_only_what_may_leave_its_sign(visc):
     assert np.max(np.abs(np.diff(S2) - (S1[:-1] * TS + I2))) < 1e-13 * TS ** 2 * n
     one_way = np.abs(I1) >= TS * (1 - 1e-12)
     assert 0.02 < np.mean(~one_way) < 0.95   # both kinds occur (4 % leave their sign)
+
+
+@pytest.mark.parametrize("visc", [0.0, 1.5, 40.0])
+def test_the_phases_interval_by_interval_are_the_array_passes(visc):
+    """`_phases` interval by interval (`_steps`: plain Python here, numba-compiled when it is
+    installed) against its array passes: the same operations in the same order, so the same
+    numbers bit for bit, on every kind of interval."""
+    from jointbench.identification import friction_state as fs
+
+    rate, ts = 40.0, 1 / 350.87
+    u, d0, d1 = _random_intervals(11, 3000)
+    I1, I2, end = fs._phases(u, d0, d1, visc, rate, ts, compiled=False)
+    free, weight, ahead, mid, mid_w = fs._tables(visc, ts)
+    J1, J2, stepped = np.zeros(len(u)), np.zeros(len(u)), np.zeros(len(u))
+    one_way = np.zeros(len(u), dtype=bool)
+    fs._steps(u, d0, d1, rate, ts / fs.SUBSTEPS, free, weight, ahead, mid, mid_w, J1, J2,
+              stepped, one_way)
+    p1, p2 = fs._unit_integrals(ts)
+    J1[one_way], J2[one_way] = np.sign(u[one_way]) * p1, np.sign(u[one_way]) * p2
+    assert 0.05 < np.mean(stepped == 0) < 0.9 and 0.05 < one_way.mean() < 0.95
+    for got, want in ((J1, I1), (J2, I2), (stepped, end)):
+        np.testing.assert_array_equal(got, want)
+    if fs._compiled_steps() is not None:
+        for got, want in zip(fs._phases(u, d0, d1, visc, rate, ts), (I1, I2, end)):
+            np.testing.assert_array_equal(got, want)
+
+
+@pytest.mark.parametrize("visc", [0.0, 1.5, 40.0])
+def test_the_one_way_test_sample_by_sample_is_the_array_one(visc):
+    """`_one_way_every_pass` sample by sample (`_one_way_steps`: plain Python here,
+    numba-compiled when it is installed) against its array operations: the same decisions,
+    both kinds present."""
+    from jointbench.identification import friction_state as fs
+
+    rate, ts = 40.0, 1 / 350.87
+    u0, d0, d1 = _random_intervals(5, 3000)
+    u1 = u0 + np.random.default_rng(6).standard_normal(len(u0)) * ts * 30.0
+    want = fs._one_way_every_pass(u0, u1, d0, d1, visc, rate, ts, compiled=False)
+    got = np.zeros(len(u0), dtype=bool)
+    P, G0, G1 = fs._powers(visc, ts)
+    fs._one_way_steps(u0, u1, d0, d1, rate, ts, min(1.0, 1.0 - ts * visc), ts / fs.SUBSTEPS,
+                      P[-1], G0[-1], G1[-1], fs.SUBSTEPS, got)
+    assert 0.05 < want.mean() < 0.95
+    np.testing.assert_array_equal(got, want)
+    np.testing.assert_array_equal(fs._one_way_every_pass(u0, u1, d0, d1, visc, rate, ts), want)
