@@ -183,16 +183,19 @@ def grid_step(nom: Nominal, value: float) -> float:
 
 
 def second_view(band: LagBand, c: Candidate,
-                causes: tuple[tuple[str, dict], ...]) -> Candidate:
+                causes: tuple[tuple[str, dict], ...], split: int = 1) -> Candidate:
     """`c` itself unless it is a torque lag or a hardening and the log has a wide band; then
     `c` with its level split over its two views (Candidate.views = 2) and, when the chooser's
     band fits it physically with a positive held-out share but does not find it significant
     at that level, the wide band's view (Candidate.second): the lag's over every segment, the
     hardening's over its large deflections (module docstring). `causes`: the named causes
-    with their values (the round's reference)."""
+    with their values (the round's reference). `split`: the views the hypothesis is split
+    over besides the two bands (a clipped log's two inverse views, bench.analysis.diagnose.
+    clipped): each band's test is then at alpha / (2 split), and the wide band's view is
+    run whenever the chooser's band fails at that level."""
     if c.effect not in SECOND or band.settings is None or not c.testable:
         return c
-    c = replace(c, views=2)
+    c = replace(c, views=2 * split)
     # a lag must show a positive share in the chooser's band; a hardening's share there may
     # be lost to a cause beside it (module docstring: the guard)
     if c.unphysical or c.significant or not (c.heldout_pct > 0 or c.effect == HARDENING):

@@ -17,7 +17,13 @@ verdict.USABLE_MIN of the experiment's) and the clip is at the metadata's `tau_m
 inverse view is run again on every row (`limit_applied`), each of its tests at half its
 level: the two views split the level as a lag's two bands do (identification.discrepancy.
 lag_band), and the chance that a clean clipped log names anything is at most ALPHA from the
-first view plus ALPHA / 2 from the second. A cause the second view names is then judged by
+first view plus ALPHA / 2 from the second. A lag or a hardening tested in two bands
+(identification.discrepancy.lag_band) runs its wide band's view only where the chooser's band
+fails; one whose chooser's band passed at the whole level but fails at half of it gets that
+view now, at half the level too (split_level's `band`): the tests are those the every-row view
+would have run at half its level from the start, so the bound above holds. A lag shows at the
+top of the sweep, which the chooser's band cuts: on every row of a pendulum clipped by its lag
+the wide band's t is several times the chooser's. A cause the second view names is then judged by
 the forward view as any other (bench.analysis.diagnose.verdict.gain_reason: the replay
 applies the same clip). When the second view names nothing either, or cannot be run (a flat
 top, no `tau_max`), the answer is "inconclusive" with the share of clipped samples, the rows
@@ -33,6 +39,7 @@ import numpy as np
 from jointbench.identification.discrepancy import InverseDiagnosis, diagnose_inverse
 from jointbench.identification.discrepancy.candidates import Candidate
 from jointbench.identification.discrepancy.inverse import NotNamed, not_named
+from jointbench.identification.discrepancy.lag_band import LagBand, second_view
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.log import Log
 from jointbench.identification.saturation import at_limit, clipped_samples
@@ -105,14 +112,29 @@ def _split(c: Candidate) -> Candidate:
     return replace(c, views=c.views * VIEWS) if c.testable else c
 
 
-def split_level(inv: InverseDiagnosis) -> InverseDiagnosis:
+def _split_cause(c: Candidate, band: LagBand | None) -> Candidate:
+    """A named cause `c` at 1/VIEWS of its level. A torque lag or a hardening whose chooser's
+    band passed at the unsplit level was named without its wide band's view (lag_band.
+    second_view runs it only where the chooser's band fails): when the chooser's band fails
+    at the split level, that view is run now, at the same split level, as it would have been
+    had the inverse view been run at that level from the start."""
+    s = _split(c)
+    if s.significant or band is None or c.second is not None:
+        return s
+    w = second_view(band, c, c.base, split=VIEWS)
+    return s if w is c else w
+
+
+def split_level(inv: InverseDiagnosis, band: LagBand | None = None) -> InverseDiagnosis:
     """`inv` with every test at 1/VIEWS of its level: the causes kept while each, in order,
     still passes (a later cause was tested on top of the ones before it), the others not
-    named (kind "failed", with why)."""
+    named (kind "failed", with why). `band`: the wide band of `inv`'s log (lag_band.LagBand,
+    every row), where a named lag or hardening gets its second view at the split level
+    (_split_cause); None: none."""
     causes: tuple[Candidate, ...] = ()
     dropped: list[NotNamed] = []
     for c in inv.causes:
-        s = _split(c)
+        s = _split_cause(c, band) if not dropped else _split(c)
         if s.significant and not dropped:
             causes += (s,)
         else:
@@ -121,9 +143,12 @@ def split_level(inv: InverseDiagnosis) -> InverseDiagnosis:
             dropped.append(NotNamed(c.effect, "failed", why, s.test, c.round))
     kept = {c.effect for c in causes}
     given = tuple(n for n in inv.not_named if n.kind in ("floor", "left_out"))
+    # the causes as split above (a second view run), every other candidate split alone
+    named = {id(c): s for c, s in zip(inv.causes, causes)}
     out = replace(inv, causes=causes,
-                  candidates=tuple(_split(c) for c in inv.candidates),
-                  rounds=tuple(tuple(_split(c) for c in r) for r in inv.rounds),
+                  candidates=tuple(named.get(id(c)) or _split(c) for c in inv.candidates),
+                  rounds=tuple(tuple(named.get(id(c)) or _split(c) for c in r)
+                               for r in inv.rounds),
                   notes=tuple(n for n in inv.notes
                               if kept & set(n.split(":", 1)[0].split(" or "))),
                   alternatives=tuple(a for a in inv.alternatives if a.named in kept))
@@ -150,7 +175,8 @@ def clipped_inverse(log: Log, settings: FilterSettings,
         return inv, replace(views, why="the clip is not at the metadata's tau_max (a flat "
                             "top, not the controller's own clip): its torque is not known to "
                             "be the one applied, so its rows stay out")
-    every = split_level(diagnose_inverse(log, settings, limit_applied=True))
+    every = split_level(diagnose_inverse(log, settings, limit_applied=True),
+                        LagBand(log, settings, limit_applied=True))
     views = replace(views, second=heldout_shares(every))
     if every.causes:
         return every, replace(views, named_by="every row")
