@@ -257,8 +257,8 @@ def _wide_fit(log: Log, model: str, wide: FilterSettings, chosen: Identification
     depend on the band: the wide band is first fitted once with the Coulomb columns of the
     chooser's estimate (its reversals and stick phases, the estimator chosen's: instruments
     only when `chosen` kept them), and fitted in full, its passes started there, only when
-    that fit wins `choose_band`'s rule; the rule then reads the full fit. `candidate`:
-    what `wide_settings` gave."""
+    that fit wins `choose_band`'s rule; the rule then reads the full fit. The look's
+    instruments are unpaired (`_instruments`). `candidate`: what `wide_settings` gave."""
     look = wanted if chosen.ls.instrumental else wanted - {"instruments"}
     first = _identify(log, model, wide, [], f1_hz, look, made, chosen.physical, settle=False)
     if choose_band(chosen, first, candidate, _joint_motor_estimate, f1_hz)[1].used != "wide":
@@ -358,7 +358,8 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
         reg = exclude_clipped(chain.regressor(friction), log)
         mark = len(notes)
         if "instruments" in wanted:
-            Z = _instruments(log, reg, f1_hz, notes, made)
+            # the look at another band (settle False) takes the instruments unpaired
+            Z = _instruments(log, reg, f1_hz, notes, made, paired=settle)
         else:
             Z = None
             notes.append("least squares: instruments switched off")
@@ -558,10 +559,12 @@ def _check_instruments(log: Log, chain: regressors.JointMotorChain, reg: regress
 
 
 def _instruments(log: Log, reg: regressors.Regressor, f1_hz: float | None,
-                 notes: list[str], made: dict | None = None) -> np.ndarray | None:
+                 notes: list[str], made: dict | None = None, paired: bool = True
+                 ) -> np.ndarray | None:
     """The regressor rebuilt from the reference's predictions (identification/instruments.py),
     or None (least squares) without q_ref; a note says which. The predicted log is made once
-    per f1 in `made` (it does not depend on the band)."""
+    per f1 in `made` (it does not depend on the band). `paired` False: its columns without
+    the 5-point chain's pairing (`regressors.JointMotorChain`)."""
     made = {} if made is None else made
     key = ("instrument_log", f1_hz)
     if key not in made:
@@ -574,7 +577,7 @@ def _instruments(log: Log, reg: regressors.Regressor, f1_hz: float | None,
                      "down")
         return None
     Z = regressors.JointMotorChain(inst, reg.settings, made.get("lowpass", lowpass),
-                                   made.get("columns")).regressor()
+                                   made.get("columns"), paired).regressor()
     # the same rows (block, sample) as the regressor's, which may have lost clipped ones
     span = int(max(Z.index.max(initial=0), reg.index.max(initial=0))) + 1
     keys, wanted = Z.block * span + Z.index, reg.block * span + reg.index
