@@ -182,7 +182,9 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
     measured on the log when f1 is not given); the result carries the first mode, the
     stencil's reason and the warnings of `band_checks.band_warnings`, and a joint-motor fit
     with a mode found is fitted again in the wide band and the more precise kept
-    (`band_choice.choose_band`, reported in `band`); with `settings`,
+    (`band_choice.choose_band`, reported in `band`; the wide band looked at once from the
+    chooser's Coulomb columns and fitted in full only when that look wins: `_wide_fit`);
+    with `settings`,
     `first_mode` (what the caller measured, for example before overriding wn or Nd; measured
     here when neither it nor f1 is given) is reported and checked against them.
     `corrections`: the corrections beyond the paper's chain to apply (CORRECTIONS, all by
