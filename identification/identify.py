@@ -372,6 +372,10 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
                             corrected=not passing)
         if passing:
             reg, ls, placed, passes = _place_reversals(log, chain, reg, ls, Z, notes, stick)
+            if not placed and friction != (0.0, 0.0) and passes.stop == "rows_moved":
+                # the first columns, kept, already placed the start's reversals
+                placed = ("reversals", "stick_phases") if stick and reversal_rates(start)[0] \
+                    and start.get("K", 0.0) > 0 else ("reversals",)
             ran += placed
         if Z is not None and settle:
             reg, ls, ran, passes = _check_instruments(log, chain, reg, ls, Z, wanted, ran, notes,
