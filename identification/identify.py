@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -27,7 +28,15 @@ from jointbench.identification.physical import InversionError, invert_motor_only
 from jointbench.identification.saturation import exclude_clipped  # clipped torque rows out
 
 MODEL_CHOICES = ("joint-motor", "motor-only", "motor-only-printed", "rigid", "auto")
-REVERSAL_PASSES = 3   # fixed-point passes of `_place_reversals` (the 3rd moves Jm by < 0.1 %)
+REVERSAL_PASSES = 3   # at most this many fixed-point passes of `_place_reversals`
+# a pass that moves each of REVERSAL_PARAMS by less than this share of its own standard
+# deviation ends the passes (`ReversalPasses`)
+REVERSAL_SETTLED = 0.1
+# the parameters the passes settle: the stiffness, the inertias and the motor's friction,
+# which the late reversals bias; the link's gravity and Coulomb terms (MX, MY, FS, FV) do not
+# settle: from pass to pass they jitter by up to half a sigma with the discrete reversal and
+# stick events, and the passes never bring them under REVERSAL_SETTLED
+REVERSAL_PARAMS = ("K", "Jm", "JL", "FVm", "FSm")
 
 def paper_chain(settings: FilterSettings, wanted: frozenset[str]) -> FilterSettings:
     """`settings` with the chain corrections switched off that `wanted` lacks: eq. (22)'s 3
@@ -43,6 +52,38 @@ def chain_corrections(settings: FilterSettings) -> tuple[str, ...]:
     """The chain corrections `settings` applies (names of CORRECTIONS)."""
     return tuple(n for n, on in (("zoh", settings.zoh), ("stencil5", settings.stencil == 5))
                  if on)
+
+
+@dataclass(frozen=True)
+class ReversalPasses:
+    """How the reversal passes of `_place_reversals` ended. `moves`: each pass's largest
+    move, max_i |X_i - X'_i| / sigma_i over REVERSAL_PARAMS (`pass_move`; X' the
+    previous pass's estimate, sigma the paper's standard deviation of the new one); `stop`:
+    `settled` (the last move under REVERSAL_SETTLED), `cap` (REVERSAL_PASSES run), `no_friction`
+    (no positive FSm / Jm or FS / JL to place: the first fit kept) or `rows_moved` (the
+    rebuilt columns lost or gained rows: the pass before kept)."""
+
+    passes: int
+    moves: tuple[float, ...]
+    stop: str
+
+    def to_json(self) -> dict:
+        """The JSON object `identify --json` prints under "reversals"."""
+        return {"passes": self.passes, "stop": self.stop,
+                "moves_sigma": [m if math.isfinite(m) else None for m in self.moves],
+                "settled_below_sigma": REVERSAL_SETTLED, "max_passes": REVERSAL_PASSES}
+
+
+def pass_move(new: LSResult, old: LSResult) -> float:
+    """The largest move of a pass: max over REVERSAL_PARAMS identified in both fits of
+    |X_new - X_old| / sigma_new (the paper's sigma of the new fit); inf when none compares."""
+    keep = [i for i, n in enumerate(new.names) if n in REVERSAL_PARAMS
+            and n not in new.unidentifiable and n not in old.unidentifiable]
+    if not keep or new.names != old.names:
+        return math.inf
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z = np.abs(new.X[keep] - old.X[keep]) / new.sigma[keep]
+    return float(np.max(z)) if np.all(np.isfinite(z)) else math.inf
 
 
 @dataclass(frozen=True)
@@ -76,6 +117,7 @@ class Identification:
     physical_eqs18_20: dict[str, float] = field(default_factory=dict)
     band: BandChoice | None = None        # joint-motor with defaults: the band_choice rule
     corrections: tuple[str, ...] = ()     # the corrections beyond the paper that ran (CORRECTIONS)
+    reversals: ReversalPasses | None = None   # joint-motor with the reversal passes: how they ended
 
     @property
     def relative_error_pct(self) -> float:
@@ -140,7 +182,9 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
     measured on the log when f1 is not given); the result carries the first mode, the
     stencil's reason and the warnings of `band_checks.band_warnings`, and a joint-motor fit
     with a mode found is fitted again in the wide band and the more precise kept
-    (`band_choice.choose_band`, reported in `band`); with `settings`,
+    (`band_choice.choose_band`, reported in `band`; the wide band looked at once from the
+    chooser's Coulomb columns and fitted in full only when that look wins: `_wide_fit`);
+    with `settings`,
     `first_mode` (what the caller measured, for example before overriding wn or Nd; measured
     here when neither it nor f1 is given) is reported and checked against them.
     `corrections`: the corrections beyond the paper's chain to apply (CORRECTIONS, all by
@@ -181,7 +225,8 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
         other = None
         if wide[0] is not None:
             try:
-                other = _identify(log, model, paper_chain(wide[0], wanted), [], f1, wanted, made)
+                other = _wide_fit(log, model, paper_chain(wide[0], wanted), result, wide, f1,
+                                  wanted, made)
             except (ValueError, ArithmeticError, np.linalg.LinAlgError) as err:
                 other = err
         result, band = choose_band(result, other, wide, _joint_motor_estimate, f1)
@@ -204,6 +249,23 @@ def identify(log: Log, model: str = "auto", settings: FilterSettings | None = No
         warnings = []
     return replace(result, first_mode=mode, warnings=tuple(warnings), stencil_reason=why,
                    paper_axis=is_paper_prototype(log))
+
+
+def _wide_fit(log: Log, model: str, wide: FilterSettings, chosen: Identification,
+              candidate: tuple, f1_hz: float, wanted: frozenset[str], made: dict
+              ) -> Identification:
+    """The joint-motor fit in the wide band `wide` for `band_choice.choose_band` against the
+    chooser's `chosen`. The reversal passes converge on the axis' friction, which does not
+    depend on the band: the wide band is first fitted once with the Coulomb columns of the
+    chooser's estimate (its reversals and stick phases, the estimator chosen's: instruments
+    only when `chosen` kept them), and fitted in full, its passes started there, only when
+    that fit wins `choose_band`'s rule; the rule then reads the full fit. The look's
+    instruments are unpaired (`_instruments`). `candidate`: what `wide_settings` gave."""
+    look = wanted if chosen.ls.instrumental else wanted - {"instruments"}
+    first = _identify(log, model, wide, [], f1_hz, look, made, chosen.physical, settle=False)
+    if choose_band(chosen, first, candidate, _joint_motor_estimate, f1_hz)[1].used != "wide":
+        return first
+    return _identify(log, model, wide, [], f1_hz, wanted, made, chosen.physical)
 
 
 def _joint_motor_estimate(r: Identification) -> tuple[dict, dict] | None:
@@ -249,19 +311,25 @@ def model_first_mode(result: Identification, measured: FirstMode) -> tuple[First
 
 def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
               f1_hz: float | None = None, wanted: frozenset[str] = frozenset(CORRECTIONS),
-              made: dict | None = None) -> Identification:
+              made: dict | None = None, start: Mapping[str, float] | None = None,
+              settle: bool = True) -> Identification:
     """`identify` with the settings chosen and the corrections `wanted`; the joint-motor
     model is solved with the reference's instruments when the log has q_ref
     (`_instruments`). `made` keeps what does not depend on the band (the instruments' log,
     the Butterworth's outputs: `filtering.Lowpassed`, the chains' undecimated columns per
-    filter setting: `regressors.ChainColumns`) for another band's fit of the log."""
+    filter setting: `regressors.ChainColumns`) for another band's fit of the log. `start`:
+    eq. (13)'s parameters from another fit of the log (the chooser's band), from which the
+    joint-motor fit's first Coulomb columns are built (`_place_reversals`' columns) instead
+    of the filtered velocity's own reversals; `settle` False: that one fit alone, with its
+    corrected covariance, without the reversal passes and the instruments' check
+    (`identify`'s look at the wide band)."""
     made = {} if made is None else made
     lp = made.setdefault("lowpass", Lowpassed())
     columns = made.setdefault("columns", regressors.ChainColumns())
     if model == "auto":
         flexible = "joint-motor" if log.q is not None else "motor-only"
         try:
-            result = _identify(log, flexible, settings, [], f1_hz, wanted, made)
+            result = _identify(log, flexible, settings, [], f1_hz, wanted, made, start, settle)
         except (InversionError, NotIdentifiable) as err:
             notes.append(f"auto: {flexible} model rejected ({err}); rigid model used")
             rejected = (str(err), {})
@@ -272,7 +340,8 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
             notes.append(f"auto: the data does not identify a stiffness in the band "
                          f"({flexible} model: {why}); rigid model used")
             rejected = (why, dict(result.physical))
-        return replace(_identify(log, "rigid", settings, notes, f1_hz, wanted, made),
+        return replace(_identify(log, "rigid", settings, notes, f1_hz, wanted, made, start,
+                                 settle),
                        rejected=rejected)
     if model != "rigid" and not (settings.zoh and settings.filter_torque):
         notes.append("the no-ZOH / unfiltered-torque options apply to the rigid model only")
@@ -281,26 +350,36 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
     check_signals(log, model, settings, lp)
     ran = list(chain_corrections(settings))
     warnings: list[str] = []
+    passes: ReversalPasses | None = None
     if model == "joint-motor":
         chain = regressors.JointMotorChain(log, settings, lp, columns)
-        reg = exclude_clipped(chain.regressor(), log)
+        stick = "stick_phases" in wanted
+        friction: tuple[float, float] | Mapping[str, float] = (0.0, 0.0)
+        if start is not None and "reversals" in wanted and any(reversal_rates(start)):
+            friction = dict(start) if stick else reversal_rates(start)
+        reg = exclude_clipped(chain.regressor(friction), log)
         mark = len(notes)
         if "instruments" in wanted:
-            Z = _instruments(log, reg, f1_hz, notes, made)
+            # the look at another band (settle False) takes the instruments unpaired
+            Z = _instruments(log, reg, f1_hz, notes, made, paired=settle)
         else:
             Z = None
             notes.append("least squares: instruments switched off")
         ran += ["instruments"] if Z is not None else []
         # with the reversal passes, only the last pass's corrected covariance is used
+        passing = "reversals" in wanted and settle
         ls = block_weighted(reg.W, reg.y, reg.names, reg.block, time=reg.index, instruments=Z,
-                            corrected="reversals" not in wanted)
-        if "reversals" in wanted:
-            reg, ls, placed = _place_reversals(log, chain, reg, ls, Z, notes,
-                                               "stick_phases" in wanted)
+                            corrected=not passing)
+        if passing:
+            reg, ls, placed, passes = _place_reversals(log, chain, reg, ls, Z, notes, stick)
+            if not placed and friction != (0.0, 0.0) and passes.stop == "rows_moved":
+                # the first columns, kept, already placed the start's reversals
+                placed = ("reversals", "stick_phases") if stick and reversal_rates(start)[0] \
+                    and start.get("K", 0.0) > 0 else ("reversals",)
             ran += placed
-        if Z is not None:
-            reg, ls, ran = _check_instruments(log, chain, reg, ls, Z, wanted, ran, notes,
-                                              warnings, mark)
+        if Z is not None and settle:
+            reg, ls, ran, passes = _check_instruments(log, chain, reg, ls, Z, wanted, ran, notes,
+                                                      warnings, mark, passes)
     elif model == "motor-only" and "motor_only_columns" not in wanted:
         reg = exclude_clipped(regressors.motor_only(log, settings, corrected=False, lp=lp), log)
         ls = least_squares(reg.W, reg.y, reg.names)
@@ -366,7 +445,8 @@ def _identify(log: Log, model: str, settings: FilterSettings, notes: list[str],
                           block=reg.block, notes=tuple(notes), table3=t3,
                           prismatic=log.prismatic, physical_sigma_corrected=sigma_corr,
                           physical_eqs18_20=eqs18_20, warnings=tuple(warnings),
-                          corrections=tuple(n for n in CORRECTIONS if n in ran))
+                          corrections=tuple(n for n in CORRECTIONS if n in ran),
+                          reversals=passes)
 
 
 def reversal_rates(p: dict[str, float]) -> tuple[float, float]:
@@ -380,47 +460,66 @@ def reversal_rates(p: dict[str, float]) -> tuple[float, float]:
 def _place_reversals(log: Log, chain: regressors.JointMotorChain, reg: regressors.Regressor,
                      ls: LSResult, Z: np.ndarray | None, notes: list[str],
                      stick: bool = True
-                     ) -> tuple[regressors.Regressor, LSResult, tuple[str, ...]]:
+                     ) -> tuple[regressors.Regressor, LSResult, tuple[str, ...], ReversalPasses]:
     """Eq. (13) solved again with the Coulomb columns built from the previous pass's
-    parameters, REVERSAL_PASSES times (the log's `regressors.JointMotorChain` with them): the
-    velocity's zero crossings put back where the friction's kink and the held torque's steps have them
+    parameters (the log's `regressors.JointMotorChain` with them): the velocity's zero
+    crossings put back where the friction's kink and the held torque's steps have them
     (`filtering.kink_corrected`), placed inside the sample interval with the kink
     (`filtering.crossing_share`), and the motor's stick phases, where the friction holds the
     drive instead of +-FSm (`friction_state`). The filtered velocity's own crossings come late
-    by an amount that grows with FS / J, and Jm with them. `stick` False: the reversals
-    alone (the rates), no stick phases. Also returns the corrections that ran (names of
-    CORRECTIONS)."""
+    by an amount that grows with FS / J, and Jm with them. The passes iterate X_k =
+    F(X_{k-1}) until one moves each of REVERSAL_PARAMS by less than REVERSAL_SETTLED of its
+    own standard deviation (`pass_move`): from there the passes only jitter within what the
+    data can tell (the reversal and stick events are discrete in X); at most REVERSAL_PASSES.
+    Only the
+    last pass's corrected covariance is computed. `stick` False: the reversals alone (the
+    rates), no stick phases. Also returns the corrections that ran (names of CORRECTIONS)
+    and how the passes ended."""
     def corrected(reg: regressors.Regressor, ls: LSResult) -> LSResult:
-        """`ls` with its corrected covariance (the passes before the last skip it)."""
+        """`ls` with its corrected covariance (the passes skip it)."""
         return ls if ls.hac is not None else block_weighted(
             reg.W, reg.y, reg.names, reg.block, time=reg.index, instruments=Z)
 
     rates = (0.0, 0.0)
     stuck = False
-    for i in range(REVERSAL_PASSES):
+    moves: list[float] = []
+    stop = "cap"
+    for _ in range(REVERSAL_PASSES):
         p = {n: ls.value(n) for n in ls.names if n not in ls.unidentifiable}
         rates = reversal_rates(p)
         if not any(rates):
-            return reg, corrected(reg, ls), ()
+            return reg, corrected(reg, ls), (), ReversalPasses(len(moves), tuple(moves),
+                                                               "no_friction")
         stuck = stick and rates[0] > 0 and p.get("K", 0.0) > 0   # `_friction_models`' rule
         again = exclude_clipped(chain.regressor(p if stick else rates), log)
-        if not np.array_equal(again.index, reg.index):   # NaN rows moved: keep the first pass
-            return reg, corrected(reg, ls), ()
-        reg = again
+        if not np.array_equal(again.index, reg.index):   # NaN rows moved: keep the pass before
+            return reg, corrected(reg, ls), (), ReversalPasses(len(moves), tuple(moves),
+                                                               "rows_moved")
+        reg, previous = again, ls
         ls = block_weighted(reg.W, reg.y, reg.names, reg.block, time=reg.index, instruments=Z,
-                            corrected=i == REVERSAL_PASSES - 1)
-    if not any(rates):
-        return reg, corrected(reg, ls), ()
+                            corrected=False)
+        moves.append(pass_move(ls, previous))
+        if moves[-1] < REVERSAL_SETTLED:
+            stop = "settled"
+            break
+    passes = ReversalPasses(len(moves), tuple(moves), stop)
+    ls = corrected(reg, ls)
     notes.append(f"Coulomb reversals placed by the identified FSm / Jm = {rates[0]:.4g} and "
                  f"FS / JL = {rates[1]:.4g} (the filtered velocity's zero crossings come late "
-                 f"by the friction's kink; {REVERSAL_PASSES} passes)")
-    return reg, ls, ("reversals", "stick_phases") if stuck else ("reversals",)
+                 f"by the friction's kink; {passes.passes} passes, "
+                 + (f"the last moving {', '.join(REVERSAL_PARAMS)} by under "
+                    f"{REVERSAL_SETTLED:g} sigma)"
+                    if stop == "settled" else
+                    f"the last still moving one by {moves[-1]:.2g} sigma)"))
+    return reg, ls, ("reversals", "stick_phases") if stuck else ("reversals",), passes
 
 
 def _check_instruments(log: Log, chain: regressors.JointMotorChain, reg: regressors.Regressor,
                        ls: LSResult, Z: np.ndarray, wanted: frozenset[str], ran: list[str],
-                       notes: list[str], warnings: list[str], mark: int
-                       ) -> tuple[regressors.Regressor, LSResult, list[str]]:
+                       notes: list[str], warnings: list[str], mark: int,
+                       passes: ReversalPasses | None = None
+                       ) -> tuple[regressors.Regressor, LSResult, list[str],
+                                  ReversalPasses | None]:
     """The instruments' fit `ls` (of rows `reg`, after the reversal passes) held against
     least squares on the same rows (`iv_check.compare`). When the two agree, or when they
     disagree but the instrument passes started from the chain without instruments (its
@@ -430,22 +529,24 @@ def _check_instruments(log: Log, chain: regressors.JointMotorChain, reg: regress
     their start, the first pass's instruments were correlated with the model's error and the
     passes fed it back: the chain without instruments is kept, with a warning naming the
     cause, and its notes replace those of the instruments' passes (`notes[mark:]`). Returns
-    the kept rows, fit and corrections that ran."""
+    the kept rows, fit, corrections that ran and how the kept fit's reversal passes ended
+    (`passes`, those of the instruments' fit, unless the chain without them is kept)."""
     check = compare(ls, block_weighted(reg.W, reg.y, reg.names, reg.block, time=reg.index))
     if check is None or not check.fired:
-        return reg, ls, ran
+        return reg, ls, ran, passes
     stick = "stick_phases" in wanted
     first = exclude_clipped(chain.regressor(), log)
     plain_notes: list[str] = []
     plain_reg, plain, placed = first, block_weighted(
         first.W, first.y, first.names, first.block, time=first.index,
         corrected="reversals" not in wanted), ()
+    plain_passes = None
     if "reversals" in wanted:
-        plain_reg, plain, placed = _place_reversals(log, chain, first, plain, None,
-                                                    plain_notes, stick)
+        plain_reg, plain, placed, plain_passes = _place_reversals(log, chain, first, plain,
+                                                                  None, plain_notes, stick)
         # the instrument passes again, from the chain without instruments (without friction
         # to place they return its fit: the instruments on its rows then)
-        _, again, _ = _place_reversals(log, chain, plain_reg, plain, Z, [], stick)
+        _, again, _, _ = _place_reversals(log, chain, plain_reg, plain, Z, [], stick)
         if not again.instrumental:
             again = block_weighted(plain_reg.W, plain_reg.y, plain_reg.names, plain_reg.block,
                                    time=plain_reg.index, instruments=Z)
@@ -454,20 +555,22 @@ def _check_instruments(log: Log, chain: regressors.JointMotorChain, reg: regress
         restart = None   # no passes: nothing fed back, the start cannot matter
     if restart is None or not restart.fired:
         warnings.append(check.kept_warning(None if restart is None else restart.b))
-        return reg, ls, ran
+        return reg, ls, ran, passes
     warnings.append(check.warning(restart.b))
     del notes[mark:]
     notes.append("least squares: the instruments failed the check against it (warnings)")
     notes.extend(plain_notes)
     kept = [n for n in ran if n not in ("instruments", "reversals", "stick_phases")]
-    return plain_reg, plain, kept + list(placed)
+    return plain_reg, plain, kept + list(placed), plain_passes
 
 
 def _instruments(log: Log, reg: regressors.Regressor, f1_hz: float | None,
-                 notes: list[str], made: dict | None = None) -> np.ndarray | None:
+                 notes: list[str], made: dict | None = None, paired: bool = True
+                 ) -> np.ndarray | None:
     """The regressor rebuilt from the reference's predictions (identification/instruments.py),
     or None (least squares) without q_ref; a note says which. The predicted log is made once
-    per f1 in `made` (it does not depend on the band)."""
+    per f1 in `made` (it does not depend on the band). `paired` False: its columns without
+    the 5-point chain's pairing (`regressors.JointMotorChain`)."""
     made = {} if made is None else made
     key = ("instrument_log", f1_hz)
     if key not in made:
@@ -480,7 +583,7 @@ def _instruments(log: Log, reg: regressors.Regressor, f1_hz: float | None,
                      "down")
         return None
     Z = regressors.JointMotorChain(inst, reg.settings, made.get("lowpass", lowpass),
-                                   made.get("columns")).regressor()
+                                   made.get("columns"), paired).regressor()
     # the same rows (block, sample) as the regressor's, which may have lost clipped ones
     span = int(max(Z.index.max(initial=0), reg.index.max(initial=0))) + 1
     keys, wanted = Z.block * span + Z.index, reg.block * span + reg.index

@@ -188,6 +188,8 @@ def to_json(result: Identification, truth: dict[str, float] | None = None) -> di
            "notes": list(result.notes),
            "warnings": list(result.warnings),
            "corrections": list(result.corrections)}
+    if result.reversals is not None:   # joint-motor with the reversal passes: how they ended
+        out["reversals"] = result.reversals.to_json()
     mode = result.first_mode
     if mode is not None:
         out["first_mode"] = finite_json({"f1_hz": mode.f1_hz, "sigma_hz": mode.sigma_hz,

@@ -123,7 +123,10 @@ class JointMotorChain:
     break it there); the spring column, in both equations, is decimated once. `lp`: the
     Butterworth (`lowpass`, or a `filtering.Lowpassed` shared with other chains of the
     log). `shared`: a `ChainColumns` that keeps the undecimated columns per log and filter
-    setting, for another chain of the log at another decimation (the wide band's)."""
+    setting, for another chain of the log at another decimation (the wide band's). `paired`
+    False: the columns without the 5-point chain's pairing with the acceleration (`_as_seen`,
+    a gain within 0.4 % of one in the band): instruments need only correlate with the
+    regressor's columns, and the pairing is the chain's costliest transform."""
 
     MOTOR_SIGN, LINK_SIGN = 2, 8   # the sign columns of the motor and link blocks
     # the columns that do not depend on the friction, by block: (column, name in `_columns`);
@@ -132,12 +135,12 @@ class JointMotorChain:
              ((3, "-spring"), (4, "q''"), (5, "g cos q"), (6, "g sin q"), (7, "q'")))
 
     def __init__(self, log: Log, s: FilterSettings, lp: Callable = lowpass,
-                 shared: ChainColumns | None = None):
+                 shared: ChainColumns | None = None, paired: bool = True):
         if log.q is None:
             raise LogError("the joint-motor model needs the link position column 'q'",
                            log.path, column="q")
         self.log, self.s = log, s
-        made = (shared or ChainColumns()).columns(log, s, lp)
+        made = (shared or ChainColumns()).columns(log, s, lp, paired)
         self.qm, self.q, self.tau, self.defl = made.qm, made.q, made.tau, made.defl
         self._columns, self._valid, self._made = made.columns, made.valid, made
         self._decimated: dict[tuple[str, int, int], np.ndarray] = {}
@@ -203,14 +206,15 @@ class _Columns:
     Butterworth, the stencil and the torque's alignment: `ChainColumns.setting`), read-only
     once made, and `filtering.held_missed` of the torque, made when first needed."""
 
-    def __init__(self, log: Log, s: FilterSettings, lp: Callable):
+    def __init__(self, log: Log, s: FilterSettings, lp: Callable, paired: bool = True):
         self.qm = qm = _filtered(log.q_m, s, 2, lp)
         self.q = q = _filtered(log.q, s, 2, lp)
         self.tau = _torque(log, s, lp=lp)
         self.defl = defl = qm[0] - q[0]
         g = log.gravity
         # the spring is one column in both equations: filtered once; all five together
-        spring, vm, gc, gs, v = _as_seen(s)(
+        seen = _as_seen(s) if paired else (lambda xs, orders: list(xs))
+        spring, vm, gc, gs, v = seen(
             [defl, qm[1], g * np.cos(q[0]), g * np.sin(q[0]), q[1]], (0, 1, 0, 0, 1))
         self.columns = {"qm''": qm[2], "qm'": vm, "spring": spring, "q''": q[2],
                         "g cos q": gc, "g sin q": gs, "q'": v, "tau": self.tau}
@@ -239,12 +243,16 @@ class ChainColumns:
         stencil and the torque's zero-order-hold alignment (not Nd, edge nor skip)."""
         return (float(s.wn), float(s.ts), int(s.m), int(s.stencil), bool(s.zoh))
 
-    def columns(self, log: Log, s: FilterSettings, lp: Callable) -> _Columns:
-        key = (id(log),) + self.setting(s)
+    def columns(self, log: Log, s: FilterSettings, lp: Callable, paired: bool = True
+                ) -> _Columns:
+        """The columns of `log` at `s`, made once (`paired` False: without the 5-point
+        chain's pairing with the acceleration, `JointMotorChain`'s)."""
+        paired = paired or s.stencil != 5   # the pairing is the 5-point chain's alone
+        key = (id(log), paired) + self.setting(s)
         hit = self._kept.get(key)
         if hit is not None and hit[0] is log:   # the log is held: its id is not reused
             return hit[1]
-        made = _Columns(log, s, lp)
+        made = _Columns(log, s, lp, paired)
         self._kept[key] = (log, made)
         return made
 
