@@ -92,7 +92,8 @@ def seen_from(rows: Rows) -> float:
     """The shortest period whose column sin(2 pi qm / p) is in the band (its frequency
     |qm'| / p under the band's decimated cutoff f_c) over at least SEEN times the samples
     where it is at the encoder-scale step (check): the |qm'| quantile of that share over
-    f_c; 0 where the signals carry no speed or band."""
+    f_c; 0 where the column is in the band nowhere at that step, or the signals carry no
+    speed or band."""
     sig = rows.sig
     qmd, settings = getattr(sig, "qmd", None), getattr(sig, "settings", None)
     if qmd is None or settings is None:
@@ -102,7 +103,7 @@ def seen_from(rows: Rows) -> float:
         return 0.0
     fc = settings.decimated_cutoff_hz
     still = float(np.mean(v < fc * _encoder_step(float(np.ptp(sig.qm[sig.sl])))))
-    return float(np.quantile(v, min(1.0, SEEN * still))) / fc
+    return float(np.quantile(v, min(1.0, SEEN * still))) / fc if still > 0 else 0.0
 
 
 def check(v: dict, rows: Rows) -> str:
