@@ -76,12 +76,12 @@ def grid(rows: Rows) -> np.ndarray:
 
 def _coarse(rows: Rows) -> np.ndarray:
     """The coarse geometric grid of periods (grid): encoder-scale steps to the motion span,
-    from no shorter than the shortest period seen while the motor turns (seen_from)."""
+    its points from the shortest period seen while the motor turns (seen_from) on, the
+    last two at least."""
     sig = rows.sig
     span = float(np.ptp(sig.qm[sig.sl]))
-    top = max(span, 2e-4)
-    return np.geomspace(min(max(_encoder_step(span), seen_from(rows)), 0.5 * top), top,
-                        COARSE)
+    g = np.geomspace(_encoder_step(span), max(span, 2e-4), COARSE)
+    return g[min(int(np.searchsorted(g, seen_from(rows))), COARSE - 2):]
 
 
 def _encoder_step(span: float) -> float:

@@ -62,8 +62,11 @@ def test_the_grid_starts_where_the_in_band_samples_are_mostly_moving_ones():
     fc = rows.sig.settings.decimated_cutoff_hz
     v = np.abs(rows.sig.qmd)
     g = torque_ripple._coarse(rows)
-    assert np.mean(v < fc * g[0]) == pytest.approx(torque_ripple.SEEN / 3, abs=2e-3)
-    assert np.mean(v < fc * 0.5 * g[0]) < torque_ripple.SEEN / 3
+    # the first point of the encoder-scale grid where it is (the grid's points are kept)
+    full = np.geomspace(1.0 / torque_ripple.SHORTEST, 1.0, torque_ripple.COARSE)
+    assert np.any(np.isclose(full, g[0], rtol=1e-12))
+    assert np.mean(v < fc * g[0]) >= torque_ripple.SEEN / 3
+    assert np.mean(v < fc * g[0] * g[0] / g[1]) < torque_ripple.SEEN / 3
     # a fit in the first step ran to that bound: a sticking motor's misfit, not a ripple
     assert torque_ripple.check({"ripple_period_rad": g[0]}, rows)
     assert torque_ripple.check({"ripple_period_rad": g[1] * 1.001}, rows) == ""
