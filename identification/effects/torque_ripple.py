@@ -18,6 +18,10 @@ def design(rows: Rows, fixed: dict) -> Design:
 SHORTEST = 2000
 # The coarse geometric grid's points, and the periodogram's peaks added to it.
 COARSE, PEAKS = 160, 3
+# A ripple is seen while the motor turns: the samples where its column lies in the band must
+# be this many times those where it does at the encoder-scale step, so that most of them are
+# samples where the motor turns (seen_from, check).
+SEEN = 2.0
 # Bins of the motor angle a shortest period holds in the periodogram's FFT.
 BINS = 8
 
@@ -71,26 +75,59 @@ def grid(rows: Rows) -> np.ndarray:
 
 
 def _coarse(rows: Rows) -> np.ndarray:
-    """The coarse geometric grid of periods (grid): encoder-scale steps to the motion span."""
+    """The coarse geometric grid of periods (grid): encoder-scale steps to the motion span,
+    its points from the shortest period seen while the motor turns (seen_from) on, the
+    last two at least."""
     sig = rows.sig
     span = float(np.ptp(sig.qm[sig.sl]))
-    return np.geomspace(max(span / SHORTEST, 1e-4), max(span, 2e-4), COARSE)
+    g = np.geomspace(_encoder_step(span), max(span, 2e-4), COARSE)
+    return g[min(int(np.searchsorted(g, seen_from(rows))), COARSE - 2):]
+
+
+def _encoder_step(span: float) -> float:
+    return max(span / SHORTEST, 1e-4)
+
+
+def seen_from(rows: Rows) -> float:
+    """The shortest period whose column sin(2 pi qm / p) is in the band (its frequency
+    |qm'| / p under the band's decimated cutoff f_c) over at least SEEN times the samples
+    where it is at the encoder-scale step (check): the |qm'| quantile of that share over
+    f_c; 0 where the column is in the band nowhere at that step, or the signals carry no
+    speed or band."""
+    sig = rows.sig
+    qmd, settings = getattr(sig, "qmd", None), getattr(sig, "settings", None)
+    if qmd is None or settings is None:
+        return 0.0
+    v = np.abs(np.nan_to_num(np.asarray(qmd)[sig.sl]))
+    if not len(v):
+        return 0.0
+    fc = settings.decimated_cutoff_hz
+    still = float(np.mean(v < fc * _encoder_step(float(np.ptp(sig.qm[sig.sl])))))
+    return float(np.quantile(v, min(1.0, SEEN * still))) / fc if still > 0 else 0.0
 
 
 def check(v: dict, rows: Rows) -> str:
-    """A period in the first step of its search grid (grid: encoder-scale steps) is where the
-    search ran to its bound, not a period the log identifies: the column sin(2 pi qm / p)
-    then stays in the band only where the motor creeps (its frequency |qm'| / p under the
-    band's cutoff), at the reversals, and there it takes up what the nominal's friction
-    law near zero speed and the position's resolution miss, a function of the angle at the
-    encoder's scale, not a ripple of the drive."""
+    """A period in the first step of its search grid is where the search ran to its bound,
+    not a period the log identifies. The grid starts at encoder-scale steps, where the column
+    sin(2 pi qm / p) is in the band (its frequency |qm'| / p under the band's decimated
+    cutoff) only where the motor creeps or sticks, or where the samples that put it in the
+    band stop being mostly ones where the motor turns (seen_from: fewer than SEEN times those
+    of the encoder-scale step; on a motor that sticks for long, a third of the samples, the
+    step is well short of that). Shorter, the column is in the band mostly where the motor
+    creeps or sticks, at the reversals and in the small strokes of a chirp's top, and there
+    it takes up what the nominal's friction law near zero speed misses (a sticking motor's
+    friction holds a torque that grows with its small displacement, a presliding stiffness,
+    which a short sinusoid of the angle follows) and the position's resolution: a function of
+    the angle where the motor creeps, not a ripple of the drive. (A sticking motor does not
+    show a ripple either: its friction holds it.)"""
     p = v.get("ripple_period_rad", 0.0)
     g = _coarse(rows)
     if not p or p >= g[1]:
         return ""
     return (f"period {p:.3g} rad in the first step of its search grid ({g[0]:.3g} to "
-            f"{g[1]:.3g} rad, encoder-scale steps): the search ran to its bound, a "
-            "function of the angle where the motor creeps, not a ripple")
+            f"{g[1]:.3g} rad, from encoder-scale steps or the shortest period seen while "
+            "the motor turns): the search ran to its bound, a function of the angle where "
+            "the motor creeps, not a ripple")
 
 
 def params(v: dict, fixed: dict, rows: Rows) -> dict[str, float]:

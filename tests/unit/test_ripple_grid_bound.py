@@ -34,3 +34,42 @@ def test_grid_starts_at_the_bound_the_check_reads():
     g = torque_ripple.grid(rows)
     assert torque_ripple.check({"ripple_period_rad": g[0]}, rows)
     assert torque_ripple.check({"ripple_period_rad": g[1]}, rows) == ""
+
+
+def _moving_rows(stuck: float, fc: float = 14.0) -> SimpleNamespace:
+    """A motor over 1 rad whose speed is 0 on a share `stuck` of the samples (it sticks) and
+    spread over 0.05 to 0.5 rad/s on the others; the band's decimated cutoff `fc` [Hz]."""
+    n = 3000
+    rng = np.random.default_rng(1)
+    v = rng.uniform(0.05, 0.5, n) * rng.choice([-1.0, 1.0], n)
+    v[: int(stuck * n)] = 0.0
+    qm = np.linspace(0.0, 1.0, n)
+    return SimpleNamespace(sig=SimpleNamespace(
+        qm=qm, qmd=v, sl=slice(None), settings=SimpleNamespace(decimated_cutoff_hz=fc)))
+
+
+def test_a_motor_that_turns_keeps_the_encoder_scale_grid():
+    rows = _moving_rows(0.0)
+    g = torque_ripple._coarse(rows)
+    assert g[0] == pytest.approx(max(1.0 / torque_ripple.SHORTEST, 1e-4))
+    assert torque_ripple.check({"ripple_period_rad": 2 * np.pi / 600}, rows) == ""
+
+
+def test_the_grid_starts_where_the_in_band_samples_are_mostly_moving_ones():
+    # a third of the samples stuck: at the encoder-scale step the column is in the band on
+    # those alone; the grid starts where it is in the band on twice as many
+    rows = _moving_rows(1 / 3)
+    fc = rows.sig.settings.decimated_cutoff_hz
+    v = np.abs(rows.sig.qmd)
+    g = torque_ripple._coarse(rows)
+    # the first point of the encoder-scale grid where it is (the grid's points are kept)
+    full = np.geomspace(1.0 / torque_ripple.SHORTEST, 1.0, torque_ripple.COARSE)
+    assert np.any(np.isclose(full, g[0], rtol=1e-12))
+    assert np.mean(v < fc * g[0]) >= torque_ripple.SEEN / 3
+    assert np.mean(v < fc * g[0] * g[0] / g[1]) < torque_ripple.SEEN / 3
+    # a fit in the first step ran to that bound: a sticking motor's misfit, not a ripple
+    assert torque_ripple.check({"ripple_period_rad": g[0]}, rows)
+    assert torque_ripple.check({"ripple_period_rad": g[1] * 1.001}, rows) == ""
+    # the periodogram's fine periods keep to the coarse grid's range
+    rows.residual, rows.block = None, None
+    assert torque_ripple.grid(rows)[0] == g[0]
