@@ -19,11 +19,19 @@ its tmp_path) or on files outside its tmp_path: the processes run side by side.
 from __future__ import annotations
 
 import inspect
+import os
 from pathlib import Path
 
-import matplotlib
-import numpy as np
-import pytest
+# One BLAS thread a test process, set before numpy loads (the xdist processes inherit it): the
+# processes already take one core each, and OpenBLAS's threads spin on the small regressors
+# identification/ solves (docs/validation.md, "BLAS threads": 1.4-1.7x the CPU of one thread).
+# A value the caller set is kept.
+for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_name, "1")
+
+import matplotlib  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
 
 matplotlib.use("Agg")
 
@@ -98,6 +106,15 @@ def prototype_run():
 @pytest.fixture(scope="session")
 def prototype_log(prototype_run):
     return prototype_run.log
+
+
+@pytest.fixture(scope="session")
+def prototype_joint_motor(prototype_log):
+    """identify(prototype_log, "joint-motor") with the defaults, made once per test process
+    for the files that check it. Read it, never write into it."""
+    from jointbench.identification.identify import identify
+
+    return identify(prototype_log, "joint-motor")
 
 
 def _once(run):

@@ -51,11 +51,11 @@ def test_arm_f1_at_paper_rate(arm_logs, joint):
     assert abs(err(mode.f1_hz, log.truth()["f1_hz"])) < 2, mode
 
 
-def test_prototype_unchanged(prototype_log):
+def test_prototype_unchanged(prototype_log, prototype_joint_motor):
     """The paper's filter (wn 176, Nd 26, 3 points) and the reference numbers (seed 1): the
     band rule (identification/band_choice.py) keeps it, the wide band (Nd 9, 15.6 Hz) being
     the less precise on this log (largest relative corrected sigma 0.16 % against 0.13 %)."""
-    result = identify(prototype_log, "joint-motor")
+    result = prototype_joint_motor
     s = result.settings
     assert (s.wn, s.Nd, s.stencil) == (176.0, 26, 3)
     assert result.band.used == "chooser" and result.band.alternative.Nd < s.Nd

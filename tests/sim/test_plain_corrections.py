@@ -39,8 +39,8 @@ def test_plain_is_within_its_sigma_of_the_truth_on_k(plain, prototype_log):
         assert abs(plain.physical[name] / truth[name] - 1) < 0.03, name
 
 
-def test_default_lists_the_corrections_that_ran(prototype_log):
-    full = identify(prototype_log, "joint-motor")
+def test_default_lists_the_corrections_that_ran(prototype_joint_motor):
+    full = prototype_joint_motor
     assert {"zoh", "instruments", "reversals", "stick_phases"} <= set(full.corrections)
     assert set(full.corrections) <= set(CORRECTIONS)
     assert full.ls.instrumental

@@ -11,7 +11,6 @@ import re
 import numpy as np
 import pytest
 
-from jointbench.identification.identify import identify
 from jointbench.identification.paper_tables import parameter_table
 
 # An unphysical fit's branch: what encoder flips (another machine's last bits) move it by, a
@@ -19,8 +18,8 @@ from jointbench.identification.paper_tables import parameter_table
 BRANCH = 1e-2
 
 
-def test_near_zero_truth_does_not_run_columns_together(prototype_log):
-    result = identify(prototype_log, "joint-motor")
+def test_near_zero_truth_does_not_run_columns_together(prototype_log, prototype_joint_motor):
+    result = prototype_joint_motor
     truth = {**prototype_log.truth(), "MY": -2.33147e-15, "MX": 0.0}
     rows = {line.split()[0]: line for line in parameter_table(result, truth).splitlines()[2:]}
     for name in ("MX", "MY"):

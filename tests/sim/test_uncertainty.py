@@ -11,7 +11,6 @@ from scipy import signal
 
 from jointbench.bench.cli import main
 from jointbench.identification.estimate import least_squares
-from jointbench.identification.identify import identify
 from jointbench.identification.log import write_log
 from jointbench.identification.uncertainty import (autocovariances, hac_covariance, kernel_sum,
                                                     kernel_weights, score_series)
@@ -138,13 +137,13 @@ def test_dropped_parameters_have_no_corrected_sigma():
     assert np.all(np.isfinite(ls.sigma_corrected[[0, 2]]))
 
 
-def test_prototype_truth_within_3_corrected_sigma(prototype_log):
+def test_prototype_truth_within_3_corrected_sigma(prototype_log, prototype_joint_motor):
     """On the demo experiment the corrected sigma of K, Jm, JL is 1.0-1.3 times the paper's
     (filtered and decimated residuals are mildly coloured: lag-one autocorrelation of the
     scores about 0.2) and the truth lies within 3 of them. (Over 30 seeds the spread of the
     estimates was 0.91-0.97 corrected sigma and 1.01-1.03 paper sigma.)"""
     truth = prototype_log.truth()
-    result = identify(prototype_log, "joint-motor")
+    result = prototype_joint_motor
     for name in ("K", "Jm", "JL"):
         ratio = result.ls.std_corrected(name) / result.ls.std(name)
         assert 0.9 < ratio < 1.5, (name, ratio)

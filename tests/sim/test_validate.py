@@ -36,10 +36,10 @@ def test_second_seed_within_1_2_of_the_fit(prototype_log, seed2_log, model):
         assert v.rows == int((result.block == 0).sum())  # same length, same filter
 
 
-def test_wrong_model_is_seen(prototype_log, seed2_log):
+def test_wrong_model_is_seen(prototype_log, prototype_joint_motor, seed2_log):
     """A control: the rigid model predicts the flexible axis far worse on new data than the
     joint-motor model does (the validation can fail)."""
-    good = validate_on(identify(prototype_log, "joint-motor"), seed2_log)
+    good = validate_on(prototype_joint_motor, seed2_log)
     bad = validate_on(identify(prototype_log, "rigid"), seed2_log)
     assert bad.relative_error_pct > 3 * good.relative_error_pct
 

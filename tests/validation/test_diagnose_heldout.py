@@ -91,10 +91,20 @@ def test_link_coulomb_is_nominal(clean_prototype, clean_prototype_diagnosis):
     assert inv.named.parameters["FS"] == pytest.approx(log.meta_float("truth_FS"), rel=0.2)
 
 
-@pytest.mark.parametrize("effect,strength", [("backlash", 0.001), ("asymmetric_friction", 0.15),
-                                             ("offset", 5.0)])
-def test_issue14_cases_are_named(effect, strength):
-    d = diagnose(_log("prototype", None, 1, effect, strength), forward=False)
+ISSUE14_CASES = (("backlash", 0.001), ("asymmetric_friction", 0.15), ("offset", 5.0))
+
+
+@pytest.fixture(scope="module")
+def issue14_diagnoses():
+    """diagnose(forward=False) of each issue-14 case (prototype, seed 1), made once: the
+    asymmetric friction's is read again by the ambiguity test below (read only)."""
+    return {effect: diagnose(_log("prototype", None, 1, effect, strength), forward=False)
+            for effect, strength in ISSUE14_CASES}
+
+
+@pytest.mark.parametrize("effect,strength", ISSUE14_CASES)
+def test_issue14_cases_are_named(issue14_diagnoses, effect, strength):
+    d = issue14_diagnoses[effect]
     assert d.named_cause == effect
     assert d.extended_parameters[EFFECTS[effect].parameter] == pytest.approx(strength, rel=0.2)
     c = d.named
@@ -229,7 +239,7 @@ def test_torque_lag_found_where_it_is_on_a_continuous_current_loop():
     assert lag == pytest.approx(0.004, rel=0.10)
 
 
-def test_asymmetric_friction_needs_its_viscous_part_to_beat_an_offset():
+def test_asymmetric_friction_needs_its_viscous_part_to_beat_an_offset(issue14_diagnoses):
     """While the motor moves, the Coulomb part of an asymmetric friction is a constant torque:
     an offset. On the independent simulator's soft family (motor Coulomb 12 N m, viscous
     3 N m s/rad at speeds of a few tenths of a rad/s) an asymmetry of 0.5 is almost all
@@ -251,7 +261,7 @@ def test_asymmetric_friction_needs_its_viscous_part_to_beat_an_offset():
     t = float(note.split("adds to offset has t = ")[1].split(",")[0])
     assert t < t_bar(DECIDE)
     assert d.to_json()["ambiguity"] == [note]
-    proto = diagnose(_log("prototype", None, 1, "asymmetric_friction", 0.15), forward=False)
+    proto = issue14_diagnoses["asymmetric_friction"]
     assert proto.named_cause == "asymmetric_friction" and proto.ambiguities == ()
     assert "ambiguity" not in proto.to_json()
 

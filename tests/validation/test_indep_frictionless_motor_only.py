@@ -23,20 +23,23 @@ from dataclasses import replace
 import pytest
 
 from jointbench.identification.identify import identify
-from jointbench.testing import FAMILIES, simulate
+from jointbench.testing import FAMILIES
 
 BARS = (("K", 0.03), ("Jm", 0.03), ("JL", 0.08))
 IV_WARNING = "instrumental-variable passes of the link reconstruction"
 
 
-def _log(ideal_sensors: bool, name: str = "soft"):
-    return simulate(replace(FAMILIES[name], FS=0.0), seed=1, duration=60.0, sweep="linear",
-                    feedforward=False, ideal_sensors=ideal_sensors)
+def _log(indep_log, ideal_sensors: bool, name: str = "soft"):
+    """The family's axis without link Coulomb friction, no feed-forward (60 s, seed 1),
+    through the session's shared logs (the same runs as test_indep_frictionless_link.py's
+    and test_indep_instruments_check.py's; read only)."""
+    return indep_log(replace(FAMILIES[name], FS=0.0), seed=1, duration=60.0, sweep="linear",
+                     feedforward=False, ideal_sensors=ideal_sensors)
 
 
 @pytest.fixture(scope="module")
-def noise_free():
-    return _log(ideal_sensors=True)
+def noise_free(indep_log):
+    return _log(indep_log, ideal_sensors=True)
 
 
 def _within_or_warned(result, truth) -> None:
@@ -46,10 +49,10 @@ def _within_or_warned(result, truth) -> None:
 
 
 @pytest.mark.parametrize("name", list(FAMILIES))
-def test_frictionless_link_noise_free_without_feedforward(noise_free, name):
+def test_frictionless_link_noise_free_without_feedforward(indep_log, noise_free, name):
     """Every family within the bars, or warned with the cause named; with the motor's stick
     phases in its Coulomb column (the correction `stick_phases`, which ran)."""
-    log = noise_free if name == "soft" else _log(ideal_sensors=True, name=name)
+    log = noise_free if name == "soft" else _log(indep_log, ideal_sensors=True, name=name)
     result = identify(replace(log, q=None), "motor-only")
     _within_or_warned(result, log.truth())
     assert "stick_phases" in result.corrections, result.corrections
