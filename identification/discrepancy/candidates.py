@@ -15,7 +15,7 @@ from scipy import optimize, stats
 from jointbench.identification.discrepancy.heldout import (FOLDS, MATERIAL, SEGMENTS, Scores,
                                                            bar, evidence, fitted_rss,
                                                            fold_of_rows, held_out, preferred,
-                                                           own_scores, scores, t_bar)
+                                                           scores, t_bar)
 from jointbench.identification.discrepancy.nominal import Nominal, transmitted_rms
 from jointbench.identification.discrepancy.stacked import Stacked, apply, design_many, stacked
 from jointbench.identification.effects import EFFECTS
@@ -276,14 +276,6 @@ def _evaluate(nom: Nominal, ref: Reference, e: Effect, fixed: dict,
     res_after = y - W @ X
     rss = float(np.sum((res_after * nom.weights) ** 2))
     n, n0 = len(y), W.shape[1] - k
-    if e.own_weights:
-        # fitted at its own block weights (heldout.own_scores): the in-sample figures on the
-        # motor rows, whose weight the reference shares
-        on = nom.block == 0
-        y0, W0, _ = ref.base.design()
-        rss0 = float(np.sum(((y0 - W0 @ ref.scores.X) * nom.weights)[on] ** 2))
-        rss = float(np.sum((res_after * nom.weights)[on] ** 2))
-        n = int(on.sum())
     bic0 = n * np.log(rss0 / n) + n0 * np.log(n)
     bic1 = n * np.log(max(rss, 1e-300) / n) + (n0 + k) * np.log(n)
     dof = n - n0 - k
@@ -424,7 +416,7 @@ def candidate(nom: Nominal, effect: str, ref: Reference | None = None) -> Candid
     def cost(v: float | None, under: Stacked = ref.base) -> float:
         fx = fixed if v is None else {**fixed, e.search: v}
         y, W, _ = apply(under, e.name, fx)[1]
-        records.append((own_scores if e.own_weights else scores)(nom, ref.folds, y, W))
+        records.append(scores(nom, ref.folds, y, W))
         trials.append((v, under))
         return records[-1].full
 

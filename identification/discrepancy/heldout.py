@@ -63,12 +63,12 @@ Among the significant effects the named one explains the most of the held-out re
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 from scipy import stats
 
-from jointbench.identification.discrepancy.nominal import Nominal, _with_bias
+from jointbench.identification.discrepancy.nominal import Nominal
 
 FOLDS = 10
 ALPHA = 1e-3
@@ -139,60 +139,6 @@ def scores(nom: Nominal, folds: np.ndarray, y: np.ndarray, W: np.ndarray) -> Sco
     held = np.bincount(folds, errors * errors, minlength=k)
     return Scores(full=full, X=x / scale, train=train, held=held, errors=errors,
                   fold_X=xs / scale)
-
-
-def own_weights(nom: Nominal, y: np.ndarray, W: np.ndarray) -> np.ndarray:
-    """Row weights for the design `y = W X` set as the nominal's are set for it (identification.
-    discrepancy.nominal: each block's weight 1 / the spread of its residual in a fit with equal
-    weights and a constant in the motor equation beside the columns), scaled so that the motor
-    rows keep the nominal's weight: only the link block's weight relative to the motor's is the
-    design's own. `nom`'s weights on a rigid axis (one block).
-
-    The link equation (0 = JL q'' + FV q' + ... - K (qm - q)) is homogeneous: its scale is set
-    by K's motor column alone. A motor-side effect the nominal lacks whose columns rebuild the
-    motor equation (a torque lag leads them, identification.effects.torque_lag) leaves the
-    nominal's motor rows far off; the fit then shrinks the link equation as a whole, whose
-    residual shrinks with it, and its weight 1 / that residual pins every fit made with it to
-    the shrunk scale (on a voltage drive lagging by 0.23 s the link weight ended a million times
-    the motor's, and the lag fitted with it, K half its value, preferred a lag 50 % too long)."""
-    block = nom.block
-    if not nom.sig.has_link:
-        return nom.weights
-    # equal weights, by the normal equations of the column-scaled design (fitted_rss: an SVD
-    # of the tall design per trial costs 40 times more on loaded cores)
-    Wb = _with_bias(nom.sig, W)
-    scale = np.linalg.norm(Wb, axis=0)
-    scale[scale == 0] = 1.0
-    A = Wb / scale
-    r = y - A @ np.linalg.lstsq(A.T @ A, A.T @ y, rcond=None)[0]
-    s = [float(np.sqrt(np.mean(r[block == b] ** 2))) for b in (0, 1)]
-    if not (s[0] > 0 and s[1] > 0):
-        return nom.weights
-    wm = float(nom.weights[block == 0][0])
-    return np.where(block == 0, wm, wm * s[0] / s[1])
-
-
-def own_scores(nom: Nominal, folds: np.ndarray, y: np.ndarray, W: np.ndarray) -> Scores:
-    """`scores` of the design `y = W X` at its own block weights (own_weights), with `full`
-    and `train` (what a search and the folds' preferences compare between trials) summed over
-    the motor rows only, whose weight every trial shares: the trials' link weights differ, so
-    their sums over every row do not compare; the motor equation is the one an effect that
-    rebuilds the motor columns acts in, and its held-out evidence is measured there too
-    (`segment_log_ratios`). `errors` on the motor rows are in the nominal's weight, as the
-    reference's are."""
-    w = own_weights(nom, y, W)
-    if w is nom.weights:
-        return scores(nom, folds, y, W)
-    own = replace(nom, weights=w)
-    if "fold_order" in nom.memo:
-        own.memo["fold_order"] = nom.memo["fold_order"]
-    sc = scores(own, folds, y, W)
-    motor = nom.block == 0
-    full = float(np.sum(((y - W @ sc.X) * w)[motor] ** 2))
-    r = (y[None, :] - sc.fold_X @ W.T) * w
-    train = np.array([float(np.sum(r[f][motor & (folds != f)] ** 2))
-                      for f in range(len(sc.fold_X))])
-    return replace(sc, full=full, train=train)
 
 
 def _fold_order(nom: Nominal, folds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

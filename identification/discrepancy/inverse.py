@@ -59,10 +59,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from jointbench.identification.discrepancy.candidates import (Candidate, HeldOutTest, Reference,
-                                                              candidate, reference)
-from jointbench.identification.discrepancy.heldout import (ALPHA, MATERIAL, own_weights,
-                                                           segment_log_ratios,
+from jointbench.identification.discrepancy.candidates import (Candidate, HeldOutTest, candidate,
+                                                              reference)
+from jointbench.identification.discrepancy.heldout import (ALPHA, MATERIAL, segment_log_ratios,
                                                            segment_t, t_bar)
 from jointbench.identification.discrepancy.lag_band import LagBand, second_view
 from jointbench.identification.discrepancy.nominal import Nominal, nominal, with_link_law
@@ -222,28 +221,9 @@ def _round(nom: Nominal, names: list[str], causes: tuple[Candidate, ...],
     if model:   # the link friction's law with the causes in the model (nominal.with_link_law)
         nom = with_link_law(nom, ref.base.design())
         ref = reference(nom, model, m=m)
-    nom, ref = _own_weighted(nom, ref, model, m)
     cands = [replace(second_view(band, candidate(nom, name, ref), model), round=k)
              for name in names]
     return _simplest_first(_rank(cands), nom, m)
-
-
-def _own_weighted(nom: Nominal, ref: Reference, model: tuple[tuple[str, dict], ...],
-                  m: int) -> tuple[Nominal, Reference]:
-    """`nom` and `ref` at the block weights of the model holding `model` (heldout.own_weights)
-    when one of its causes rebuilds the motor columns (Effect.own_weights: a torque lag); as
-    they are otherwise. A lag fitted at the nominal's weights, which the nominal's misfit
-    without it sets, keeps the shrunk link equation it was found without (heldout.own_weights),
-    and the candidates tested on top of it would be weighed against that misfit."""
-    if not any(EFFECTS[name].own_weights for name, _ in model):
-        return nom, ref
-    y, W, _ = ref.base.design()
-    w = own_weights(nom, y, W)
-    if w is nom.weights:
-        return nom, ref
-    own = replace(nom, weights=w)
-    own.memo.update(nom.memo)   # columns and fold order: the same rows, whatever the weights
-    return own, reference(own, model, m=m)
 
 
 def _better(worse: Candidate | np.ndarray, better: Candidate, n: int) -> tuple[float, float]:
@@ -511,7 +491,6 @@ def _against(nom: Nominal, c: Candidate, others: tuple[tuple[str, dict], ...],
     """`c`'s effect fitted and tested again on top of `others` (name, values), at the level
     of the round it entered, with the lag's second band: its own test there."""
     ref = reference(nom, others, m=_level_m(c))
-    nom, ref = _own_weighted(nom, ref, others, _level_m(c))
     return replace(second_view(band, candidate(nom, c.effect, ref), others), round=c.round)
 
 

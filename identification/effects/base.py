@@ -79,11 +79,6 @@ class Effect:
     # forward view judges it only where a replay keeps its phase
     # (bench.analysis.diagnose.forward). "" for none.
     period: str = ""
-    # Its columns rebuild the motor equation's (a torque lag leads them): each trial is fitted
-    # at its own block weights and the trials compare on the motor rows
-    # (identification.discrepancy.heldout.own_scores), not at the nominal's weights, which the
-    # nominal's misfit without it sets.
-    own_weights: bool = False
 
     def unit_for(self, prismatic: bool) -> str:
         return self.unit_prismatic if prismatic else self.unit

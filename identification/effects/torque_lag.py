@@ -37,20 +37,9 @@ def design(rows: Rows, fixed: dict) -> Design:
     return rows.columns(lead=fixed["lag_s"])
 
 
-STEP = 250.0 ** (1 / 39)   # the ratio of successive trials: 40 from 0.2 ts to 50 ts
-
-
 def grid(rows: Rows) -> np.ndarray:
-    """No lag, then geometric trials of ratio STEP from a fifth of the sample period to the
-    longer of 50 periods and D / 2 pi, D the record's length. A lag T whose corner 1 / (2 pi T)
-    lies below the lowest frequency the record holds, 1 / D, acts as T d/dt on every motor
-    column over all of it: T then scales the fitted parameters and is not identified. Up to
-    there the led columns tell it (a voltage drive under a position loop lags by a good part
-    of a second: its corner is below the first mode)."""
     ts = rows.sig.ts
-    end = max(50 * ts, len(rows.sig.qm) * ts / (2 * np.pi))
-    n = int(np.ceil(np.log(end / (0.2 * ts)) / np.log(STEP) - 1e-9)) + 1
-    return np.r_[0.0, np.geomspace(0.2 * ts, end, n)]
+    return np.r_[0.0, np.geomspace(0.2 * ts, 50 * ts, 40)]
 
 
 # No physical-range check on T: a current loop slower than the first mode still drives the
@@ -63,4 +52,4 @@ EFFECT = Effect(
     "torque_lag", "lag_s", "s", "s",
     "the applied torque lags the command (first-order current-loop lag)",
     needs_link=False, rigid_axis=True, block=0, k=1, design=design,
-    params=searched_value("lag_s"), search="lag_s", grid=grid, own_weights=True)
+    params=searched_value("lag_s"), search="lag_s", grid=grid)
