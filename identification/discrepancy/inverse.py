@@ -569,6 +569,11 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
             break
         round_, note, alt = after or _round(nom, rest, causes, band, k + 1)   # Holm
         rounds.append(round_)
+    causes, left, again = _redecided(nom, causes, nested, rounds, band)
+    dropped += left
+    settled |= again
+    notes = tuple(x for x in notes if x[0] in {c.effect for c in causes}
+                  and one_of(x[1]) not in settled)
     causes, notes, left = _pruned(nom, causes, notes, band)
     dropped += left
     if len(causes) > 2:
@@ -592,6 +597,56 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
                            rounds=tuple(tuple(r) for r in rounds), alternatives=alternatives,
                            stopped=stopped)
     return replace(inv, not_named=not_named(inv, tuple(dropped)))
+
+
+def _redecided(nom: Nominal, causes: tuple[Candidate, ...], nested: list[Alternative],
+               rounds: list[list[Candidate]],
+               band: LagBand) -> tuple[tuple[Candidate, ...], list[NotNamed],
+                                       set[frozenset[str]]]:
+    """The parsimony choices the log could not make in their round (an offset named for an
+    asymmetric friction, "one of A or B", how "nested"), made again once the rounds stop,
+    against the model holding the causes named beside it (their values from the joint fit):
+    the weaker of a pair is tested against the model holding the stronger. A torque lag left
+    out of the reference leaves a phase error in the motor equation that the asymmetry's
+    viscous part, a torque in phase with the speed, cannot follow, and the two-way choice
+    (_which) then sees only the constant they share. Where, with the others held, the richer
+    is named (_which at the level of the round the cause entered), it takes the simpler's
+    place and every cause is fitted again in order (_chain); the swap stands only if all of
+    them pass there. Returns the causes, the simpler causes left with why, and the pairs
+    settled (no longer "one of A or B")."""
+    out: list[NotNamed] = []
+    settled: set[frozenset[str]] = set()
+    for alt in nested:
+        names = [c.effect for c in causes]
+        if (len(causes) < 2 or alt.named not in names or alt.other in names
+                or EFFECTS[alt.other].reduces_to != alt.named):
+            continue
+        i = names.index(alt.named)
+        values = dict(_model(causes))
+        others = tuple((o, values[o]) for o in names if o != alt.named)
+        m = _level_m(causes[i])
+        ref = reference(nom, others, m=m)
+        simpler, richer = candidate(nom, alt.named, ref), candidate(nom, alt.other, ref)
+        if not _which(nom, simpler, richer, m)[0]:
+            continue
+        first = next((c for c in rounds[max(causes[i].round, 1) - 1] if c.effect == alt.other),
+                     None)
+        if first is None:
+            continue
+        chain, lost = _chain(nom, causes[:i] + (first,) + causes[i + 1:], band)
+        if lost or len(chain) != len(causes):
+            continue
+        t, p, _ = _on_top(nom, richer, simpler, m)
+        t2, _, _ = _on_top(nom, simpler, richer, m)
+        out.append(NotNamed(alt.named, "left_out", (
+            f"round {causes[i].round} named it for the two, the log not telling it from "
+            f"{alt.other} against the causes before it; against the model holding "
+            f"{', '.join(o for o, _ in others)}, what {alt.other} adds to {alt.named} has "
+            f"t = {t:.3g} (p = {p:.2g}), what {alt.named} adds to {alt.other} t = {t2:.3g}: "
+            f"{alt.other} is named in its place"), simpler.test, causes[i].round))
+        settled.add(frozenset((alt.named, alt.other)))
+        causes = chain
+    return causes, out, settled
 
 
 def _level_m(c: Candidate) -> int:
