@@ -50,6 +50,17 @@ offset and an asymmetric friction while the motor moves). The answer says "one o
 with the share each explains, in its text and as the named cause's alternative, rather than
 choosing silently.
 
+**The weaker of a pair against the model holding the stronger.** A round whose top ties
+with another significant candidate (_tied: the test above cannot separate them) cannot choose
+alone, but the two may lead to different next rounds: a gravity torque left out shrinks the
+homogeneous link equation, and the torque of the mean deflection then reappears in the motor
+equation as a constant that an offset takes up as well as gravity does. The next round is
+run on top of each (_ahead), and the tied candidate is named when it, with the cause its next
+round names, predicts the held-out rows better than the top with its own, at DECIDE; the one
+left is listed with why and is no "one of A or B". Likewise a parsimony choice the round
+could not make (an offset named for an asymmetric friction) is made again once the rounds
+stop, against the model holding the causes named beside it (_redecided).
+
 Every effect tested and not named is listed apart with why (NotNamed).
 """
 
