@@ -14,9 +14,10 @@ from __future__ import annotations
 import pytest
 
 from jointbench.bench.analysis.diagnose import diagnose
-from jointbench.bench.campaign.battery import BENCH_PLACES, BenchRunner
 from jointbench.bench.analysis.diagnose.claims import failing_claims
+from jointbench.bench.campaign.battery import BENCH_PLACES, BenchRunner, Place
 from jointbench.identification.output_values import finite_json
+from jointbench.testing import IndepRunner
 
 
 @pytest.fixture(scope="module")
@@ -41,3 +42,25 @@ def test_gravity_and_spring_damping_named_not_the_offset(answer):
 
 def test_each_named_cause_passes_its_own_test(answer):
     assert all(c.test.passes for c in answer.causes)
+
+
+@pytest.fixture(scope="module")
+def lag_answer():
+    """The independent simulator's soft family: an asymmetric friction (a = 0.53) and a
+    torque lag of 12.9 ms, with feedforward and torque noise."""
+    log = IndepRunner(40.0).log(Place("indep", "soft"),
+                                (("asymmetric_friction", 0.5327, {}), ("torque_lag", 0.012915, {})),
+                                91018, True, True)
+    return diagnose(log)
+
+
+def test_the_asymmetry_chosen_against_the_model_holding_the_lag(lag_answer):
+    """Against the nominal alone the log cannot tell the asymmetry from an offset; against
+    the model holding the lag its viscous part adds, and it is named in the offset's place."""
+    assert {c.effect for c in lag_answer.causes} == {"asymmetric_friction", "torque_lag"}
+    doc = finite_json(lag_answer.to_json())
+    assert failing_claims(doc) == []
+    why = {n["effect"]: n for n in doc["not_named"]}
+    assert why["offset"]["kind"] == "left_out"
+    assert "against the model holding torque_lag" in why["offset"]["why"]
+    assert not any("offset" in a for a in lag_answer.ambiguities)
