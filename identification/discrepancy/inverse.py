@@ -50,6 +50,17 @@ offset and an asymmetric friction while the motor moves). The answer says "one o
 with the share each explains, in its text and as the named cause's alternative, rather than
 choosing silently.
 
+**The weaker of a pair against the model holding the stronger.** A round whose top ties
+with another significant candidate (_tied: the test above cannot separate them) cannot choose
+alone, but the two may lead to different next rounds: a gravity torque left out shrinks the
+homogeneous link equation, and the torque of the mean deflection then reappears in the motor
+equation as a constant that an offset takes up as well as gravity does. The next round is
+run on top of each (_ahead), and the tied candidate is named when it, with the cause its next
+round names, predicts the held-out rows better than the top with its own, at DECIDE; the one
+left is listed with why and is no "one of A or B". Likewise a parsimony choice the round
+could not make (an offset named for an asymmetric friction) is made again once the rounds
+stop, against the model holding the causes named beside it (_redecided).
+
 Every effect tested and not named is listed apart with why (NotNamed).
 """
 
@@ -224,6 +235,112 @@ def _round(nom: Nominal, names: list[str], causes: tuple[Candidate, ...],
     cands = [replace(second_view(band, candidate(nom, name, ref), model), round=k)
              for name in names]
     return _simplest_first(_rank(cands), nom, m)
+
+
+Round = tuple[list[Candidate], str, Alternative | None]   # _round's answer
+
+
+def _tied(top: Candidate, b: Candidate, n: int, later: bool) -> bool:
+    """`b` explains the same thing as the round's `top`: it passes its own test (in a later
+    round, above the floor too), neither reduces to the other (_which decides those), and
+    the segment test without margin cannot separate their held-out errors in either
+    direction at DECIDE."""
+    if not b.significant or (later and not b.test.own_share > 100 * FLOOR):
+        return False
+    if top.heldout_errors is None or b.heldout_errors is None:
+        return False
+    if top.effect == EFFECTS[b.effect].reduces_to or b.effect == EFFECTS[top.effect].reduces_to:
+        return False
+    return _better(b, top, n)[1] >= DECIDE and _better(top, b, n)[1] >= DECIDE
+
+
+def _chain_errors(first: Candidate, after: Round) -> tuple[np.ndarray, str]:
+    """The held-out errors of `first` with the cause the next round names on top of it (if
+    its test passes there, above the floor), and that cause's name ("" for none)."""
+    r = after[0]
+    if r and r[0].significant and r[0].test.own_share > 100 * FLOOR:
+        return r[0].heldout_errors, r[0].effect
+    return first.heldout_errors, ""
+
+
+def _ahead(nom: Nominal, round_: list[Candidate], note: str, alt: Alternative | None,
+           causes: tuple[Candidate, ...], band: LagBand,
+           k: int) -> tuple[list[Candidate], str, Alternative | None, Round | None,
+                            list[NotNamed]]:
+    """The round's top against the candidates it ties with (_tied: a constant torque on the
+    motor and a gravity whose rest is not the start, while the link stays near it): the
+    round alone cannot choose, but each leads to a different next round. The weaker cause
+    of a pair is visible only against a model holding the stronger one, and the round's
+    reference without either is not that model: a gravity torque left out shrinks the
+    homogeneous link equation (K, JL, ... scaled down together), whose mean deflection's
+    torque then reappears in the motor equation as a constant; an offset takes it up, and a
+    spring damping tested on top of that offset finds the link equation still shrunk. So
+    the next round is run on top of each, and a tied candidate is named in the top's place
+    when it with the cause its next round names predicts the held-out rows better than the
+    top with its own (the segment test without margin over every row, at DECIDE, and the
+    converse not). Returns the round (the chosen first), its note and alternative (dropped
+    when about the top left), the next round on the chosen (None when no look-ahead ran) and
+    the top left, listed with why."""
+    top, n = round_[0], len(nom.sig.index)
+    later = bool(causes)
+    if not any(_tied(top, b, n, later) for b in round_[1:]):
+        return round_, note, alt, None, []
+
+    def after(c: Candidate) -> Round:
+        rest = [x.effect for x in round_ if x is not c and x.testable]
+        return _round(nom, rest, causes + (c,), band, k + 1) if rest else ([], "", None)
+
+    chains: dict[str, tuple[Round, np.ndarray, str]] = {}
+
+    def chain(c: Candidate) -> tuple[Round, np.ndarray, str]:
+        if c.effect not in chains:
+            a = after(c)
+            chains[c.effect] = (a, *_chain_errors(c, a))
+        return chains[c.effect]
+
+    def compare(a: Candidate, b: Candidate) -> tuple[float, float, float, float]:
+        """t, p that b's chain predicts better than a's, and the converse."""
+        (_, ea, _), (_, eb, _) = chain(a), chain(b)
+        return (*segment_t(segment_log_ratios(ea, eb, n)),
+                *segment_t(segment_log_ratios(eb, ea, n)))
+
+    best = top
+    while True:   # the candidates tied with the one chosen so far, until none does better
+        better = None
+        for b in round_:
+            if b.effect in chains and b is not best or b is best or not _tied(best, b, n, later):
+                continue
+            t, p, t2, p2 = compare(best, b)
+            if p < DECIDE <= p2:
+                better = b
+                break
+        chain(best)
+        if better is None:
+            break
+        best = better
+    # the candidates whose chain did worse than the chosen one's: the tie is resolved
+    out: list[NotNamed] = []
+    _, _, next_best = chain(best)
+    for b in round_:
+        if b is best or b.effect not in chains:
+            continue
+        t, p, t2, p2 = compare(b, best)
+        if not p < DECIDE <= p2:
+            continue
+        next_b = chains[b.effect][2]
+        out.append(NotNamed(b.effect, "left_out", (
+            f"round {k}: alone the log cannot tell it from {best.effect} (held out "
+            f"{b.effect} explains {b.heldout_pct:.3g} %, {best.effect} {best.heldout_pct:.3g} "
+            f"%), but {best.effect}{f' and {next_best}' if next_best else ''} predict the "
+            f"held-out rows better than {b.effect}{f' and {next_b}' if next_b else ''} (t = "
+            f"{t:.3g}, the converse t = {t2:.3g}, the bar t > {t_bar(DECIDE):.3g})"),
+            b.test, k))
+    if best is top:
+        return round_, note, alt, chains[top.effect][0], out
+    ordered = [best] + [c for c in round_ if c is not best]
+    keep_note = note if best.effect in one_of(note) else ""
+    keep_alt = alt if alt is not None and alt.named == best.effect else None
+    return ordered, keep_note, keep_alt, chains[best.effect][0], out
 
 
 def _better(worse: Candidate | np.ndarray, better: Candidate, n: int) -> tuple[float, float]:
@@ -436,6 +553,7 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
     notes: tuple[tuple[str, str], ...] = ()   # (the cause it is about, the note)
     nested: list[Alternative] = []   # the parsimony choices the log could not make
     rounds, round_, stopped, dropped = [ranked], ranked, "", []
+    settled: set[frozenset[str]] = set()   # ties the next round resolved (_ahead)
     while round_:
         top, k = round_[0], len(rounds)
         if not top.significant:
@@ -448,6 +566,11 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
                        f"equations it acts in, under the floor of {100 * FLOOR:g} %")
             dropped.append(NotNamed(top.effect, "floor", stopped, top.test, k))
             break
+        round_, note, alt, after, told = _ahead(nom, round_, note, alt, causes, band, k)
+        top = round_[0]
+        rounds[-1] = round_
+        dropped += told
+        settled |= {frozenset((top.effect, d.effect)) for d in told}
         causes += (top,)
         notes += ((top.effect, note),) if note else ()
         nested += [alt] if alt is not None and alt.named == top.effect else []
@@ -455,8 +578,13 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
         if not rest:
             stopped = f"round {k}: every effect is named"
             break
-        round_, note, alt = _round(nom, rest, causes, band, k + 1)   # Holm
+        round_, note, alt = after or _round(nom, rest, causes, band, k + 1)   # Holm
         rounds.append(round_)
+    causes, left, again = _redecided(nom, causes, nested, rounds, band)
+    dropped += left
+    settled |= again
+    notes = tuple(x for x in notes if x[0] in {c.effect for c in causes}
+                  and one_of(x[1]) not in settled)
     causes, notes, left = _pruned(nom, causes, notes, band)
     dropped += left
     if len(causes) > 2:
@@ -470,7 +598,8 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
                          and any(one_of(n) == {a.named, a.other} for _, n in notes))
     alternatives += tuple(a for a in _alternatives(rounds, causes, len(nom.sig.index))
                           if not any({a.named, a.other} == {b.named, b.other}
-                                     for b in alternatives))
+                                     for b in alternatives)
+                          and frozenset((a.named, a.other)) not in settled)
     # the first round's ranking, with the first named cause at the top
     top = [c for c in ranked if causes and c.effect == causes[0].effect] or ranked[:1]
     inv = InverseDiagnosis(nominal=nom, causes=causes, notes=tuple(n for _, n in notes),
@@ -479,6 +608,56 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
                            rounds=tuple(tuple(r) for r in rounds), alternatives=alternatives,
                            stopped=stopped)
     return replace(inv, not_named=not_named(inv, tuple(dropped)))
+
+
+def _redecided(nom: Nominal, causes: tuple[Candidate, ...], nested: list[Alternative],
+               rounds: list[list[Candidate]],
+               band: LagBand) -> tuple[tuple[Candidate, ...], list[NotNamed],
+                                       set[frozenset[str]]]:
+    """The parsimony choices the log could not make in their round (an offset named for an
+    asymmetric friction, "one of A or B", how "nested"), made again once the rounds stop,
+    against the model holding the causes named beside it (their values from the joint fit):
+    the weaker of a pair is tested against the model holding the stronger. A torque lag left
+    out of the reference leaves a phase error in the motor equation that the asymmetry's
+    viscous part, a torque in phase with the speed, cannot follow, and the two-way choice
+    (_which) then sees only the constant they share. Where, with the others held, the richer
+    is named (_which at the level of the round the cause entered), it takes the simpler's
+    place and every cause is fitted again in order (_chain); the swap stands only if all of
+    them pass there. Returns the causes, the simpler causes left with why, and the pairs
+    settled (no longer "one of A or B")."""
+    out: list[NotNamed] = []
+    settled: set[frozenset[str]] = set()
+    for alt in nested:
+        names = [c.effect for c in causes]
+        if (len(causes) < 2 or alt.named not in names or alt.other in names
+                or EFFECTS[alt.other].reduces_to != alt.named):
+            continue
+        i = names.index(alt.named)
+        values = dict(_model(causes))
+        others = tuple((o, values[o]) for o in names if o != alt.named)
+        m = _level_m(causes[i])
+        ref = reference(nom, others, m=m)
+        simpler, richer = candidate(nom, alt.named, ref), candidate(nom, alt.other, ref)
+        if not _which(nom, simpler, richer, m)[0]:
+            continue
+        first = next((c for c in rounds[max(causes[i].round, 1) - 1] if c.effect == alt.other),
+                     None)
+        if first is None:
+            continue
+        chain, lost = _chain(nom, causes[:i] + (first,) + causes[i + 1:], band)
+        if lost or len(chain) != len(causes):
+            continue
+        t, p, _ = _on_top(nom, richer, simpler, m)
+        t2, _, _ = _on_top(nom, simpler, richer, m)
+        out.append(NotNamed(alt.named, "left_out", (
+            f"round {causes[i].round} named it for the two, the log not telling it from "
+            f"{alt.other} against the causes before it; against the model holding "
+            f"{', '.join(o for o, _ in others)}, what {alt.other} adds to {alt.named} has "
+            f"t = {t:.3g} (p = {p:.2g}), what {alt.named} adds to {alt.other} t = {t2:.3g}: "
+            f"{alt.other} is named in its place"), simpler.test, causes[i].round))
+        settled.add(frozenset((alt.named, alt.other)))
+        causes = chain
+    return causes, out, settled
 
 
 def _level_m(c: Candidate) -> int:
