@@ -33,10 +33,11 @@ extra "fast"; the same numbers as the array passes).
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from functools import lru_cache
 
 import numpy as np
+
+from jointbench.identification.compiled import compiled as compiled_kernel
 
 SUBSTEPS = 32       # sub-steps a sample interval: a reversal placed to 1/32 of a sample
 MATCH_PASSES = 2    # passes shifting the drive onto the next sample's velocity
@@ -145,7 +146,7 @@ def _phases(u: np.ndarray, d0: np.ndarray, d1: np.ndarray, visc: float, rate: fl
     else these array passes."""
     n, N, h = len(u), SUBSTEPS, ts / SUBSTEPS
     free, weight, ahead, mid, mid_w = _tables(visc, ts)
-    steps = _compiled_steps() if compiled else None
+    steps = compiled_kernel(_steps) if compiled else None
     if steps is not None:
         I1, I2, end = np.zeros(n), np.zeros(n), np.zeros(n)
         one_way = np.zeros(n, dtype=np.bool_)
@@ -223,7 +224,7 @@ def _steps(u: np.ndarray, d0: np.ndarray, d1: np.ndarray, rate: float, h: float,
            mid_w: np.ndarray, I1: np.ndarray, I2: np.ndarray, end: np.ndarray,
            one_way: np.ndarray) -> None:
     """`_phases` interval by interval as plain scalar code (numba compiles it,
-    `_compiled_steps`): each interval's phases in the order `_phases` takes them (a moving
+    `compiled_kernel`): each interval's phases in the order `_phases` takes them (a moving
     phase, then a phase at rest, each ending in an event (`_step`) or at the interval's end),
     each value with `_phases`' operations in the same order, so the same numbers; a moving
     phase stops at the first sub-step whose free step leaves the sign. Writes I1, I2, end and
@@ -309,7 +310,7 @@ def _one_way_steps(u0: np.ndarray, u1: np.ndarray, d0: np.ndarray, d1: np.ndarra
                    rate: float, ts: float, k: float, h: float, PN: float, G0N: float,
                    G1N: float, N: int, out: np.ndarray) -> None:
     """`_one_way_every_pass` sample by sample as plain scalar code (numba compiles it,
-    `_compiled_one_way`), each value with its operations in the same order: the same
+    `compiled_kernel`), each value with its operations in the same order: the same
     decisions. Writes them into `out`."""
     for i in range(len(u0)):
         u, a, b = u0[i], d0[i], d1[i]
@@ -321,27 +322,6 @@ def _one_way_steps(u0: np.ndarray, u1: np.ndarray, d0: np.ndarray, d1: np.ndarra
         excess = max(rate - min(sg * a, sg * b), 0.0)
         reach = ts * (max(abs(a), abs(b)) + rate)
         out[i] = u != 0 and abs(u) * k - ts * excess - moved > 0.01 * (reach + moved)
-
-
-@lru_cache(maxsize=1)
-def _compiled_one_way() -> Callable | None:
-    """`_one_way_steps` compiled by numba (cached on disk), or None without numba."""
-    try:
-        import numba
-    except ImportError:
-        return None
-    return numba.njit(cache=True, nogil=True)(_one_way_steps)
-
-
-@lru_cache(maxsize=1)
-def _compiled_steps() -> Callable | None:
-    """`_steps` compiled by numba (cached on disk: later processes load it), or None when
-    numba is not installed."""
-    try:
-        import numba
-    except ImportError:
-        return None
-    return numba.njit(cache=True, nogil=True)(_steps)
 
 
 @lru_cache(maxsize=64)
@@ -427,7 +407,7 @@ def _one_way_every_pass(u0: np.ndarray, u1: np.ndarray, d0: np.ndarray, d1: np.n
         return np.zeros(len(u0), dtype=bool)
     P, G0, G1 = _powers(visc, ts)
     h = ts / SUBSTEPS
-    steps = _compiled_one_way() if compiled else None
+    steps = compiled_kernel(_one_way_steps) if compiled else None
     if steps is not None:
         out = np.zeros(len(u0), dtype=np.bool_)
         steps(u0, u1, d0, d1, rate, ts, k, h, P[-1], G0[-1], G1[-1], SUBSTEPS, out)

@@ -24,12 +24,12 @@ Three pieces:
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
-from functools import lru_cache
 
 import numpy as np
 from scipy import fft
 from scipy.linalg import expm
+
+from jointbench.identification.compiled import compiled as compiled_kernel
 
 
 def _transition(a: float, b: float, ts: float) -> tuple[list[float], ...]:
@@ -73,7 +73,7 @@ def simulate_link(qm: np.ndarray, ts: float, a: float, b: float, c: float = 0.0,
     n = len(qm)
     q0 = rest_angle(float(qm[0]), a, gx, gy)
     slope = (qm[1:] - qm[:-1]) / ts
-    steps = _compiled_steps() if compiled else None
+    steps = compiled_kernel(_steps) if compiled else None
     if steps is not None:
         out_q, phi = np.empty(n), np.empty(n)
         steps(qm, slope, out_q, phi, q0, float(a), float(c), float(gx), float(gy),
@@ -151,17 +151,6 @@ def _steps(u, slope, out_q, phi, q: float, a: float, c: float, gx: float, gy: fl
                 q, v = qn, vn
         out_q[k + 1] = q
     phi[n - 1] = 0.0
-
-
-@lru_cache(maxsize=1)
-def _compiled_steps() -> Callable | None:
-    """`_steps` compiled by numba (cached on disk: later processes load it), or None when
-    numba is not installed."""
-    try:
-        import numba
-    except ImportError:
-        return None
-    return numba.njit(cache=True, nogil=True)(_steps)
 
 
 def spectra(signals: list[np.ndarray], ts: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

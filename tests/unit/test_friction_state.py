@@ -12,6 +12,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from jointbench.identification.compiled import compiled
 from jointbench.identification.filtering import crossing_share, sign_integrals
 from jointbench.identification.friction_state import friction_integrals
 from jointbench.identification.log import Log
@@ -209,7 +210,7 @@ def test_the_phases_interval_by_interval_are_the_array_passes(visc):
     assert 0.05 < np.mean(stepped == 0) < 0.9 and 0.05 < one_way.mean() < 0.95
     for got, want in ((J1, I1), (J2, I2), (stepped, end)):
         np.testing.assert_array_equal(got, want)
-    if fs._compiled_steps() is not None:
+    if compiled(fs._steps) is not None:
         for got, want in zip(fs._phases(u, d0, d1, visc, rate, ts), (I1, I2, end)):
             np.testing.assert_array_equal(got, want)
 
