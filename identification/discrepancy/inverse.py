@@ -75,6 +75,7 @@ from jointbench.identification.discrepancy.candidates import (Candidate, HeldOut
 from jointbench.identification.discrepancy.heldout import (ALPHA, MATERIAL, segment_log_ratios,
                                                            segment_t, t_bar)
 from jointbench.identification.discrepancy.lag_band import LagBand, second_view
+from jointbench.identification.discrepancy.masked import MaskedPair, masked_pair
 from jointbench.identification.discrepancy.nominal import Nominal, nominal, with_link_law
 from jointbench.identification.effects import EFFECTS, NONE
 from jointbench.identification.filtering import FilterSettings
@@ -181,6 +182,7 @@ class InverseDiagnosis:
     not_named: tuple[NotNamed, ...] = ()   # every effect tested and not named, with why
     alternatives: tuple[Alternative, ...] = ()   # one of A or B (_alternatives)
     stopped: str = ""                   # why the rounds stopped
+    masked: MaskedPair | None = None    # nothing named: the two best fitted together (masked)
 
     @property
     def named(self) -> Candidate | None:
@@ -199,9 +201,10 @@ class InverseDiagnosis:
         if not tested:
             return "no effect is testable on this log"
         best = tested[0]
+        pair = f"; {self.masked.describe()}" if self.masked is not None else ""
         return (f"no effect is significant: the best, {best.effect} (explains "
                 f"{best.heldout_pct:.3g} % of the held-out residual, {best.explained_pct:.3g} % "
-                f"in sample), fails: {best.why_not}")
+                f"in sample), fails: {best.why_not}{pair}")
 
 
 def _rank(cands: list[Candidate]) -> list[Candidate]:
@@ -606,7 +609,8 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
                            candidates=tuple(top + _rank([c for c in ranked if c not in top]
                                                         + first)),
                            rounds=tuple(tuple(r) for r in rounds), alternatives=alternatives,
-                           stopped=stopped)
+                           stopped=stopped,
+                           masked=None if causes else masked_pair(nom, ranked, len(names)))
     return replace(inv, not_named=not_named(inv, tuple(dropped)))
 
 

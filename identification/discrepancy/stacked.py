@@ -75,6 +75,8 @@ class _Rows:
         self.base = base
         self.after = base
         self.sig = base.nom.sig
+        self.link_v0 = base.nom.link_v0   # the link friction law's speed (nominal.link_law)
+        self.deflection = base.deflection   # the spring's, when a cause rebuilt it (backlash)
         self.added: tuple[tuple[str, np.ndarray], ...] | None = None   # by extend alone
 
     def value(self, name: str) -> float:

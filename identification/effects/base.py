@@ -19,6 +19,12 @@ class Rows(Protocol):
     `sig` holds its band-limited raw-rate signals (qm, qmd, q, qd, tau_raw, qs, g, ts, sl, lp)."""
 
     sig: Any
+    # the speed v0 of the nominal's link friction law tanh(q' / v0), 0 for a sign
+    # (identification.discrepancy.nominal.link_law)
+    link_v0: float
+    # the spring deflection the nominal columns are built with when a cause rebuilt it (a
+    # backlash's dead zone), None for qm - q
+    deflection: np.ndarray | None
 
     def value(self, name: str) -> float:
         """A nominal parameter."""

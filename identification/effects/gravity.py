@@ -11,8 +11,34 @@ ORDER = 10
 
 
 def design(rows: Rows, fixed: dict) -> Design:
+    """Q g cos(q - qs) where the link is not held by friction alone (`free`)."""
     sig = rows.sig
-    return rows.extend(("Q", None, sig.g * np.cos(sig.q - sig.qs)))
+    return rows.extend(("Q", None, sig.g * np.cos(sig.q - sig.qs) * free(rows)))
+
+
+def free(rows: Rows) -> np.ndarray:
+    """0 on the instants where the link rests held by its static friction alone, 1 elsewhere:
+    its speed |q'| under the speed v0 of the nominal's link friction law tanh(q' / v0)
+    (identification.discrepancy.nominal.link_law) while the spring transmits nothing, its
+    deflection inside a dead band that a cause of the reference put in the model
+    (`rows.deflection` zero: the motor moves within a backlash). 1 everywhere for a sign law
+    (v0 = 0) or a spring without a dead band.
+
+    A link at rest that the spring does not touch is held by static friction, which takes
+    any torque up to FS: a pendulum whose motor rattles in a backlash's dead band while its
+    link sticks at q* holds P g sin(q* - qs) by friction, a constant over the stuck stretch
+    that the law (0 at zero speed) leaves in the link equation's residual. Over the few mrad
+    a stuck link moves, Q g cos(q - qs) is that constant, and a rest moved to q* takes it up.
+    Those rows carry no evidence of where gravity's rest lies, only the friction's misfit
+    near zero speed, part of the nominal's own; a rest away from qs loads the link wherever
+    the spring or its motion reads it, and there the column keeps it."""
+    sig = rows.sig
+    v0 = float(getattr(rows, "link_v0", 0.0))
+    d = getattr(rows, "deflection", None)
+    if v0 <= 0 or d is None:
+        return np.ones(len(sig.q))
+    held = (np.abs(np.nan_to_num(sig.qd)) < v0) & (np.asarray(d) == 0)
+    return (~held).astype(float)
 
 
 def params(v: dict, fixed: dict, rows: Rows) -> dict[str, float]:

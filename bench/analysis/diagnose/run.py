@@ -22,6 +22,7 @@ from jointbench.bench.analysis.diagnose.forward import add_forward_view
 from jointbench.bench.analysis.diagnose.report import write
 from jointbench.bench.analysis.diagnose.types import Diagnosis, ForwardView
 from jointbench.bench.analysis.diagnose.verdict import (clipped_reason, every_row_reason,
+                                                        masked_reason,
                                                         gain_reason, nominal_reason,
                                                         with_clipping)
 from jointbench.identification.filter_choice import choose_filter
@@ -126,7 +127,8 @@ def _judged(d: Diagnosis, forward: bool, say: Callable[[str], None],
     if forward:
         d = add_forward_view(d, say, nominal_view)
     if not d.overruled:
-        d = replace(d, overruled=gain_reason(d) or every_row_reason(d) or clipped_reason(d))
+        d = replace(d, overruled=gain_reason(d) or every_row_reason(d) or clipped_reason(d)
+                                  or masked_reason(d))
     if d.overruled:   # nothing named: no extended model
         d = replace(d, extended_parameters={})
     return d

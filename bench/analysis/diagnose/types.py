@@ -151,6 +151,8 @@ class Diagnosis:
             out["alternatives"] = [a.to_json() for a in self.inverse.alternatives]
         out["not_named"] = [n.to_json() for n in self.not_named]
         out["stopped"] = self.inverse.stopped
+        if self.inverse.masked is not None:
+            out["masked_pair"] = self.inverse.masked.to_json()
         out["floor_pct"] = 100 * FLOOR
         if self.overruled and self.inverse.named is not None:
             out["rejected_cause"] = self.inverse.named.effect

@@ -38,6 +38,11 @@ answer is then "inconclusive", with the reason.
   (bench.analysis.diagnose.clipped), and when that names nothing either the answer is
   "inconclusive", with the share of clipped samples and each candidate's held-out share in
   each view.
+- **Two effects that mask each other.** No effect passes alone, but the two physical
+  candidates that explain the most of the held-out residual pass together against the
+  nominal, or one on top of the other (identification.discrepancy.masked): "none" would be
+  silence on a discrepancy the log carries; the answer is "inconclusive", with the pair's
+  share and every test.
 """
 
 from __future__ import annotations
@@ -169,6 +174,16 @@ def with_clipping(d: Diagnosis) -> str:
     if not d.overruled or views is None or views.text() in d.overruled:
         return d.overruled
     return f"{d.overruled}; {views.text()}"
+
+
+def masked_reason(d: Diagnosis) -> str:
+    """Why "none" cannot be said of this log ("" when it can, or when a cause is named): no
+    effect passes alone, but the two that explain the most pass together or one on top of
+    the other (identification.discrepancy.masked)."""
+    pair = d.inverse.masked
+    if d.inverse.causes or pair is None or not pair.passes:
+        return ""
+    return f"{pair.describe()}: the log carries a discrepancy that no one cause names"
 
 
 def clipped_reason(d: Diagnosis) -> str:
