@@ -155,11 +155,13 @@ def _steps(u, slope, out_q, phi, q: float, a: float, c: float, gx: float, gy: fl
 
 def spectra(signals: list[np.ndarray], ts: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The Laplace variable s = j w on the FFT bins (the record zero padded to at least twice
-    its length, so that the link's response does not wrap), the spectra of the signals less
-    their first sample (rows), and those first samples. NaN counts as 0."""
+    its length, so that the link's response does not wrap: to twice the next length with
+    small prime factors, `scipy.fft.next_fast_len`, which a batch of rows transforms several
+    times faster than the next power of two), the spectra of the signals less their first
+    sample (rows), and those first samples. NaN counts as 0."""
     u = np.nan_to_num(np.asarray(signals, dtype=float))
     n = u.shape[-1]
-    L = 1 << int(math.ceil(math.log2(2 * max(n, 2))))
+    L = 2 * fft.next_fast_len(max(n, 2), real=True)    # even: `inverse` reads L off the bins
     u0 = u[:, 0].copy()
     return 2j * np.pi * fft.rfftfreq(L, ts), fft.rfft(u - u0[:, None], L), u0
 
