@@ -116,3 +116,16 @@ def test_inverse_at_reads_the_inverse_transform(first, step, count):
     full = fft.irfft(X, n_fft)[:, first + step * np.arange(count)]
     got = inverse_at(X[:, :bins], n_fft, first, step, count)
     np.testing.assert_allclose(got, full, rtol=0, atol=1e-13 * np.abs(full).max())
+
+
+@pytest.mark.parametrize("n", [2, 3, 1000, 3510, 21053])
+def test_spectra_pad_to_twice_the_record(n):
+    """`spectra` pads to an even FFT length of at least 2 n (the link's response does not
+    wrap onto the record; `inverse` reads the length off the bins), and `inverse` gives the
+    signals back (to rounding)."""
+    from jointbench.identification.link_sim import inverse, spectra
+    u = np.random.default_rng(n).standard_normal((2, n))
+    s, U, u0 = spectra(list(u), 1 / 350.87)
+    L = 2 * (len(s) - 1)
+    assert L >= 2 * n and L % 2 == 0
+    np.testing.assert_allclose(inverse(U, s, n) + u0[:, None], u, rtol=0, atol=1e-12)

@@ -158,7 +158,7 @@ def test_rows_are_those_of_decimate_parallel():
     applied to the response continued as the link's own past the record's ends (at rest
     before its first sample, the free response after its last one). Against
     filtering.decimate of that continued response (50 decimated rows each side, longer than
-    the filter's transient; measured: 4e-8 of the column's largest value, the response's
+    the filter's transient; measured: 3e-8 of the column's largest value, the response's
     tail folded onto its start by the FFT and the stopband's bins left out)."""
     log = simulate(replace(FAMILIES["balanced"], MY=0.3), 1, 10.0, "linear", True)
     p, rows = _rows_at_the_truth(log)
