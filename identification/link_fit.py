@@ -29,7 +29,7 @@ does.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy import optimize, stats
@@ -491,8 +491,9 @@ def start_from_band(log: Log, s: FilterSettings) -> dict[str, float]:
 
 def _instruments(log: Log, s: FilterSettings, f1_hz: float | None, stick: bool = True):
     """A function of the parameters giving the instruments (the same columns from the
-    reference's predicted motor angle), or None; and a note."""
-    inst = instrument_log(log, f1_hz)
+    reference's predicted motor angle), or None; and a note. The link angle q, which the
+    columns do not hold, is not predicted."""
+    inst = instrument_log(replace(log, q=None), f1_hz)
     if inst is None:
         return None, "least squares (no instruments: no q_ref, or the log is too short)"
     rows = _Rows(inst, s, stick=stick)
