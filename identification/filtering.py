@@ -81,6 +81,19 @@ def antialias(q: int) -> tuple[tuple[float, ...], ...]:
     return tuple(map(tuple, signal.cheby1(8, 0.05, 0.8 / q, output="sos")))
 
 
+@lru_cache(maxsize=16)
+def antialias_gain(q: int, n_fft: int) -> np.ndarray:
+    """The zero-phase gain |G(e^(j w Ts))|^2 of `decimate`'s anti-alias pass (`antialias`,
+    forward and reverse) on the bins w Ts = 2 pi k / n_fft, k = 0 ... n_fft / 2, of a real FFT
+    of length n_fft: `decimate` applied in the frequency domain (the same filter on the
+    record's inside; at its ends the record continues as it is, not oddly). Made once per
+    (q, n_fft), read-only: shared."""
+    w = 2 * np.pi * np.arange(n_fft // 2 + 1) / n_fft
+    gain = np.abs(signal.sosfreqz(np.array(antialias(q)), worN=w)[1]) ** 2
+    gain.setflags(write=False)
+    return gain
+
+
 @lru_cache(maxsize=64)
 def _zero_phase_design(sos: tuple[tuple[float, ...], ...]) -> tuple[np.ndarray, np.ndarray, int]:
     """The sections as an array, their steady-state initial conditions

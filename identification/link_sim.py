@@ -24,6 +24,7 @@ Three pieces:
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import numpy as np
 from scipy import fft
@@ -155,11 +156,13 @@ def _steps(u, slope, out_q, phi, q: float, a: float, c: float, gx: float, gy: fl
 
 def spectra(signals: list[np.ndarray], ts: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The Laplace variable s = j w on the FFT bins (the record zero padded to at least twice
-    its length, so that the link's response does not wrap), the spectra of the signals less
-    their first sample (rows), and those first samples. NaN counts as 0."""
+    its length, so that the link's response does not wrap: to twice the next length with
+    small prime factors, `scipy.fft.next_fast_len`, which a batch of rows transforms several
+    times faster than the next power of two), the spectra of the signals less their first
+    sample (rows), and those first samples. NaN counts as 0."""
     u = np.nan_to_num(np.asarray(signals, dtype=float))
     n = u.shape[-1]
-    L = 1 << int(math.ceil(math.log2(2 * max(n, 2))))
+    L = 2 * fft.next_fast_len(max(n, 2), real=True)    # even: `inverse` reads L off the bins
     u0 = u[:, 0].copy()
     return 2j * np.pi * fft.rfftfreq(L, ts), fft.rfft(u - u0[:, None], L), u0
 
@@ -167,6 +170,41 @@ def spectra(signals: list[np.ndarray], ts: float) -> tuple[np.ndarray, np.ndarra
 def inverse(X: np.ndarray, s: np.ndarray, n: int) -> np.ndarray:
     """The first n samples of the signals whose spectra are the rows of X (bins of s)."""
     return fft.irfft(X, 2 * (len(s) - 1))[..., :n]
+
+
+def inverse_at(X: np.ndarray, n_fft: int, first: int, step: int, count: int) -> np.ndarray:
+    """Samples first + k step, k < count, of the real signals of length n_fft whose spectra
+    (`scipy.fft.rfft`'s bins) are the rows of X, with every bin past X's last one zero (a
+    band-limited spectrum: `inverse` read at a few samples). The real inverse transform
+    x[t] = (2 / n_fft) Re sum_j X_j' w^(j t), X_0' = X_0 / 2, w = exp(2 pi i / n_fft), is
+    evaluated on the stride by Bluestein's chirp convolution (jk = (j^2 + k^2 - (k - j)^2) / 2),
+    one FFT pair of about len + count points per row instead of n_fft."""
+    pre, kernel, post, size = _bluestein(X.shape[-1], n_fft, first, step, count)
+    c = fft.ifft(fft.fft(X * pre, size) * kernel, size)[..., :count]
+    return (c * post).real
+
+
+@lru_cache(maxsize=8)
+def _bluestein(bins: int, n_fft: int, first: int, step: int, count: int
+               ) -> tuple[np.ndarray, ...]:
+    """`inverse_at`'s factors for one grid: the input's (the half DC bin, the shift to `first`,
+    the chirp w^(step j^2 / 2)), the kernel's FFT (w^(-step t^2 / 2), t from -(bins - 1) to
+    count - 1) and the output's (the chirp and 2 / n_fft); each phase exact as an integer
+    modulo 2 n_fft. Made once per grid, read-only: shared."""
+    def chirp(t: np.ndarray) -> np.ndarray:       # w^(step t^2 / 2)
+        return np.exp(1j * np.pi * ((step * t * t) % (2 * n_fft)) / n_fft)
+
+    j, k = np.arange(bins, dtype=np.int64), np.arange(count, dtype=np.int64)
+    size = fft.next_fast_len(bins + count - 1)
+    pre = chirp(j) * np.exp(2j * np.pi * ((j * first) % n_fft) / n_fft)
+    pre[0] *= 0.5
+    t = np.arange(-(bins - 1), count, dtype=np.int64)
+    v = np.zeros(size, dtype=complex)
+    v[t % size] = np.conj(chirp(t))
+    out = (pre, fft.fft(v), chirp(k) * (2.0 / n_fft), size)
+    for x in out[:3]:
+        x.setflags(write=False)
+    return out
 
 
 def link_response(u: np.ndarray, a: float, b: float, ts: float, order: int = 1,

@@ -12,11 +12,11 @@ from scipy import signal
 
 from jointbench.identification import link_fit
 from jointbench.identification.filter_choice import choose_filter
-from jointbench.identification.filtering import decimate_parallel
+from jointbench.identification.filtering import decimate, decimate_parallel
 from jointbench.identification.identify import identify
 from jointbench.bench.sim.experiment import run_experiment
 from jointbench.bench.sim.sensors import Sensors
-from jointbench.identification.link_sim import link_response, simulate_link
+from jointbench.identification.link_sim import inverse, link_response, simulate_link, spectra
 from jointbench.testing import FAMILIES, frictionless, simulate
 
 TS = 1 / 350.87
@@ -152,11 +152,14 @@ def test_jacobian_columns_are_the_model_derivatives():
 
 
 def test_rows_are_those_of_decimate_parallel():
-    """`_Rows.linear` decimates its columns once per profile or per (a, b), on the rows
-    filtering.decimate_parallel keeps: the same rows and numbers (to rounding) as
-    decimate_parallel of the torque and the full columns (qm'', qm', sign, H u_i from
-    `link_response`; measured: the motor columns equal, the responses within 3e-14 of their
-    largest value)."""
+    """`_Rows.linear` keeps the rows filtering.decimate_parallel keeps, with the torque and the
+    motor columns (qm'', qm', sign) decimated as it does (equal), and the link's responses
+    H u_i decimated in the frequency domain (`_Rows._responses`): the same anti-alias filter
+    applied to the response continued as the link's own past the record's ends (at rest
+    before its first sample, the free response after its last one). Against
+    filtering.decimate of that continued response (50 decimated rows each side, longer than
+    the filter's transient; measured: 3e-8 of the column's largest value, the response's
+    tail folded onto its start by the FFT and the stopband's bins left out)."""
     log = simulate(replace(FAMILIES["balanced"], MY=0.3), 1, 10.0, "linear", True)
     p, rows = _rows_at_the_truth(log)
     a, b, s = p["a"], p["b"], rows.s
@@ -169,4 +172,18 @@ def test_rows_are_those_of_decimate_parallel():
     W[rows.bad] = np.nan
     y0, W0, idx0 = decimate_parallel(rows.tau, W, s)
     assert np.array_equal(idx, idx0) and np.array_equal(y, y0)
-    np.testing.assert_allclose(L, W0, rtol=1e-10, atol=1e-12 * np.abs(W0).max())
+    np.testing.assert_array_equal(L[:, :3], W0[:, :3])
+    n, extra = len(log.t), 50 * s.Nd
+    continued = []
+    for u in inputs:
+        sb, U, u0 = spectra([u], s.ts)
+        response = inverse(U / (sb * sb + b * sb + a), sb, 2 * (len(sb) - 1))[0]
+        continued.append(np.r_[np.zeros(extra), response[:n + extra]] + u0[0] / a)
+    X = decimate(np.column_stack(continued)[rows.first:], s.Nd, axis=0)
+    Xd = X[(idx - rows.first + extra) // s.Nd]
+    np.testing.assert_allclose(L[:, 3:], Xd, rtol=0, atol=1e-6 * np.abs(Xd).max())
+    # decimate_parallel's odd extension of each response differs from the continued one
+    # within the filter's transient of the ends alone
+    inside = slice(5, -40)
+    np.testing.assert_allclose(L[inside, 3:], W0[inside, 3:], rtol=0,
+                               atol=1e-4 * np.abs(W0[:, 3:]).max())
