@@ -93,7 +93,8 @@ log-ratios have a negative mean as every segment's do (the column adds only esti
 variance, and it adds it on the very instants where the column is not zero), and the segment
 test counts their number in its degrees of freedom (heldout.dof): a view over few segments
 asks for a larger t. Its level is split with the
-chooser's band's test as the lag's is (t > 4.50 in either view in a first round of 8).
+chooser's band's test, half each (t > 4.50 in either view over every segment in a first
+round of 8; the wide band's one view keeps the whole half, where the lag's two share it).
 
 The guard differs from the lag's. The wide view confirms only a hardening that the chooser's
 band fits physically (its overall share there need not be positive: beside a backlash the
