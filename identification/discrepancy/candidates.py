@@ -44,15 +44,19 @@ class SecondView:
     # view at large deflections, its share in the first band lost to a cause beside it)
     diluted: bool = False
     segments: int = SEGMENTS   # the segments its test is over (heldout.dof)
+    # the tests in this band that share the band's level (lag_band: a lag's two wide views),
+    # each at alpha / split; the one reported is the one with the smaller p
+    split: int = 1
 
     def confirms(self, alpha: float) -> bool:
         return (not self.unphysical and self.agree and self.heldout_pct > 0
-                and self.p_heldout < alpha)
+                and self.p_heldout < alpha / self.split)
 
     def to_json(self, alpha: float) -> dict:
         """What `diagnose --json` lists under a candidate's "second_view"."""
         return {"band": self.band, "heldout_pct": self.heldout_pct, "t": self.t_stat,
-                "p_heldout": self.p_heldout, "value": self.value, "agree": self.agree,
+                "p_heldout": self.p_heldout, "alpha": alpha / self.split,
+                "value": self.value, "agree": self.agree,
                 "unphysical": self.unphysical, "confirms": self.confirms(alpha)}
 
 
@@ -180,7 +184,7 @@ class Candidate:
         if own.passes or not self.confirmed:
             return own
         v = self.second
-        return HeldOutTest(v.band, v.heldout_pct, v.t_stat, v.p_heldout, self.level,
+        return HeldOutTest(v.band, v.heldout_pct, v.t_stat, v.p_heldout, self.level / v.split,
                            acts_pct=v.acts_pct, segments=v.segments)
 
     @property

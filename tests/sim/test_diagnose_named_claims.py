@@ -5,7 +5,8 @@ lag, and a lab rig whose spring is damped and whose drive lags.
 The lab rig reproduces a real lab flexible joint's diagnosis without q_ref: a spring damping
 named first, then a torque lag whose second-round test in the chooser's band fails. The lag
 is named on its test in the wide band (identification.discrepancy.lag_band), which passes at
-half the round's level: the answer names it with that test, never with the failing one."""
+a quarter of the round's level: the answer names it with that test, never with the failing
+one."""
 
 from __future__ import annotations
 
@@ -20,6 +21,7 @@ from jointbench.bench.analysis.diagnose.claims import failing_claims
 from jointbench.bench.analysis.diagnose.report import dumps, summary_text
 from jointbench.bench.analysis.diagnose.run import diagnose
 from jointbench.identification.discrepancy.candidates import CHOOSER
+from jointbench.identification.discrepancy.lag_band import WIDE_VIEWS
 from jointbench.testing.hidden_effects import as_hidden, plant
 
 jsonschema = pytest.importorskip("jsonschema")
@@ -63,10 +65,13 @@ def test_the_lab_rig_lag_is_named_on_the_test_that_passed(lab):
     doc = _checked(lab)
     assert doc["named_causes"] == ["spring_damping", "torque_lag"]
     lag = lab.causes[1]
-    # its own band's test fails; the wide band's passes at half the round's level
+    # its own band's test fails; the wide band's passes at a quarter of the round's level
+    # (the wide band's half shared by its two views, lag_band), over every segment: the
+    # lab rig's multisine holds every frequency in every segment
     assert not lag.own_test.passes and lag.own_test.view == CHOOSER
     assert lag.test.view.startswith("wide band") and lag.test.passes
-    assert lag.test.level == pytest.approx(lag.alpha / 2)
+    assert lag.test.level == pytest.approx(lag.alpha / 2 / WIDE_VIEWS)
+    assert "over every segment" in lag.test.view
     entry = doc["causes"][1]
     assert entry["round"] == 2 and entry["t"] == lag.test.t > entry["test"]["t_bar"]
     assert "its test, round 2, wide band" in summary_text(lab)
