@@ -20,7 +20,9 @@ eq. (13)'s chain cannot do without at the chooser's band (three Butterworth pass
 tau_m, and the decimation of y and the ten columns of the two equations that are not zero,
 each a zero-phase order-8 Chebyshev pass); and the full joint-motor fit with one correction
 switched off at a time (what each costs); and diagnose without its forward view (the forward
-view's MuJoCo replays are what is left). The verdict is read on the CPU-time ratio (the
+view's MuJoCo replays are what is left), and under those replays the physics alone: one
+replay's MuJoCo steps (the log's samples x its plant's substeps, one C call, no controller),
+the floor no forward view at the plant's discretisation can go under. The verdict is read on the CPU-time ratio (the
 machine is shared: wall times there swing with the other processes). The script prints
 figures and ratios and asserts nothing: timings depend on the machine and its load, and no
 unit test holds one.
@@ -28,14 +30,18 @@ unit test holds one.
 
 from __future__ import annotations
 
+import copy
 import os
 import time
+
+import mujoco
 
 import numpy as np
 from scipy import signal
 
 import jointbench.bench.analysis.debias as debias_module
 from jointbench.bench.analysis.diagnose import diagnose
+from jointbench.bench.analysis.diagnose.forward import plant_substeps
 from jointbench.bench.sim.experiment import run_experiment
 from jointbench.identification.corrections import CORRECTIONS
 from jointbench.identification.filter_choice import PAPER_WN, choose_filter
@@ -75,6 +81,15 @@ def chain_filtering(log, settings) -> None:
     for x in (log.q_m, log.q, log.tau_m):
         lowpass(x, settings.wn, settings.ts, settings.m)
     decimate(np.column_stack([log.q_m] * 11), settings.Nd, axis=0)
+
+
+def replay_steps(model: mujoco.MjModel, log) -> None:
+    """The physics of one replay of the log and nothing else: len(log) x the plant's substeps
+    MuJoCo steps (`plant_substeps`, the discretisation the forward view replays with) in one
+    C call, from rest, with no controller, sensors or Python per tick."""
+    m = copy.deepcopy(model)
+    m.opt.timestep = log.ts / plant_substeps(log)
+    mujoco.mj_step(m, mujoco.MjData(m), nstep=len(log) * plant_substeps(log))
 
 
 def debias_times(log, ident) -> tuple[float, float, float, float]:
@@ -127,6 +142,9 @@ def main() -> None:
     t["diagnose (forward view included)"] = best_of(lambda: diagnose(log), SLOW_REPEATS)
     t["diagnose, inverse view alone"] = best_of(lambda: diagnose(log, forward=False),
                                                 SLOW_REPEATS)
+    exp = run_experiment("prototype", duration=60.0, seed=1).experiment
+    t["one replay's MuJoCo steps alone"] = best_of(
+        lambda: replay_steps(exp.model, log), SLOW_REPEATS)
     ident = identify(log, "joint-motor")
     w, c, rw, rc = debias_times(log, ident)
     t["debias 8"], t["its 8 replays"] = (w, c), (rw, rc)
@@ -158,6 +176,11 @@ def main() -> None:
     print(f"diagnose's forward view (its MuJoCo replays of the log) alone is "
           f"{replays / cpu['plain joint-motor']:.1f}x the plain chain; its inverse view "
           f"{cpu['diagnose, inverse view alone'] / cpu['plain joint-motor']:.1f}x")
+    physics = cpu["one replay's MuJoCo steps alone"]
+    print(f"the physics floor under the forward view: one replay's MuJoCo steps alone "
+          f"({len(log)} samples x {plant_substeps(log)} substeps, the log's plant) are "
+          f"{physics / cpu['plain joint-motor']:.1f}x the "
+          f"plain chain (the diagnose target: <= {TARGETS['diagnose / plain']:g}x)")
 
 
 if __name__ == "__main__":
