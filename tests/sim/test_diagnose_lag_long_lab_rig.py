@@ -1,6 +1,6 @@
 """A drive lag of a good part of a second on the lab rig (its voltage drive under a P loop,
-500 Hz, 40 s): 200 sample periods, four times past the 50 periods where the lag's search grid
-used to end, and well inside the record's D / 2 pi (identification.effects.torque_lag.grid).
+500 Hz, 40 s): 200 sample periods, four times the 50 periods where the grid's short trials
+end, and well inside the record's D / 2 pi (identification.effects.torque_lag.grid).
 `diagnose` names it with its own passing held-out test and finds its time constant and the
 rig's mechanics; on the same rig and seed without the lag nothing is named, though the grid
 reaches as far."""
