@@ -37,9 +37,28 @@ def design(rows: Rows, fixed: dict) -> Design:
     return rows.columns(lead=fixed["lag_s"])
 
 
+STEP = 250.0 ** (1 / 39)   # the ratio of successive trials: 40 from 0.2 ts to 50 ts
+
+
 def grid(rows: Rows) -> np.ndarray:
+    """No lag, then geometric trials of ratio STEP from a fifth of the sample period ts to
+    50 ts, continued at the same ratio up to D / 2 pi, D the record's length n ts.
+
+    The led columns x + T x' tell T from the parameters' scale through the frequencies at and
+    below the lag's corner 1 / (2 pi T), where the two terms are comparable. The lowest
+    frequency a record holds is 1 / D (one period over the whole of it): a lag whose corner
+    lies below that acts on every component the record holds as T d/dt alone, a scale the
+    fitted parameters take up, and T is not identified. Up to D / 2 pi the record resolves it
+    (a voltage drive under a position loop lags by a good part of a second, its corner below
+    the first mode). The excitation's own lowest frequency would bound it more tightly where
+    it is known, but a log need not say it; the record's length it always holds. Past 50 ts
+    the trials are added on the same ratio, so the trials up to there, and a short lag's
+    search, are the same on every log."""
     ts = rows.sig.ts
-    return np.r_[0.0, np.geomspace(0.2 * ts, 50 * ts, 40)]
+    short = np.geomspace(0.2 * ts, 50 * ts, 40)
+    end = len(rows.sig.qm) * ts / (2 * np.pi)
+    n = int(np.floor(np.log(end / (50 * ts)) / np.log(STEP) + 1e-9)) if end > 50 * ts else 0
+    return np.r_[0.0, short, 50 * ts * STEP ** np.arange(1, n + 1)]
 
 
 # No physical-range check on T: a current loop slower than the first mode still drives the
