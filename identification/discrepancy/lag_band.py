@@ -218,7 +218,7 @@ def second_view(band: LagBand, c: Candidate,
     run whenever the chooser's band fails at that level."""
     if c.effect not in SECOND or band.settings is None or not c.testable:
         return c
-    c = replace(c, views=2 * split)
+    c = replace(c, views=c.views * 2 * split)   # its rows' views besides (Candidate.views)
     # a lag must show a positive share in the chooser's band; a hardening's share there may
     # be lost to a cause beside it (module docstring: the guard)
     if c.unphysical or c.significant or not (c.heldout_pct > 0 or c.effect == HARDENING):
