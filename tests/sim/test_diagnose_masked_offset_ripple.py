@@ -86,3 +86,20 @@ def test_ripple_alone_and_clean_name_no_extra(runner):
     assert [c.effect for c in d.causes] == ["torque_ripple"]
     clean = diagnose(runner.log(PROTO, (), SEED, True, True))
     assert clean.causes == () and clean.verdict == "none"
+
+
+def test_clipped_split_keeps_both_or_neither(pair):
+    """On a clipped log's every-row view each test is at 1/VIEWS of its level
+    (bench.analysis.diagnose.clipped.split_level): the pair's two, each tested on top of the
+    other, are named together or not at all; one alone would carry a test against a model
+    holding a cause not named."""
+    from dataclasses import replace
+
+    from jointbench.bench.analysis.diagnose.clipped import split_level
+
+    inv = pair.inverse
+    assert [c.effect for c in split_level(inv).causes] == [c.effect for c in inv.causes]
+    weak = replace(inv, causes=(inv.causes[0], replace(inv.causes[1], p_heldout=0.5)))
+    out = split_level(weak)
+    assert out.causes == ()
+    assert {n.effect for n in out.not_named} >= {"offset", "torque_ripple"}
