@@ -607,7 +607,6 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
                           if not any({a.named, a.other} == {b.named, b.other}
                                      for b in alternatives)
                           and frozenset((a.named, a.other)) not in settled)
-    # the first round's ranking, with the first named cause at the top
     masked = None if causes else masked_pair(nom, ranked, len(names))
     if masked is not None and masked.named:   # two that pass only together (masked)
         causes = masked.causes
@@ -616,6 +615,7 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
         alone = {c.effect: c for c in ranked}
         dropped += [NotNamed(e, "failed", f"{alone[e].why_not}; in the masked pair, {why}",
                              alone[e].test, 1) for e, why in masked.skipped]
+    # the first round's ranking, with the first named cause at the top
     top = [c for c in ranked if causes and c.effect == causes[0].effect] or ranked[:1]
     inv = InverseDiagnosis(nominal=nom, causes=causes, notes=tuple(n for _, n in notes),
                            candidates=tuple(top + _rank([c for c in ranked if c not in top]
