@@ -151,6 +151,7 @@ class Candidate:
     second: SecondView | None = None   # a second band's test (lag_band), when one was run
     views: int = 1   # the tests its hypothesis is split over (lag_band: 2), each at alpha / views
     round: int = 0   # the round of the inverse view it was tested in (1 against the nominal)
+    view: str = CHOOSER   # what its own test is (the masked pair's: on top of the other)
 
     @property
     def level(self) -> float:
@@ -172,8 +173,8 @@ class Candidate:
 
     @property
     def own_test(self) -> HeldOutTest:
-        """Its test in the chooser's band, at its level."""
-        return HeldOutTest(CHOOSER, self.heldout_pct, self.t_stat, self.p_heldout, self.level,
+        """Its test in the chooser's band (or its `view`), at its level."""
+        return HeldOutTest(self.view, self.heldout_pct, self.t_stat, self.p_heldout, self.level,
                            self.explained_pct, self.acts_pct)
 
     @property

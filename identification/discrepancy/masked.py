@@ -123,9 +123,9 @@ def _on_top(nom: Nominal, under: Candidate, c: Candidate, alpha: float) -> tuple
     """`c`'s effect fitted on top of `under` (its value held), at the level `alpha` of the
     first round's look, and its test there."""
     ref = reference(nom, ((under.effect, under.fixed),))
-    x = replace(candidate(nom, c.effect, ref), alpha=alpha, round=1)
-    return x, HeldOutTest(f"the masked pair, on top of {under.effect}", x.heldout_pct,
-                          x.t_stat, x.p_heldout, alpha, x.explained_pct, x.acts_pct)
+    x = replace(candidate(nom, c.effect, ref), alpha=alpha, round=1,
+                view=f"the masked pair, on top of {under.effect}")
+    return x, x.own_test
 
 
 def _same(c: Candidate, others: list[Candidate]) -> str:

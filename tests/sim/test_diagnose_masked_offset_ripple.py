@@ -52,6 +52,7 @@ def test_both_named_each_with_its_passing_test(pair):
         other = ({"offset", "torque_ripple"} - {c["effect"]}).pop()
         assert c["after"] == [other]            # tested on top of the other
         t = c["test"]
+        assert t["view"] == f"the masked pair, on top of {other}"
         assert t["passes"] and t["heldout_pct"] > 0 and t["p_heldout"] < t["alpha"]
         assert t["alpha"] == pytest.approx(level)
         assert (c["t"], c["p_heldout"], c["heldout_pct"]) == (t["t"], t["p_heldout"],
@@ -77,6 +78,7 @@ def test_text_gives_each_test_and_what_was_not_named(pair):
     text = summary_text(pair)
     for c in pair.causes:
         assert f"t = {c.test.t:.3g}" in text and f"p = {c.test.p:.2g}" in text
+        assert f"{c.test.view}: held out it explains {c.test.heldout_pct:.3g} %" in text
     asym = [n for n in pair.not_named if n.effect == "asymmetric_friction"]
     assert asym and "reduces to offset" in asym[0].why
 
