@@ -154,6 +154,7 @@ class Candidate:
     # second cause of the spring law over the link equation, _test); "" for those
     rows: str = ""
     round: int = 0   # the round of the inverse view it was tested in (1 against the nominal)
+    view: str = CHOOSER   # what its own test is (the masked pair's: on top of the other)
 
     @property
     def level(self) -> float:
@@ -175,8 +176,8 @@ class Candidate:
 
     @property
     def own_test(self) -> HeldOutTest:
-        """Its test in the chooser's band, at its level."""
-        view = f"{CHOOSER}, {self.rows}" if self.rows else CHOOSER
+        """Its test in the chooser's band (or its `view`), over its `rows`, at its level."""
+        view = f"{self.view}, {self.rows}" if self.rows else self.view
         return HeldOutTest(view, self.heldout_pct, self.t_stat, self.p_heldout, self.level,
                            self.explained_pct, self.acts_pct)
 

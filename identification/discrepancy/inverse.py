@@ -61,6 +61,10 @@ left is listed with why and is no "one of A or B". Likewise a parsimony choice t
 could not make (an offset named for an asymmetric friction) is made again once the rounds
 stop, against the model holding the causes named beside it (_redecided).
 
+**Two that pass only together** (identification.discrepancy.masked): when no round names
+anything, the two best candidates are fitted together; where the pair passes and each passes
+on top of the other, both are named, each with that test.
+
 Every effect tested and not named is listed apart with why (NotNamed).
 """
 
@@ -603,14 +607,21 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
                           if not any({a.named, a.other} == {b.named, b.other}
                                      for b in alternatives)
                           and frozenset((a.named, a.other)) not in settled)
+    masked = None if causes else masked_pair(nom, ranked, len(names))
+    if masked is not None and masked.named:   # two that pass only together (masked)
+        causes = masked.causes
+        stopped += (f"; {masked.first} and {masked.second} pass together and each on top "
+                    f"of the other (the masked pair): both are named")
+        alone = {c.effect: c for c in ranked}
+        dropped += [NotNamed(e, "failed", f"{alone[e].why_not}; in the masked pair, {why}",
+                             alone[e].test, 1) for e, why in masked.skipped]
     # the first round's ranking, with the first named cause at the top
     top = [c for c in ranked if causes and c.effect == causes[0].effect] or ranked[:1]
     inv = InverseDiagnosis(nominal=nom, causes=causes, notes=tuple(n for _, n in notes),
                            candidates=tuple(top + _rank([c for c in ranked if c not in top]
                                                         + first)),
                            rounds=tuple(tuple(r) for r in rounds), alternatives=alternatives,
-                           stopped=stopped,
-                           masked=None if causes else masked_pair(nom, ranked, len(names)))
+                           stopped=stopped, masked=masked)
     return replace(inv, not_named=not_named(inv, tuple(dropped)))
 
 

@@ -22,52 +22,95 @@ it (a positive share each) are fitted together (`masked_pair`), and three tests 
   at ALPHA / (m (m - 1)): Bonferroni over the ordered pairs. An effect that passes on top of
   a reference holding another explains something that reference, and so the nominal, cannot.
 
-When any passes, the answer is "inconclusive" (bench.analysis.diagnose.verdict), with the
-pair's share and every test: the log carries a discrepancy that the two describe together,
-and not one named with its own test against the causes before it. Nothing here names a cause:
-the rounds' rule (inverse) is unchanged.
+When the pair passes and each of the two passes on top of the other (and explains more than
+MATERIAL of the held-out residual of the equations it acts in there, the rounds' floor), both
+are named (`named`, `causes`): each with its own passing test, on top of the other, at the
+ordered pairs' level. A prototype with an offset and a torque ripple whose motor rests for
+the last quarter of the log is such a case: at rest the residual is the offset plus the
+ripple frozen at the resting angle, so against the nominal (no ripple) the offset loses in
+those segments and wins in the others, and the ripple tested without the offset fails the
+same way; each on top of the other passes. When the pair passes but not each on top of the
+other, the answer is "inconclusive" (bench.analysis.diagnose.verdict), with the pair's share
+and every test: the log carries a discrepancy that the two describe together, and not one
+named with its own test against the other.
+
+**An effect and the one it reduces to are one description here.** While the motor moves,
+an asymmetric friction's Coulomb part a FSm sign(qm') is a constant torque on each stretch
+of one direction, the offset's column; only its viscous part a FVm |qm'| differs (registry
+`reduces_to`: asymmetric_friction reduces to offset). Fitted together the two explain
+little more than either alone, and a pair of them says nothing the better one does not. So a
+candidate that reduces to another candidate of the look is left out of it (`skipped`, with
+why): the simpler stands for the two, the richer's own part being the rounds' question (a
+richer effect is named over the one it reduces to only when what it adds is significant,
+identification.discrepancy.inverse._which), and the partner is the next candidate that is
+not the same description. The pair is still one of the m (m - 1) / 2, so the levels above
+hold.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 from jointbench.identification.discrepancy.candidates import (Candidate, HeldOutTest, candidate,
                                                               reference)
 from jointbench.identification.discrepancy.heldout import ALPHA, MATERIAL, evidence
 from jointbench.identification.discrepancy.nominal import Nominal
+from jointbench.identification.effects import EFFECTS
 
 
 @dataclass(frozen=True)
 class MaskedPair:
-    """Two first-round candidates, none named, fitted together: `first` and `second` (ranked
-    by their held-out shares alone), the pair's test against the nominal (`pair`) and each
-    one's test on top of the other (`second_on_first`, `first_on_second`)."""
+    """Two first-round candidates, none named alone, fitted together: `first` and `second`
+    (ranked by their held-out shares alone), the pair's test against the nominal (`pair`)
+    and each one's test on top of the other (`second_on_first`, `first_on_second`);
+    `skipped`, the candidates left out of the look as the same description as one in it
+    (effect, why); `on_top`, the two fits on top of the other (first on second, second on
+    first), the causes when both are named."""
 
     first: str
     second: str
     pair: HeldOutTest
     second_on_first: HeldOutTest
     first_on_second: HeldOutTest
+    skipped: tuple[tuple[str, str], ...] = ()
+    on_top: tuple[Candidate, ...] = field(default=(), repr=False, compare=False)
 
     @property
     def passes(self) -> bool:
         return any(t.passes for t in (self.pair, self.second_on_first, self.first_on_second))
 
+    @property
+    def named(self) -> bool:
+        """Both named: the pair passes, and each passes on top of the other above the floor
+        (MATERIAL of the held-out residual of the equations it acts in)."""
+        return self.pair.passes and all(t.passes and t.own_share > 100 * MATERIAL
+                                        for t in (self.second_on_first, self.first_on_second))
+
+    @property
+    def causes(self) -> tuple[Candidate, ...]:
+        """The named causes (() when not `named`): `first` fitted on top of `second`, then
+        `second` on top of `first` (its fit the joint one), each at its test's level."""
+        return self.on_top if self.named else ()
+
     def describe(self) -> str:
         head = (f"no effect passes alone; {self.first} and {self.second} together explain "
                 f"{self.pair.heldout_pct:.3g} % of the held-out residual")
-        what = ("they mask each other" if self.passes else
+        what = ("each passes on top of the other: both are named" if self.named else
+                "they mask each other" if self.passes else
                 "neither that nor either on top of the other passes")
+        left = "".join(f"; {e} left out of the pair: {why}" for e, why in self.skipped)
         return (f"{head}: {what}; the pair against the nominal, "
                 f"{_line(self.pair)}; {self.second} on top of {self.first}, "
                 f"{_line(self.second_on_first)}; {self.first} on top of {self.second}, "
-                f"{_line(self.first_on_second)}")
+                f"{_line(self.first_on_second)}{left}")
 
     def to_json(self) -> dict:
         return {"first": self.first, "second": self.second, "passes": self.passes,
-                "pair": self.pair.to_json(), "second_on_first": self.second_on_first.to_json(),
-                "first_on_second": self.first_on_second.to_json(), "text": self.describe()}
+                "named": self.named, "pair": self.pair.to_json(),
+                "second_on_first": self.second_on_first.to_json(),
+                "first_on_second": self.first_on_second.to_json(),
+                "skipped": [{"effect": e, "why": why} for e, why in self.skipped],
+                "text": self.describe()}
 
 
 def _line(t: HeldOutTest) -> str:
@@ -77,29 +120,48 @@ def _line(t: HeldOutTest) -> str:
 
 def _on_top(nom: Nominal, under: Candidate, c: Candidate, alpha: float) -> tuple[Candidate,
                                                                                    HeldOutTest]:
-    """`c`'s effect fitted on top of `under` (its value held) and its test there."""
+    """`c`'s effect fitted on top of `under` (its value held), at the level `alpha` of the
+    first round's look, and its test there."""
     ref = reference(nom, ((under.effect, under.fixed),))
-    x = candidate(nom, c.effect, ref)
-    return x, HeldOutTest(f"on top of {under.effect} (not named)", x.heldout_pct, x.t_stat,
-                          x.p_heldout, alpha, x.explained_pct, x.acts_pct)
+    x = replace(candidate(nom, c.effect, ref), alpha=alpha, round=1,
+                view=f"the masked pair, on top of {under.effect}")
+    return x, x.own_test
+
+
+def _same(c: Candidate, others: list[Candidate]) -> str:
+    """Why `c` is left out of the look ("" when it is not): it reduces to another of its
+    candidates (registry `reduces_to`, module docstring)."""
+    simpler = EFFECTS[c.effect].reduces_to if c.effect in EFFECTS else ""
+    if not simpler or not any(o.effect == simpler for o in others):
+        return ""
+    return (f"it reduces to {simpler}, a candidate of the look (while the motor moves its "
+            f"Coulomb part is a constant torque, {simpler}'s column; only its viscous part "
+            f"differs, and what that adds is the rounds' question), so {simpler} stands for "
+            f"the two")
 
 
 def masked_pair(nom: Nominal, ranked: list[Candidate] | tuple[Candidate, ...],
                 m: int) -> MaskedPair | None:
     """The two physical first-round candidates with the largest positive held-out shares,
-    fitted together and tested (module docstring); None when there are not two, the best
-    explains no more than MATERIAL, or fewer than two effects were tested (m)."""
-    two = sorted((c for c in ranked if c.testable and not c.unphysical and c.heldout_pct > 0
-                  and c.heldout_errors is not None), key=lambda c: -c.heldout_pct)[:2]
+    one that reduces to another of them left out (module docstring), fitted together and
+    tested; None when there are not two, the best explains no more than MATERIAL, or fewer
+    than two effects were tested (m)."""
+    fit = sorted((c for c in ranked if c.testable and not c.unphysical and c.heldout_pct > 0
+                  and c.heldout_errors is not None), key=lambda c: -c.heldout_pct)
+    skipped = tuple((c.effect, why) for c in fit if (why := _same(c, fit)))
+    two = [c for c in fit if c.effect not in dict(skipped)][:2]
     if len(two) < 2 or m < 2 or not two[0].heldout_pct > 100 * MATERIAL:
         return None
     a, b = two
     ordered = ALPHA / (m * (m - 1))
     ba, t_ba = _on_top(nom, a, b, ordered)
-    _, t_ab = _on_top(nom, b, a, ordered)
+    ab, t_ab = _on_top(nom, b, a, ordered)
     n = len(nom.sig.index)
     acts = tuple(sorted(set(a.acts) | set(ba.acts))) if a.acts and ba.acts else ()
     ev = evidence(reference(nom).scores.errors, ba.heldout_errors, n, acts)
     pair = HeldOutTest("the pair against the nominal", ev.explained_pct, ev.t, ev.p,
                        2 * ordered, acts_pct=ev.acts_pct)
-    return MaskedPair(a.effect, b.effect, pair, t_ba, t_ab)
+    # skipped only where the pair it would have been in differs (the richer ranked in it)
+    ranked_two = fit[:2]
+    skipped = tuple((e, why) for e, why in skipped if any(c.effect == e for c in ranked_two))
+    return MaskedPair(a.effect, b.effect, pair, t_ba, t_ab, skipped, (ab, ba))

@@ -141,6 +141,14 @@ def split_level(inv: InverseDiagnosis, band: LagBand | None = None) -> InverseDi
             why = (s.why_not or "a cause before it is not named") + \
                 f" (every row, each test at 1/{VIEWS} of its level)"
             dropped.append(NotNamed(c.effect, "failed", why, s.test, c.round))
+    if dropped and inv.masked is not None and inv.masked.named:
+        # the masked pair's two, each tested on top of the other: both or neither
+        pair = {inv.masked.first, inv.masked.second}
+        dropped = [NotNamed(c.effect, "failed", f"it was tested on top of "
+                            f"{(pair - {c.effect}).pop()}, which is not named (every row, "
+                            f"each test at 1/{VIEWS} of its level)", s.test, c.round)
+                   for c, s in zip(inv.causes, causes)] + dropped
+        causes = ()
     kept = {c.effect for c in causes}
     given = tuple(n for n in inv.not_named if n.kind in ("floor", "left_out"))
     # the causes as split above (a second view run), every other candidate split alone

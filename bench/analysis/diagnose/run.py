@@ -102,7 +102,10 @@ def diagnose(log: Log, out_dir: Path | None = None, forward: bool = True,
     # Several causes whose extended model the forward view rejects: the later ones are left
     # out in turn, not the whole answer (each named cause keeps its own
     # gain; a worse replay of the last one says nothing of the ones named before it).
-    while _replay_rejects(judged) and len(judged.inverse.causes) > 1:
+    # (Not the masked pair's two: each was tested on top of the other, and neither stands
+    # alone, identification.discrepancy.masked.)
+    while (_replay_rejects(judged) and len(judged.inverse.causes) > 1
+           and not (judged.inverse.masked is not None and judged.inverse.masked.named)):
         left_out.append(f"{judged.inverse.causes[-1].effect} left out: {judged.overruled}")
         judged = _judged(replace(d, inverse=_without_last(judged.inverse, judged.overruled)),
                          forward, say, judged.forward_nominal)
