@@ -108,8 +108,9 @@ def prototype_run():
 
 
 @pytest.fixture(scope="session")
-def prototype_log(prototype_run):
-    return prototype_run.log
+def prototype_log(bench_log):
+    """prototype_run's log, through bench_log (simulated once per session)."""
+    return bench_log("prototype", duration=60.0, seed=1)
 
 
 @pytest.fixture(scope="session")
