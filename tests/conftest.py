@@ -1,8 +1,9 @@
-"""Shared, session-scoped experiments: each virtual run is simulated once per test process.
+"""Shared, session-scoped experiments: each virtual run is simulated once per session.
 `make test` and `make check` run one process per core (pytest-xdist, `--dist loadfile
 --no-loadscope-reorder`): every test file stays in one process, so its module fixtures run
-once, and two files that ask bench_log or indep_log for the same run share it when they land
-in the same process. The files go out longest first (LONGEST below).
+once, and two files that ask bench_log or indep_log for the same run share it: simulated by
+one process, read by the other from the session's shared folder. The files go out longest
+first (LONGEST below).
 
 The folder a test lives in is its layer, and its marker (pyproject.toml declares them):
 
@@ -18,8 +19,11 @@ its tmp_path) or on files outside its tmp_path: the processes run side by side.
 
 from __future__ import annotations
 
+import hashlib
 import inspect
 import os
+import pickle
+import time
 from pathlib import Path
 
 # One BLAS thread a test process, set before numpy loads (the xdist processes inherit it): the
@@ -104,8 +108,9 @@ def prototype_run():
 
 
 @pytest.fixture(scope="session")
-def prototype_log(prototype_run):
-    return prototype_run.log
+def prototype_log(bench_log):
+    """prototype_run's log, through bench_log (simulated once per session)."""
+    return bench_log("prototype", duration=60.0, seed=1)
 
 
 @pytest.fixture(scope="session")
@@ -117,10 +122,49 @@ def prototype_joint_motor(prototype_log):
     return identify(prototype_log, "joint-motor")
 
 
-def _once(run):
-    """`run` called once per distinct set of arguments (bound to its signature, defaults
-    filled in, compared by repr: frozen dataclasses and plain values), the result kept for the
-    session. Arguments holding arrays are not kept."""
+def _made_once(folder: Path, key: str, make):
+    """make() for `key`, computed by one of the session's processes and read from `folder` by
+    the others (pickled: arrays bit for bit). The first to create `key`'s lock file computes
+    and writes the result atomically; the others wait for it. A lock left by a process that
+    is gone, or a computation that failed (the lock removed), is taken over."""
+    name = hashlib.sha256(key.encode()).hexdigest()[:32]
+    done, lock = folder / f"{name}.pkl", folder / f"{name}.lock"
+    while True:
+        if done.exists():
+            with open(done, "rb") as f:
+                return pickle.load(f)
+        try:
+            fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+        except FileExistsError:
+            try:
+                owner = int(lock.read_text() or 0)
+                os.kill(owner, 0)
+            except ProcessLookupError:
+                lock.unlink(missing_ok=True)   # its maker is gone
+            except (ValueError, FileNotFoundError, PermissionError):
+                pass                           # being written, just removed, or alive
+            time.sleep(0.05)
+            continue
+        try:
+            os.write(fd, str(os.getpid()).encode())
+            os.close(fd)
+            value = make()
+            part = folder / f"{name}.{os.getpid()}.part"
+            with open(part, "wb") as f:
+                pickle.dump(value, f, protocol=pickle.HIGHEST_PROTOCOL)
+            os.replace(part, done)
+            return value
+        finally:
+            if not done.exists():
+                lock.unlink(missing_ok=True)
+
+
+def _once(run, folder: Path | None = None, keep=lambda result: result):
+    """keep(run(...)) made once per distinct set of arguments (bound to run's signature,
+    defaults filled in, compared by repr: frozen dataclasses and plain values) and kept for
+    the session. With `folder` (the session's folder shared by its xdist processes) it is
+    made once in the whole session: the other processes read it from there. Arguments
+    holding arrays are not kept."""
     signature = inspect.signature(run)
     kept = {}
 
@@ -128,31 +172,46 @@ def _once(run):
         bound = signature.bind(*args, **options)
         bound.apply_defaults()
         if any(isinstance(v, np.ndarray) for v in bound.arguments.values()):
-            return run(*bound.args, **bound.kwargs)
+            return keep(run(*bound.args, **bound.kwargs))
         key = repr(tuple(bound.arguments.items()))
         if key not in kept:
-            kept[key] = run(*bound.args, **bound.kwargs)
+            def make():
+                return keep(run(*bound.args, **bound.kwargs))
+            kept[key] = make() if folder is None else _made_once(
+                folder, f"{run.__module__}.{run.__qualname__}{key}", make)
         return kept[key]
 
     return get
 
 
 @pytest.fixture(scope="session")
-def bench_log():
-    """The bench's logs, each simulated once per session: `bench_log(model, joint, **options)`
-    is run_experiment(model, joint, **options).log, the same Log object for the same
-    arguments. Read it, never write into it."""
-    from jointbench.bench.sim.experiment import run_experiment
-
-    once = _once(run_experiment)
-    return lambda *args, **options: once(*args, **options).log
+def shared_folder(tmp_path_factory) -> Path | None:
+    """The folder the session's xdist processes share (beside their own temporary folders,
+    so new for every session), or None when the tests run in one process."""
+    if "PYTEST_XDIST_WORKER" not in os.environ:
+        return None
+    folder = tmp_path_factory.getbasetemp().parent / "shared-runs"
+    folder.mkdir(exist_ok=True)
+    return folder
 
 
 @pytest.fixture(scope="session")
-def indep_log():
+def bench_log(shared_folder):
+    """The bench's logs, each simulated once per session: `bench_log(model, joint, **options)`
+    is run_experiment(model, joint, **options).log, the same Log object for the same
+    arguments in a process (the other processes read it from shared_folder). Read it, never
+    write into it."""
+    from jointbench.bench.sim.experiment import run_experiment
+
+    return _once(run_experiment, shared_folder, keep=lambda result: result.log)
+
+
+@pytest.fixture(scope="session")
+def indep_log(shared_folder):
     """The independent simulator's logs, each simulated once per session (a 60 s log takes
-    seconds in numpy): `indep_log(family, **options)` is jointbench.testing.simulate(family,
-    **options), the same Log object for the same arguments. Read it, never write into it."""
+    1-10 s in numpy): `indep_log(family, **options)` is jointbench.testing.simulate(family,
+    **options), the same Log object for the same arguments in a process (the other processes
+    read it from shared_folder). Read it, never write into it."""
     from jointbench.testing import simulate
 
-    return _once(simulate)
+    return _once(simulate, shared_folder)

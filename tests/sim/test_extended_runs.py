@@ -125,8 +125,11 @@ def test_emps_extended_model_of_every_candidate_runs(emps_diagnosis, tmp_path):
         xml = tmp_path / f"extended{i}.xml"
         nominal_axes.write_xml(spec, xml)
         sim = tmp_path / f"sim{i}.csv"
-        # the default 60 s: a short chirp's amplitude cap kinks the reference (velocity step)
-        assert _run("--model", str(xml), "--out", str(sim)) == 0, effects
+        # all of them at once at the default 60 s, each alone at 20 s, whose chirp keeps the
+        # 60 s one's amplitude (0.049 m) and acceleration (a shorter chirp's amplitude cap
+        # kinks the reference: a velocity step)
+        duration = [] if i == len(runs) - 1 else ["--duration", "20"]
+        assert _run("--model", str(xml), *duration, "--out", str(sim)) == 0, effects
         assert read_log(sim).prismatic
         assert _run("--replay", str(log.path), "--model", str(xml),
                     "--out", str(tmp_path / f"replay{i}.csv")) == 0, effects
@@ -145,7 +148,9 @@ def test_emps_diagnose_out_models_run(tmp_path):
     out = tmp_path / "d"
     assert main(["diagnose", str(EMPS / "emps_estimation.csv"), "--out", str(out),
                  "--quiet", "--no-forward"]) == 0
-    for name in ("nominal.xml", "extended.xml"):
-        assert _run("--model", str(out / name), "--out", str(tmp_path / f"{name}.csv")) == 0
+    # the nominal at 20 s (the chirp of the 60 s default, test above), the extended at 60 s
+    for name, duration in (("nominal.xml", ["--duration", "20"]), ("extended.xml", [])):
+        assert _run("--model", str(out / name), *duration,
+                    "--out", str(tmp_path / f"{name}.csv")) == 0
         assert _run("--replay", str(EMPS / "emps_estimation.csv"), "--model", str(out / name),
                     "--out", str(tmp_path / f"r_{name}.csv")) == 0
