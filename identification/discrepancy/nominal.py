@@ -7,7 +7,7 @@ import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import optimize
+from scipy import optimize, stats
 
 from jointbench.identification.discrepancy.signals import Signals, signals, stack
 from jointbench.identification.effects.base import Column, Design, hat, sign0
@@ -246,6 +246,39 @@ class Nominal:
 # Under a thousandth of it the nominal's link equation describes no link (a collapse).
 COLLAPSED = 1e-3
 
+# The scale test of the block weights (scale_shrunk): the held-out test's bar (heldout.ALPHA
+# over heldout.SEGMENTS contiguous segments), here on a delete-one-segment jackknife of K.
+SCALE_SEGMENTS = 40
+SCALE_ALPHA = 1e-3
+
+
+def scale_shrunk(Wb: np.ndarray, y: np.ndarray, block: np.ndarray, w: np.ndarray,
+                 k: int) -> bool:
+    """Whether the block-weighted fit's spring stiffness K (column k of the stacked design
+    Wb) lies below the equal-weight fit's by more than the latter's standard error allows:
+    (K_eq - K_w) sign(K_eq) > t(SCALE_ALPHA, G - 1) se(K_eq), se by the delete-one-segment
+    jackknife over G contiguous segments (the residual is low-passed: a row-wise standard
+    error would understate it by the filter's correlation length).
+
+    The link equation is homogeneous (0 = K (qm - q) - JL q'' - ...): its rows fix the
+    ratios of its parameters, never their scale, which only K's motor column sets. Its
+    weighted residual is that scale times the misfit of the ratios, so a weight on the link
+    rows buys residual by shrinking the whole block, paid for only through the motor rows.
+    Weights of 1 / (each block's residual spread) are an efficiency reweighting of one
+    model when the residuals are noise, and then move K by a fraction of its standard
+    error; when a motor-side misfit (a lag, a ripple) inflates the motor residual, the link
+    equation gets a hundred times the weight and K shrinks by tens of standard errors: a
+    degenerate reference, which the block weights must not set."""
+    n = int(np.sum(block == 0))
+    G = min(SCALE_SEGMENTS, n)
+    seg = np.minimum(np.arange(n) * G // n, G - 1)
+    seg = np.r_[seg, seg]
+    ones = np.ones(len(y))
+    K_eq, K_w = solve(Wb, y, ones)[0][k], solve(Wb, y, w)[0][k]
+    Kj = np.array([solve(Wb[seg != g], y[seg != g], ones[seg != g])[0][k] for g in range(G)])
+    se = np.sqrt((G - 1) / G * np.sum((Kj - Kj.mean()) ** 2))
+    return bool((K_eq - K_w) * np.sign(K_eq) > stats.t.isf(SCALE_ALPHA, G - 1) * se)
+
 
 def nominal(log: Log, settings: FilterSettings, link_friction: bool = True,
             limit_applied: bool = False) -> Nominal:
@@ -283,10 +316,12 @@ def nominal(log: Log, settings: FilterSettings, link_friction: bool = True,
             w[rows] = 1.0 / s if s > 0 else 1.0
     X = solve(Wb, y, w)[0]
     ref = _reference_rms(y, W, X[:-1], block, names)
-    if sig.has_link and ref[1] < COLLAPSED * ref[0]:
-        # The link equation (homogeneous: 0 = ...) collapsed towards 0 = 0: the spring
+    if sig.has_link and (ref[1] < COLLAPSED * ref[0] or
+                         scale_shrunk(Wb, y, block, w, names.index("K"))):
+        # The link equation (homogeneous: 0 = ...) collapsed towards 0 = 0 (the spring
         # carries next to none of the motor torque, its residual's spread measures no noise,
-        # and a weight of 1 / (that spread) pins every extended fit to the collapse.
+        # and a weight of 1 / (that spread) pins every extended fit to the collapse), or the
+        # weights shrank its scale beyond K's standard error (scale_shrunk).
         # Both equations are in N m: equal weights.
         w = np.ones(len(y))
         X = solve(Wb, y, w)[0]

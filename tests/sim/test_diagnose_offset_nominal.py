@@ -66,6 +66,10 @@ def test_without_the_constant_the_link_equation_shrinks(logs, monkeypatch):
     sig = sigmas(a)
     monkeypatch.setattr(NOMINAL, "_with_bias",
                         lambda sig, W: np.column_stack([W, np.zeros(len(W))]))
+    # the block weights' scale test (scale_shrunk) refuses the shrunk weights: equal weights
+    assert np.all(nominal(shifted, s).weights == 1.0)
+    # without that test either, the weights shrink the link equation
+    monkeypatch.setattr(NOMINAL, "scale_shrunk", lambda *args: False)
     b = nominal(shifted, s)
     ratios = [b.value(n) / a.value(n) for n in LINK]
     assert max(ratios) < 0.6 and np.ptp(ratios) < 0.1   # one scale, the link equation's
