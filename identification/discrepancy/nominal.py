@@ -273,9 +273,18 @@ def scale_shrunk(Wb: np.ndarray, y: np.ndarray, block: np.ndarray, w: np.ndarray
     G = min(SCALE_SEGMENTS, n)
     seg = np.minimum(np.arange(n) * G // n, G - 1)
     seg = np.r_[seg, seg]
-    ones = np.ones(len(y))
-    K_eq, K_w = solve(Wb, y, ones)[0][k], solve(Wb, y, w)[0][k]
-    Kj = np.array([solve(Wb[seg != g], y[seg != g], ones[seg != g])[0][k] for g in range(G)])
+    K_eq, K_w = solve(Wb, y, np.ones(len(y)))[0][k], solve(Wb, y, w)[0][k]
+    # the replicates by the normal equations of the column-scaled design, the sums over
+    # all segments less one segment's (as link_law's cost: a least squares per replicate
+    # would cost as much as the rest of the nominal)
+    scale = np.linalg.norm(Wb, axis=0)
+    scale[scale == 0] = 1.0
+    A = Wb / scale
+    Gs = np.array([A[seg == g].T @ A[seg == g] for g in range(G)])
+    cs = np.array([A[seg == g].T @ y[seg == g] for g in range(G)])
+    G_all, c_all = Gs.sum(axis=0), cs.sum(axis=0)
+    Kj = np.array([np.linalg.lstsq(G_all - Gs[g], c_all - cs[g], rcond=None)[0][k]
+                   for g in range(G)]) / scale[k]
     se = np.sqrt((G - 1) / G * np.sum((Kj - Kj.mean()) ** 2))
     return bool((K_eq - K_w) * np.sign(K_eq) > stats.t.isf(SCALE_ALPHA, G - 1) * se)
 
