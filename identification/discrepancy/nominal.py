@@ -250,6 +250,7 @@ COLLAPSED = 1e-3
 # over heldout.SEGMENTS contiguous segments), here on a delete-one-segment jackknife of K.
 SCALE_SEGMENTS = 40
 SCALE_ALPHA = 1e-3
+SCALE_STEPS = 12   # bisection halvings of scale_weights' exponent (to 2.4e-4)
 
 
 def scale_shrunk(Wb: np.ndarray, y: np.ndarray, block: np.ndarray, w: np.ndarray,
@@ -269,11 +270,18 @@ def scale_shrunk(Wb: np.ndarray, y: np.ndarray, block: np.ndarray, w: np.ndarray
     error; when a motor-side misfit (a lag, a ripple) inflates the motor residual, the link
     equation gets a hundred times the weight and K shrinks by tens of standard errors: a
     degenerate reference, which the block weights must not set."""
+    K_eq, bound = _shrink_bound(Wb, y, block, k)
+    return bool((K_eq - solve(Wb, y, w)[0][k]) * np.sign(K_eq) > bound)
+
+
+def _shrink_bound(Wb: np.ndarray, y: np.ndarray, block: np.ndarray,
+                  k: int) -> tuple[float, float]:
+    """scale_shrunk's equal-weight K and the shrink it allows, t(SCALE_ALPHA, G - 1) se."""
     n = int(np.sum(block == 0))
     G = min(SCALE_SEGMENTS, n)
     seg = np.minimum(np.arange(n) * G // n, G - 1)
     seg = np.r_[seg, seg]
-    K_eq, K_w = solve(Wb, y, np.ones(len(y)))[0][k], solve(Wb, y, w)[0][k]
+    K_eq = solve(Wb, y, np.ones(len(y)))[0][k]
     # the replicates by the normal equations of the column-scaled design, the sums over
     # all segments less one segment's (as link_law's cost: a least squares per replicate
     # would cost as much as the rest of the nominal)
@@ -286,7 +294,42 @@ def scale_shrunk(Wb: np.ndarray, y: np.ndarray, block: np.ndarray, w: np.ndarray
     Kj = np.array([np.linalg.lstsq(G_all - Gs[g], c_all - cs[g], rcond=None)[0][k]
                    for g in range(G)]) / scale[k]
     se = np.sqrt((G - 1) / G * np.sum((Kj - Kj.mean()) ** 2))
-    return bool((K_eq - K_w) * np.sign(K_eq) > stats.t.isf(SCALE_ALPHA, G - 1) * se)
+    return float(K_eq), float(stats.t.isf(SCALE_ALPHA, G - 1) * se)
+
+
+def scale_weights(Wb: np.ndarray, y: np.ndarray, block: np.ndarray, w: np.ndarray,
+                  k: int) -> np.ndarray:
+    """The block weights `w` (1 / each block's residual spread) taken only as far as they
+    leave the link equation's scale alone: w^f with the largest f in [0, 1] whose fit K is
+    not shrunk (scale_shrunk), by bisection to SCALE_STEPS halvings; f = 0 is equal weights.
+
+    Equal weights alone would give the motor equation, whose residual a motor-side misfit
+    (a ripple) inflates, the fit of a link-side effect beside it (a hardening, whose
+    evidence is in the link rows); the weights as far as the scale allows keep the link
+    rows' say without the degenerate shrink."""
+    K_eq, bound = _shrink_bound(Wb, y, block, k)
+    # w is one weight per block: each trial's fit by the blocks' normal equations of the
+    # column-scaled design, w_b^(2 f) G_b summed (a least squares per trial would cost as
+    # much as the rest of the nominal)
+    scale = np.linalg.norm(Wb, axis=0)
+    scale[scale == 0] = 1.0
+    A = Wb / scale
+    parts = [(float(w[block == b][0]), A[block == b].T @ A[block == b],
+              A[block == b].T @ y[block == b]) for b in np.unique(block)]
+
+    def K_at(f: float) -> float:
+        Gf = sum(wb ** (2 * f) * Gb for wb, Gb, _ in parts)
+        cf = sum(wb ** (2 * f) * cb for wb, _, cb in parts)
+        return float(np.linalg.lstsq(Gf, cf, rcond=None)[0][k] / scale[k])
+
+    lo, hi = 0.0, 1.0
+    for _ in range(SCALE_STEPS):
+        f = 0.5 * (lo + hi)
+        if (K_eq - K_at(f)) * np.sign(K_eq) > bound:
+            hi = f
+        else:
+            lo = f
+    return w ** lo
 
 
 def nominal(log: Log, settings: FilterSettings, link_friction: bool = True,
@@ -329,10 +372,11 @@ def nominal(log: Log, settings: FilterSettings, link_friction: bool = True,
                          scale_shrunk(Wb, y, block, w, names.index("K"))):
         # The link equation (homogeneous: 0 = ...) collapsed towards 0 = 0 (the spring
         # carries next to none of the motor torque, its residual's spread measures no noise,
-        # and a weight of 1 / (that spread) pins every extended fit to the collapse), or the
-        # weights shrank its scale beyond K's standard error (scale_shrunk).
-        # Both equations are in N m: equal weights.
-        w = np.ones(len(y))
+        # and a weight of 1 / (that spread) pins every extended fit to the collapse): both
+        # equations are in N m, equal weights. Or the weights shrank its scale beyond K's
+        # standard error (scale_shrunk): the weights as far as the scale allows.
+        w = np.ones(len(y)) if ref[1] < COLLAPSED * ref[0] else scale_weights(
+            Wb, y, block, w, names.index("K"))
         X = solve(Wb, y, w)[0]
         ref = _reference_rms(y, W, X[:-1], block, names)
     X, bias = X[:-1], float(X[-1])

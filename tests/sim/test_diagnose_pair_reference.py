@@ -7,14 +7,9 @@ a gravity torque left out of the reference shrinks the homogeneous link equation
 mean deflection's torque reappears in the motor equation as a constant that an offset takes
 up as well as gravity does. Alone the first round cannot tell them apart; with the next
 round on top of each, gravity and the spring damping predict the held-out rows better than
-the offset does, and the offset is listed as not named with that reason. The nominal's
-scale test on its block weights (nominal.scale_shrunk) refuses that shrunk reference: with
-equal weights the offset explains nothing held out and fails its own test; the look-ahead
-is exercised on the shrunk reference, the scale test turned off."""
+the offset does, and the offset is listed as not named with that reason."""
 
 from __future__ import annotations
-
-import sys
 
 import pytest
 
@@ -24,33 +19,14 @@ from jointbench.bench.campaign.battery import BENCH_PLACES, BenchRunner, Place
 from jointbench.identification.output_values import finite_json
 from jointbench.testing import IndepRunner
 
-NOMINAL = sys.modules["jointbench.identification.discrepancy.nominal"]   # the module
-
 
 @pytest.fixture(scope="module")
-def pair_log():
+def answer():
     runner = BenchRunner(40.0)
     axis2 = next(p for p in BENCH_PLACES if p.joint == "axis2")
-    return runner.log(axis2, (("spring_damping", 2020.86, {}), ("gravity", -0.07989, {})),
-                      91012, False, False)
-
-
-@pytest.fixture(scope="module")
-def answer(pair_log):
-    """The answer on the shrunk reference (the block weights kept whatever their scale)."""
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(NOMINAL, "scale_shrunk", lambda *args: False)
-        return diagnose(pair_log)
-
-
-def test_on_the_scale_tested_reference_the_offset_fails_its_own_test(pair_log):
-    answer = diagnose(pair_log)
-    assert {c.effect for c in answer.causes} == {"gravity", "spring_damping"}
-    doc = finite_json(answer.to_json())
-    assert failing_claims(doc) == []
-    why = {n["effect"]: n for n in doc["not_named"]}
-    assert why["offset"]["kind"] == "failed"
-    assert not any("offset" in (a["named"], a["other"]) for a in doc.get("alternatives") or [])
+    log = runner.log(axis2, (("spring_damping", 2020.86, {}), ("gravity", -0.07989, {})),
+                     91012, False, False)
+    return diagnose(log)
 
 
 def test_gravity_and_spring_damping_named_not_the_offset(answer):
