@@ -7,7 +7,7 @@ import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import optimize
+from scipy import optimize, stats
 
 from jointbench.identification.discrepancy.signals import Signals, signals, stack
 from jointbench.identification.effects.base import Column, Design, hat, sign0
@@ -246,6 +246,91 @@ class Nominal:
 # Under a thousandth of it the nominal's link equation describes no link (a collapse).
 COLLAPSED = 1e-3
 
+# The scale test of the block weights (scale_shrunk): the held-out test's bar (heldout.ALPHA
+# over heldout.SEGMENTS contiguous segments), here on a delete-one-segment jackknife of K.
+SCALE_SEGMENTS = 40
+SCALE_ALPHA = 1e-3
+SCALE_STEPS = 12   # bisection halvings of scale_weights' exponent (to 2.4e-4)
+
+
+def scale_shrunk(Wb: np.ndarray, y: np.ndarray, block: np.ndarray, w: np.ndarray,
+                 k: int) -> bool:
+    """Whether the block-weighted fit's spring stiffness K (column k of the stacked design
+    Wb) lies below the equal-weight fit's by more than the latter's standard error allows:
+    (K_eq - K_w) sign(K_eq) > t(SCALE_ALPHA, G - 1) se(K_eq), se by the delete-one-segment
+    jackknife over G contiguous segments (the residual is low-passed: a row-wise standard
+    error would understate it by the filter's correlation length).
+
+    The link equation is homogeneous (0 = K (qm - q) - JL q'' - ...): its rows fix the
+    ratios of its parameters, never their scale, which only K's motor column sets. Its
+    weighted residual is that scale times the misfit of the ratios, so a weight on the link
+    rows buys residual by shrinking the whole block, paid for only through the motor rows.
+    Weights of 1 / (each block's residual spread) are an efficiency reweighting of one
+    model when the residuals are noise, and then move K by a fraction of its standard
+    error; when a motor-side misfit (a lag, a ripple) inflates the motor residual, the link
+    equation gets a hundred times the weight and K shrinks by tens of standard errors: a
+    degenerate reference, which the block weights must not set."""
+    K_eq, bound = _shrink_bound(Wb, y, block, k)
+    return bool((K_eq - solve(Wb, y, w)[0][k]) * np.sign(K_eq) > bound)
+
+
+def _shrink_bound(Wb: np.ndarray, y: np.ndarray, block: np.ndarray,
+                  k: int) -> tuple[float, float]:
+    """scale_shrunk's equal-weight K and the shrink it allows, t(SCALE_ALPHA, G - 1) se."""
+    n = int(np.sum(block == 0))
+    G = min(SCALE_SEGMENTS, n)
+    seg = np.minimum(np.arange(n) * G // n, G - 1)
+    seg = np.r_[seg, seg]
+    K_eq = solve(Wb, y, np.ones(len(y)))[0][k]
+    # the replicates by the normal equations of the column-scaled design, the sums over
+    # all segments less one segment's (as link_law's cost: a least squares per replicate
+    # would cost as much as the rest of the nominal)
+    scale = np.linalg.norm(Wb, axis=0)
+    scale[scale == 0] = 1.0
+    A = Wb / scale
+    Gs = np.array([A[seg == g].T @ A[seg == g] for g in range(G)])
+    cs = np.array([A[seg == g].T @ y[seg == g] for g in range(G)])
+    G_all, c_all = Gs.sum(axis=0), cs.sum(axis=0)
+    Kj = np.array([np.linalg.lstsq(G_all - Gs[g], c_all - cs[g], rcond=None)[0][k]
+                   for g in range(G)]) / scale[k]
+    se = np.sqrt((G - 1) / G * np.sum((Kj - Kj.mean()) ** 2))
+    return float(K_eq), float(stats.t.isf(SCALE_ALPHA, G - 1) * se)
+
+
+def scale_weights(Wb: np.ndarray, y: np.ndarray, block: np.ndarray, w: np.ndarray,
+                  k: int) -> np.ndarray:
+    """The block weights `w` (1 / each block's residual spread) taken only as far as they
+    leave the link equation's scale alone: w^f with the largest f in [0, 1] whose fit K is
+    not shrunk (scale_shrunk), by bisection to SCALE_STEPS halvings; f = 0 is equal weights.
+
+    Equal weights alone would give the motor equation, whose residual a motor-side misfit
+    (a ripple) inflates, the fit of a link-side effect beside it (a hardening, whose
+    evidence is in the link rows); the weights as far as the scale allows keep the link
+    rows' say without the degenerate shrink."""
+    K_eq, bound = _shrink_bound(Wb, y, block, k)
+    # w is one weight per block: each trial's fit by the blocks' normal equations of the
+    # column-scaled design, w_b^(2 f) G_b summed (a least squares per trial would cost as
+    # much as the rest of the nominal)
+    scale = np.linalg.norm(Wb, axis=0)
+    scale[scale == 0] = 1.0
+    A = Wb / scale
+    parts = [(float(w[block == b][0]), A[block == b].T @ A[block == b],
+              A[block == b].T @ y[block == b]) for b in np.unique(block)]
+
+    def K_at(f: float) -> float:
+        Gf = sum(wb ** (2 * f) * Gb for wb, Gb, _ in parts)
+        cf = sum(wb ** (2 * f) * cb for wb, _, cb in parts)
+        return float(np.linalg.lstsq(Gf, cf, rcond=None)[0][k] / scale[k])
+
+    lo, hi = 0.0, 1.0
+    for _ in range(SCALE_STEPS):
+        f = 0.5 * (lo + hi)
+        if (K_eq - K_at(f)) * np.sign(K_eq) > bound:
+            hi = f
+        else:
+            lo = f
+    return w ** lo
+
 
 def nominal(log: Log, settings: FilterSettings, link_friction: bool = True,
             limit_applied: bool = False) -> Nominal:
@@ -283,12 +368,15 @@ def nominal(log: Log, settings: FilterSettings, link_friction: bool = True,
             w[rows] = 1.0 / s if s > 0 else 1.0
     X = solve(Wb, y, w)[0]
     ref = _reference_rms(y, W, X[:-1], block, names)
-    if sig.has_link and ref[1] < COLLAPSED * ref[0]:
-        # The link equation (homogeneous: 0 = ...) collapsed towards 0 = 0: the spring
+    if sig.has_link and (ref[1] < COLLAPSED * ref[0] or
+                         scale_shrunk(Wb, y, block, w, names.index("K"))):
+        # The link equation (homogeneous: 0 = ...) collapsed towards 0 = 0 (the spring
         # carries next to none of the motor torque, its residual's spread measures no noise,
-        # and a weight of 1 / (that spread) pins every extended fit to the collapse.
-        # Both equations are in N m: equal weights.
-        w = np.ones(len(y))
+        # and a weight of 1 / (that spread) pins every extended fit to the collapse): both
+        # equations are in N m, equal weights. Or the weights shrank its scale beyond K's
+        # standard error (scale_shrunk): the weights as far as the scale allows.
+        w = np.ones(len(y)) if ref[1] < COLLAPSED * ref[0] else scale_weights(
+            Wb, y, block, w, names.index("K"))
         X = solve(Wb, y, w)[0]
         ref = _reference_rms(y, W, X[:-1], block, names)
     X, bias = X[:-1], float(X[-1])
