@@ -22,7 +22,7 @@ from jointbench.bench.analysis.diagnose.forward import add_forward_view
 from jointbench.bench.analysis.diagnose.report import write
 from jointbench.bench.analysis.diagnose.types import Diagnosis, ForwardView
 from jointbench.bench.analysis.diagnose.verdict import (clipped_reason, every_row_reason,
-                                                        masked_reason,
+                                                        cycle_only, loop_cycle, masked_reason,
                                                         gain_reason, nominal_reason,
                                                         with_clipping)
 from jointbench.identification.filter_choice import choose_filter
@@ -109,6 +109,15 @@ def diagnose(log: Log, out_dir: Path | None = None, forward: bool = True,
         left_out.append(f"{judged.inverse.causes[-1].effect} left out: {judged.overruled}")
         judged = _judged(replace(d, inverse=_without_last(judged.inverse, judged.overruled)),
                          forward, say, judged.forward_nominal)
+    while cycle_only(judged) and len(judged.inverse.causes) > 1 and \
+            not (judged.inverse.masked is not None and judged.inverse.masked.named):
+        why = ("the log sits in a limit cycle that the loop's stability with the lag "
+               "explains; no replay reaches the cycle, and at it every state is periodic in "
+               "time, so a later cause can take what the lag's model leaves there "
+               "(verdict.cycle_only)")
+        left_out.append(f"{judged.inverse.causes[-1].effect} left out: {why}")
+        judged = _judged(replace(d, inverse=_without_last(judged.inverse, why, "")),
+                         forward, say, judged.forward_nominal)
     d = replace(judged, overruled=with_clipping(judged))
     if left_out and not d.overruled:
         d = replace(d, forward_note="; ".join(n for n in (d.forward_note, *left_out) if n))
@@ -132,6 +141,9 @@ def _judged(d: Diagnosis, forward: bool, say: Callable[[str], None],
     if not d.overruled:
         d = replace(d, overruled=gain_reason(d) or every_row_reason(d) or clipped_reason(d)
                                   or masked_reason(d))
+    cycle = loop_cycle(d) if not d.overruled else None
+    if cycle is not None and cycle.confirms:   # what confirms a lag named on every row
+        d = replace(d, forward_note="; ".join(n for n in (d.forward_note, cycle.text()) if n))
     if d.overruled:   # nothing named: no extended model
         d = replace(d, extended_parameters={})
     return d
@@ -145,7 +157,8 @@ def _replay_rejects(d: Diagnosis) -> bool:
             and d.forward_nominal is not None and not nominal_reason(d))
 
 
-def _without_last(inv: InverseDiagnosis, why: str = "") -> InverseDiagnosis:
+def _without_last(inv: InverseDiagnosis, why: str = "",
+                  head: str = "the forward view rejects it: ") -> InverseDiagnosis:
     """`inv` without its last named cause, and without the ambiguity notes about it (a
     note's head "A or B:" or "one of A or B:" names the cause it is about: inverse.one_of); the cause listed as not named, left
     out for `why` (the forward view rejects its extended model)."""
@@ -153,7 +166,7 @@ def _without_last(inv: InverseDiagnosis, why: str = "") -> InverseDiagnosis:
     kept = {c.effect for c in causes}
     notes = tuple(n for n in inv.notes if kept & one_of(n))
     last = inv.causes[-1]
-    out = NotNamed(last.effect, "left_out", f"the forward view rejects it: {why}", last.test,
+    out = NotNamed(last.effect, "left_out", f"{head}{why}", last.test,
                    last.round)
     return replace(inv, causes=causes, notes=notes,
                    alternatives=tuple(a for a in inv.alternatives if a.named in kept),

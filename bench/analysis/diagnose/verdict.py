@@ -51,6 +51,8 @@ import numpy as np
 
 from jointbench.bench.analysis.diagnose.clipped import USABLE_MIN, undecided  # noqa: F401
 from jointbench.bench.analysis.diagnose.forward import forward_scope, limit_mismatch
+from jointbench.bench.analysis.diagnose.stability import LimitCycle, limit_cycle
+from jointbench.bench.sim.controller import controller_from_log
 from jointbench.bench.analysis.diagnose.types import Diagnosis
 from jointbench.identification.discrepancy.heldout import ALPHA, segment_sums, segment_t
 from jointbench.identification.checks.plausibility import mislabel_reason
@@ -147,7 +149,9 @@ def every_row_reason(d: Diagnosis) -> str:
     clip); when the nominal or the extended model does not replay (it saturates far beyond
     the log, diverges, or the log describes no controller), or when the extended model's
     replay does not reach the limit more as the log does than the nominal's (the share of
-    samples at tau_max, segment by segment: forward.limit_mismatch), nothing confirms that
+    samples at tau_max, segment by segment: forward.limit_mismatch), and, for a named torque
+    lag, the loop linearised with it is not unstable where the nominal's is stable at the
+    frequency the log's clipped torque oscillates at (loop_cycle), nothing confirms that
     reading of the log: a torque clipped after the fact (a sensor's range) reads as an
     effect there."""
     views = getattr(d, "clipped", None)
@@ -160,11 +164,55 @@ def every_row_reason(d: Diagnosis) -> str:
     if a is None or b is None:
         why = d.forward_note or "the forward view was not run"
         return f"{head} ({why})"
-    ma, mb = (limit_mismatch(d.log, x.tau_m) for x in (a, b))
-    if mb < ma:
+    if replay_at_limit(d):
         return ""
+    ma, mb = (limit_mismatch(d.log, x.tau_m) for x in (a, b))
+    cycle = loop_cycle(d)
+    if cycle is not None and cycle.confirms:
+        return ""
+    why = f"; {cycle.text()}" if cycle is not None else ""
     return (f"{head} (the extended model's replay reaches the limit no more as the log does "
-            f"than the nominal's: {mb:.3g} % of the samples off, against {ma:.3g} %)")
+            f"than the nominal's: {mb:.3g} % of the samples off, against {ma:.3g} %{why})")
+
+
+def replay_at_limit(d: Diagnosis) -> bool:
+    """The extended model's replay reaches the limit more as the log does than the
+    nominal's (forward.limit_mismatch, both replays run)."""
+    a, b = d.forward_nominal, d.forward_extended
+    return (a is not None and b is not None
+            and limit_mismatch(d.log, b.tau_m) < limit_mismatch(d.log, a.tau_m))
+
+
+def cycle_only(d: Diagnosis) -> bool:
+    """The every-row reading of a clipped log stands on the loop's stability alone: a lag
+    named first on every row, confirmed by loop_cycle and not by a replay at the limit. In a
+    limit cycle every state is periodic in time, so the residual the lag's model leaves at
+    the cycle is a function of the motor angle and of the deflection too, which a later
+    cause's column can take (a torque ripple of a few periods per cycle); the replay that
+    would tell them apart does not reach the cycle, and the loop's stability speaks of the
+    lag alone: the later causes are not named (bench.analysis.diagnose.run)."""
+    if d.overruled or replay_at_limit(d):
+        return False
+    cycle = loop_cycle(d)
+    return cycle is not None and cycle.confirms
+
+
+def loop_cycle(d: Diagnosis) -> LimitCycle | None:
+    """The loop's linearisation with the named lag (bench.analysis.diagnose.stability) on a
+    log whose causes rest on every row; None when none is named there, or no lag, or the
+    controller is not the PI cascade. A replay from rest need not reach a limit cycle that
+    the lag makes the loop grow into (stability's module docstring): the extended loop
+    unstable where the nominal's is stable, at the frequency of the log's clipped
+    oscillation, confirms the every-row reading as a replay at the limit does."""
+    views = getattr(d, "clipped", None)
+    if views is None or not views.named_by or not d.inverse.causes or \
+            d.inverse.causes[0].effect != "torque_lag":
+        return None
+    try:
+        gains = controller_from_log(d.log)
+    except ValueError:   # LogError included: no controller described
+        return None
+    return limit_cycle(d.log, d.nominal_parameters, d.extended_parameters, gains)
 
 
 def with_clipping(d: Diagnosis) -> str:
