@@ -1,0 +1,48 @@
+"""bench.analysis.diagnose.stability: the closed-loop matrix is the stepped PI cascade on the
+plant with its lag, and the phase crossover is where the loop's response is real and
+negative."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from jointbench.bench.analysis.diagnose.stability import (closed_loop, crossover_hz,
+                                                          dominant_mode, plant)
+from jointbench.bench.sim.controller import Gains, PIController, gains_rule
+
+T = 1.0 / 350.87
+P = {"Jm": 0.5, "FVm": 0.75, "K": 646.0, "JL": 5.0, "FV": 6.0}
+
+
+@pytest.mark.parametrize("lag", [0.0, 2e-3])
+def test_the_matrix_is_the_stepped_controller_on_the_lagged_plant(lag):
+    gains = gains_rule(P["Jm"], P["JL"], P["K"], 1e9, T)
+    F = closed_loop(P, gains.kp, gains.kv, gains.ki, T, lag)
+    Ad, Bd = plant(P, T, lag)
+    n = len(Bd)
+    z = np.zeros(n + 2)
+    z[0] = z[2] = z[n] = 0.01     # at rest off the reference (q_m[-1] = q_m[0]), I[-1] = 0
+    x = z[:n].copy()
+    ctrl = PIController(Gains(gains.kp, gains.kv, gains.ki, 1e9, False), T, tau0=0.0)
+    for _ in range(50):
+        tau = ctrl.step(x[0], 0.0)
+        x = Ad @ x + Bd * tau
+        z = F @ z
+        assert z[:n] == pytest.approx(x, rel=1e-9, abs=1e-12)
+
+
+def test_a_lag_past_the_onset_makes_the_loop_grow():
+    gains = gains_rule(P["Jm"], P["JL"], P["K"], 1e9, T)
+    r0, _ = dominant_mode(closed_loop(P, gains.kp, gains.kv, gains.ki, T), T)
+    r1, f1 = dominant_mode(closed_loop(P, gains.kp, gains.kv, gains.ki, T, 3e-3), T)
+    assert r0 < 1 < r1 and 0 < f1 < 0.5 / T
+    fc = crossover_hz(P, gains.kp, gains.kv, gains.ki, T, 3e-3)
+    # at the crossover the loop's response is real, negative and over 1 in size
+    Ad, Bd = plant(P, T, 3e-3)
+    zz = np.exp(2j * math.pi * fc * T)
+    G = np.linalg.solve(zz * np.eye(len(Bd)) - Ad, Bd)[0]
+    L = (gains.kv + gains.ki * T * zz / (zz - 1)) * (gains.kp + (zz - 1) / (zz * T)) * G
+    assert abs(L.imag) < 1e-3 * abs(L) and L.real < -1
