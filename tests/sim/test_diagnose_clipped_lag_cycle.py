@@ -62,3 +62,5 @@ def test_the_lag_is_named_on_every_row_confirmed_by_the_loop(answer):
     assert cycle is not None and cycle.confirms
     assert cycle.nominal_radius < 1 < cycle.extended_radius
     assert "loop linearised" in doc["forward_note"]
+    assert clipped["loop_stability"]["confirms"] is True
+    assert clipped["loop_stability"]["extended_radius"] == pytest.approx(cycle.extended_radius)

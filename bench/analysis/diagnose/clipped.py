@@ -63,6 +63,8 @@ class ClippedViews:
     second: dict[str, float] | None = None
     why: str = ""        # why the second view did not run ("" when it did)
     named_by: str = ""   # "every row" when the answer's causes come from the second view
+    # the loop's stability that confirms a lag named on every row (diagnose.stability)
+    loop: dict | None = None
 
     def text(self) -> str:
         """The shares in words, for the inconclusive reason and the report."""
@@ -89,6 +91,8 @@ class ClippedViews:
             out["why_not_every_row"] = self.why
         if self.named_by:
             out["named_by"] = self.named_by
+        if self.loop is not None:
+            out["loop_stability"] = self.loop
         return out
 
 

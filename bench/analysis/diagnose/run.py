@@ -143,7 +143,8 @@ def _judged(d: Diagnosis, forward: bool, say: Callable[[str], None],
                                   or masked_reason(d))
     cycle = loop_cycle(d) if not d.overruled else None
     if cycle is not None and cycle.confirms:   # what confirms a lag named on every row
-        d = replace(d, forward_note="; ".join(n for n in (d.forward_note, cycle.text()) if n))
+        d = replace(d, forward_note="; ".join(n for n in (d.forward_note, cycle.text()) if n),
+                    clipped=replace(d.clipped, loop=cycle.to_json()))
     if d.overruled:   # nothing named: no extended model
         d = replace(d, extended_parameters={})
     return d

@@ -172,14 +172,13 @@ def cycle_hz(log: Log) -> tuple[float, float] | None:
 
 
 def limit_cycle(log: Log, nominal: dict[str, float], extended: dict[str, float],
-                gains) -> LimitCycle | None:
-    """The loop's linearisation for a named lag on a clipped log (module docstring): None
-    when the extended model has no lag, the controller is not the PI cascade (`gains` not
-    bench.sim.controller.Gains), or the log never reaches tau_max."""
+                kp: float, kv: float, ki: float) -> LimitCycle | None:
+    """The loop's linearisation for a named lag on a clipped log under the PI cascade of
+    gains kp, kv, ki (module docstring): None when the extended model has no lag or the log
+    never reaches tau_max."""
     lag = float(extended.get("lag_s", 0.0))
-    kp, kv, ki = (getattr(gains, k, None) for k in ("kp", "kv", "ki"))
     cycle = cycle_hz(log)
-    if not lag > 0 or None in (kp, kv, ki) or cycle is None:
+    if not lag > 0 or cycle is None:
         return None
     ts = log.ts
     ext = {**nominal, **extended}

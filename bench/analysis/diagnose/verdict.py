@@ -52,7 +52,7 @@ import numpy as np
 from jointbench.bench.analysis.diagnose.clipped import USABLE_MIN, undecided  # noqa: F401
 from jointbench.bench.analysis.diagnose.forward import forward_scope, limit_mismatch
 from jointbench.bench.analysis.diagnose.stability import LimitCycle, limit_cycle
-from jointbench.bench.sim.controller import controller_from_log
+from jointbench.bench.sim.controller import Gains, controller_from_log
 from jointbench.bench.analysis.diagnose.types import Diagnosis
 from jointbench.identification.discrepancy.heldout import ALPHA, segment_sums, segment_t
 from jointbench.identification.checks.plausibility import mislabel_reason
@@ -212,7 +212,10 @@ def loop_cycle(d: Diagnosis) -> LimitCycle | None:
         gains = controller_from_log(d.log)
     except ValueError:   # LogError included: no controller described
         return None
-    return limit_cycle(d.log, d.nominal_parameters, d.extended_parameters, gains)
+    if not isinstance(gains, Gains):
+        return None
+    return limit_cycle(d.log, d.nominal_parameters, d.extended_parameters,
+                       gains.kp, gains.kv, gains.ki)
 
 
 def with_clipping(d: Diagnosis) -> str:
