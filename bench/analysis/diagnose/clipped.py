@@ -25,7 +25,11 @@ would have run at half its level from the start, so the bound above holds. A lag
 top of the sweep, which the chooser's band cuts: on every row of a pendulum clipped by its lag
 the wide band's t is several times the chooser's. A cause the second view names is then judged by
 the forward view as any other (bench.analysis.diagnose.verdict.gain_reason: the replay
-applies the same clip). When the second view names nothing either, or cannot be run (a flat
+applies the same clip), and must be confirmed there: the extended model's replay reaches the
+limit more as the log does than the nominal's, or, for a lag named first, the loop
+linearised with it grows where the nominal's decays, at the frequency of the log's clipped
+oscillation (verdict.every_row_reason, bench.analysis.diagnose.stability). When the second
+view names nothing either, or cannot be run (a flat
 top, no `tau_max`), the answer is "inconclusive" with the share of clipped samples, the rows
 each view used, and the held-out share each candidate explains in each.
 """

@@ -35,9 +35,10 @@ answer is then "inconclusive", with the reason.
   half of the experiment's, "none" would speak for the whole experiment from the minority of
   it (a torque lag that drives the loop into its limit leaves a few percent of the rows):
   the inverse view is run again on every row when the clip is the controller's own
-  (bench.analysis.diagnose.clipped), and when that names nothing either the answer is
-  "inconclusive", with the share of clipped samples and each candidate's held-out share in
-  each view.
+  (bench.analysis.diagnose.clipped), and when that names nothing either, or nothing in the
+  forward view confirms its reading (a replay that reaches the limit as the log does, or
+  for a lag the loop's own stability: every_row_reason), the answer is "inconclusive", with
+  the share of clipped samples and each candidate's held-out share in each view.
 - **Two effects that mask each other.** No effect passes alone, but the two physical
   candidates that explain the most of the held-out residual pass together against the
   nominal, or one on top of the other (identification.discrepancy.masked): "none" would be
