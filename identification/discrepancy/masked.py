@@ -31,18 +31,18 @@ ripple frozen at the resting angle, so against the nominal (no ripple) the offse
 those segments and wins in the others, and the ripple tested without the offset fails the
 same way; each on top of the other passes.
 
-**The stronger, then the weaker on top of it.** When one of the two passes on top of the
-other and the other does not (`lead`), the one that passes is named with that test: it
-explains, at the ordered pairs' level, something a reference holding the other cannot, and so
-something the nominal cannot (the Bonferroni over the ordered pairs holds whichever two the
-ranking picks, whether or not the pair's own test passes). The rounds then go on on top of
-it (identification.discrepancy.inverse), and the other is tested there with every effect
-left, against the model holding the stronger, at the next round's Holm level, in the view
-where it is visible (lag_band: a lag at the top of the sweep, a hardening at large
-deflections, a backlash or a spring damping where its prediction changes most). A soft
-axis's backlash and spring damping are such a pair: against the nominal the damping's
-misfit, in the few segments of the mode, hides the dead band, and the reverse. When neither
-passes on top of the other but the pair does, the answer is "inconclusive"
+**The stronger, then the weaker on top of it.** When the pair passes and one of the two
+passes on top of the other while the other does not (`lead`), the one that passes is named
+with that test: it explains, at the ordered pairs' level, something a reference holding the
+other cannot, and so something the nominal cannot (the Bonferroni over the ordered pairs
+holds whichever two the ranking picks). The rounds then go on on top of it
+(identification.discrepancy.inverse), and the other is tested there with every effect left,
+against the model holding the stronger, at the next round's Holm level, in the view where it
+is visible (lag_band: a lag at the top of the sweep, a hardening at large deflections, a
+backlash or a spring damping where its prediction changes most). A soft axis's backlash and
+spring damping are such a pair: against the nominal the damping's misfit, in the few
+segments of the mode, hides the dead band, and the reverse. When the pair passes but neither
+passes on top of the other, or one does but not the pair, the answer is "inconclusive"
 (bench.analysis.diagnose.verdict), with the pair's share and every test: the log carries a
 discrepancy that the two describe together, and not one named with its own test against
 the other.
@@ -102,11 +102,12 @@ class MaskedPair:
     @property
     def lead(self) -> Candidate | None:
         """The stronger of the two, named first (module docstring: the stronger, then the
-        weaker on top of it): it alone passes on top of the other, above the floor (MATERIAL
-        of the held-out residual of the equations it acts in); its fit on top of the other,
-        with that test, its own values the reference of the next round (`base` empty: the
-        other is tested there, not held). None when both are named or neither passes."""
-        if self.named:
+        weaker on top of it): the pair passes and it alone passes on top of the other, above
+        the floor (MATERIAL of the held-out residual of the equations it acts in); its fit on
+        top of the other, with that test, its own values the reference of the next round
+        (`base` empty: the other is tested there, not held). None when both are named, the
+        pair fails or neither passes on top of the other."""
+        if self.named or not self.pair.passes:
             return None
         ok = [c for c, t in zip(self.on_top, (self.first_on_second, self.second_on_first))
               if t.passes and t.own_share > 100 * MATERIAL]
