@@ -720,11 +720,10 @@ def _against(nom: Nominal, c: Candidate, others: tuple[tuple[str, dict], ...],
 def _views(band: LagBand, c: Candidate, model: tuple[tuple[str, dict], ...],
            n: int) -> Candidate:
     """`c` with its second view: a lag's or a hardening's in the wide band (lag_band.
-    second_view); against a model holding a cause, a backlash's or a spring damping's where
-    it is visible (lag_band.where_visible: the weaker of a pair against the model holding
-    the stronger)."""
-    c = second_view(band, c, model)
-    return where_visible(c, n) if model else c
+    second_view); against a model holding another effect of the spring's law or damping, a
+    backlash's or a spring damping's where it is visible (lag_band.where_visible: the weaker
+    of a pair against the model holding the stronger)."""
+    return where_visible(second_view(band, c, model), n, model)
 
 
 def _passes(c: Candidate) -> bool:

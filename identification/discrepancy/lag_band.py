@@ -299,16 +299,19 @@ def _deflection_view(nom: Nominal, c: Candidate, w: Candidate, label: str) -> Se
                       acts_pct=ev.acts_pct, diluted=True, segments=ev.segments)
 
 
-# The effects between the motor and the link whose test against a model holding a cause has
-# a view where they are visible (`where_visible`): the dead band and the spring's damping.
+# The effects between the motor and the link whose test against a model holding one of
+# BESIDE has a view where they are visible (`where_visible`): the dead band and the spring's
+# damping, beside another effect of the spring's law or damping.
 AT_THE_MODE = ("backlash", "spring_damping")
+BESIDE = (*AT_THE_MODE, HARDENING)
 VISIBLE_VIEWS = 2   # their tests against such a model: every segment, where it is visible
 
 
-def where_visible(c: Candidate, n: int) -> Candidate:
-    """`c` itself unless it is a backlash or a spring damping (AT_THE_MODE); then `c` with its
-    level split over two views (Candidate.views), every segment and the half where its
-    held-out prediction changes most (`changed_most`), the second as its SecondView.
+def where_visible(c: Candidate, n: int, model: tuple[tuple[str, dict], ...]) -> Candidate:
+    """`c` itself unless it is a backlash or a spring damping (AT_THE_MODE) and `model` holds
+    another effect of the spring's law or damping (BESIDE); then `c` with its level split
+    over two views (Candidate.views), every segment and the half where its held-out
+    prediction changes most (`changed_most`), the second as its SecondView.
 
     The weaker effect of a pair is tested against the model holding the stronger, and a
     sweep shows a dead band or a spring damping where it swings the deflection and its rate:
@@ -329,8 +332,17 @@ def where_visible(c: Candidate, n: int) -> Candidate:
     finds: each view at half the level (Bonferroni within the hypothesis), so the chance of
     naming an effect the log does not carry stays under the round's level. Against the
     nominal (the first round) the stronger of a pair is tested as every effect is, over every
-    segment: the view is for the weaker, against the model holding the stronger."""
-    if c.effect not in AT_THE_MODE or not c.testable:
+    segment: the view is for the weaker, against the model holding the stronger.
+
+    Only beside another effect of the spring's law or damping, which acts where the sweep
+    swings the deflection as the candidate does: against a model holding a motor-side cause
+    (a torque lag, whose evidence and residual misfit sit at the top of the sweep), the half
+    where a dead band's prediction changes most is where that cause's own misfit is, and a
+    dead band takes it up there (a single lag on the prototype: a third of that half's
+    held-out residual). The view would then test the first cause's misfit, not a second
+    effect."""
+    if (c.effect not in AT_THE_MODE or not c.testable
+            or not any(name in BESIDE for name, _ in model)):
         return c
     c = replace(c, views=c.views * VISIBLE_VIEWS)
     if (c.unphysical or not c.heldout_pct > 0 or c.heldout_errors is None
