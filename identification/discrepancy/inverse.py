@@ -63,7 +63,10 @@ stop, against the model holding the causes named beside it (_redecided).
 
 **Two that pass only together** (identification.discrepancy.masked): when no round names
 anything, the two best candidates are fitted together; where the pair passes and each passes
-on top of the other, both are named, each with that test.
+on top of the other, both are named, each with that test; where one alone passes on top of
+the other, it is named with that test, and the rounds go on on top of it: the weaker of the
+pair is tested against the model holding the stronger, in the view where it is visible
+(_views).
 
 Every effect tested and not named is listed apart with why (NotNamed).
 """
@@ -78,7 +81,8 @@ from jointbench.identification.discrepancy.candidates import (Candidate, HeldOut
                                                               reference)
 from jointbench.identification.discrepancy.heldout import (ALPHA, MATERIAL, segment_log_ratios,
                                                            segment_t, t_bar)
-from jointbench.identification.discrepancy.lag_band import LagBand, second_view
+from jointbench.identification.discrepancy.lag_band import (LagBand, second_view,
+                                                           where_visible)
 from jointbench.identification.discrepancy.masked import MaskedPair, masked_pair
 from jointbench.identification.discrepancy.nominal import Nominal, nominal, with_link_law
 from jointbench.identification.effects import EFFECTS, NONE
@@ -239,7 +243,8 @@ def _round(nom: Nominal, names: list[str], causes: tuple[Candidate, ...],
     if model:   # the link friction's law with the causes in the model (nominal.with_link_law)
         nom = with_link_law(nom, ref.base.design())
         ref = reference(nom, model, m=m)
-    cands = [replace(second_view(band, candidate(nom, name, ref), model), round=k)
+    n = len(nom.sig.index)
+    cands = [replace(_views(band, candidate(nom, name, ref), model, n), round=k)
              for name in names]
     return _simplest_first(_rank(cands), nom, m)
 
@@ -556,10 +561,68 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
             names.append(name)
     band = LagBand(log, settings, link_friction, limit_applied)
     ranked, note, alt = _round(nom, names, (), band, 1)
-    causes: tuple[Candidate, ...] = ()
+    causes, notes, nested, rounds, stopped, dropped, settled = _rounds(
+        nom, (ranked, note, alt), (), band, [ranked])
+    masked = None if causes else masked_pair(nom, ranked, len(names))
+    lead = masked.lead if masked is not None else None
+    if lead is not None:   # the stronger of a masked pair, then the weaker on top of it
+        rest = [c.effect for c in ranked if c.testable and c.effect != lead.effect]
+        nxt = _round(nom, rest, (lead,), band, 2)
+        causes, notes, nested, rounds, after, dropped, settled = _rounds(
+            nom, nxt, (lead,), band, [ranked, nxt[0]])
+        stopped += (f"; {lead.effect} passes on top of {masked.other(lead.effect)} (the "
+                    f"masked pair) and is named, the others tested on top of it; {after}")
+    causes, left, again = _redecided(nom, causes, nested, rounds, band)
+    dropped += left
+    settled |= again
+    notes = tuple(x for x in notes if x[0] in {c.effect for c in causes}
+                  and one_of(x[1]) not in settled)
+    causes, notes, left = _pruned(nom, causes, notes, band)
+    dropped += left
+    if len(causes) > 2:
+        causes, left = _leave_one_out(nom, causes, band)
+        dropped += left
+        notes = tuple(x for x in notes if x[0] in {c.effect for c in causes})
+    kept = {c.effect for c in causes}
+    # a "one of A or B" note whose two effects are both named in the end says no more
+    notes = tuple(x for x in notes if not (x[1].startswith("one of ") and one_of(x[1]) <= kept))
+    alternatives = tuple(a for a in nested if a.named in kept and a.other not in kept
+                         and any(one_of(n) == {a.named, a.other} for _, n in notes))
+    alternatives += tuple(a for a in _alternatives(rounds, causes, len(nom.sig.index))
+                          if not any({a.named, a.other} == {b.named, b.other}
+                                     for b in alternatives)
+                          and frozenset((a.named, a.other)) not in settled)
+    if masked is not None and masked.named:   # two that pass only together (masked)
+        causes = masked.causes
+        stopped += (f"; {masked.first} and {masked.second} pass together and each on top "
+                    f"of the other (the masked pair): both are named")
+        alone = {c.effect: c for c in ranked}
+        dropped += [NotNamed(e, "failed", f"{alone[e].why_not}; in the masked pair, {why}",
+                             alone[e].test, 1) for e, why in masked.skipped]
+    # the first round's ranking, with the first named cause at the top
+    top = [c for c in ranked if causes and c.effect == causes[0].effect] or ranked[:1]
+    inv = InverseDiagnosis(nominal=nom, causes=causes, notes=tuple(n for _, n in notes),
+                           candidates=tuple(top + _rank([c for c in ranked if c not in top]
+                                                        + first)),
+                           rounds=tuple(tuple(r) for r in rounds), alternatives=alternatives,
+                           stopped=stopped, masked=masked)
+    return replace(inv, not_named=not_named(inv, tuple(dropped)))
+
+
+def _rounds(nom: Nominal, first: Round, causes: tuple[Candidate, ...], band: LagBand,
+            rounds: list[list[Candidate]]) -> tuple[
+                tuple[Candidate, ...], tuple[tuple[str, str], ...], list[Alternative],
+                list[list[Candidate]], str, list[NotNamed], set[frozenset[str]]]:
+    """The rounds from `first` (the last of `rounds`, tested on top of `causes`) on: each
+    names its top when it passes (a later round's above the floor too, module docstring: the
+    stopping rule), after the look-ahead of a tie (_ahead), and the next round tests the
+    rest on top of the causes named. Returns the causes, the notes (the cause each is about,
+    the note), the parsimony choices the log could not make, the rounds, why they stopped,
+    the effects left with why, and the ties the next round resolved."""
+    round_, note, alt = first
     notes: tuple[tuple[str, str], ...] = ()   # (the cause it is about, the note)
     nested: list[Alternative] = []   # the parsimony choices the log could not make
-    rounds, round_, stopped, dropped = [ranked], ranked, "", []
+    stopped, dropped = "", []
     settled: set[frozenset[str]] = set()   # ties the next round resolved (_ahead)
     while round_:
         top, k = round_[0], len(rounds)
@@ -587,42 +650,7 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
             break
         round_, note, alt = after or _round(nom, rest, causes, band, k + 1)   # Holm
         rounds.append(round_)
-    causes, left, again = _redecided(nom, causes, nested, rounds, band)
-    dropped += left
-    settled |= again
-    notes = tuple(x for x in notes if x[0] in {c.effect for c in causes}
-                  and one_of(x[1]) not in settled)
-    causes, notes, left = _pruned(nom, causes, notes, band)
-    dropped += left
-    if len(causes) > 2:
-        causes, left = _leave_one_out(nom, causes, band)
-        dropped += left
-        notes = tuple(x for x in notes if x[0] in {c.effect for c in causes})
-    kept = {c.effect for c in causes}
-    # a "one of A or B" note whose two effects are both named in the end says no more
-    notes = tuple(x for x in notes if not (x[1].startswith("one of ") and one_of(x[1]) <= kept))
-    alternatives = tuple(a for a in nested if a.named in kept and a.other not in kept
-                         and any(one_of(n) == {a.named, a.other} for _, n in notes))
-    alternatives += tuple(a for a in _alternatives(rounds, causes, len(nom.sig.index))
-                          if not any({a.named, a.other} == {b.named, b.other}
-                                     for b in alternatives)
-                          and frozenset((a.named, a.other)) not in settled)
-    masked = None if causes else masked_pair(nom, ranked, len(names))
-    if masked is not None and masked.named:   # two that pass only together (masked)
-        causes = masked.causes
-        stopped += (f"; {masked.first} and {masked.second} pass together and each on top "
-                    f"of the other (the masked pair): both are named")
-        alone = {c.effect: c for c in ranked}
-        dropped += [NotNamed(e, "failed", f"{alone[e].why_not}; in the masked pair, {why}",
-                             alone[e].test, 1) for e, why in masked.skipped]
-    # the first round's ranking, with the first named cause at the top
-    top = [c for c in ranked if causes and c.effect == causes[0].effect] or ranked[:1]
-    inv = InverseDiagnosis(nominal=nom, causes=causes, notes=tuple(n for _, n in notes),
-                           candidates=tuple(top + _rank([c for c in ranked if c not in top]
-                                                        + first)),
-                           rounds=tuple(tuple(r) for r in rounds), alternatives=alternatives,
-                           stopped=stopped, masked=masked)
-    return replace(inv, not_named=not_named(inv, tuple(dropped)))
+    return causes, notes, nested, rounds, stopped, dropped, settled
 
 
 def _redecided(nom: Nominal, causes: tuple[Candidate, ...], nested: list[Alternative],
@@ -685,7 +713,17 @@ def _against(nom: Nominal, c: Candidate, others: tuple[tuple[str, dict], ...],
     """`c`'s effect fitted and tested again on top of `others` (name, values), at the level
     of the round it entered, with the lag's second band: its own test there."""
     ref = reference(nom, others, m=_level_m(c))
-    return replace(second_view(band, candidate(nom, c.effect, ref), others), round=c.round)
+    return replace(_views(band, candidate(nom, c.effect, ref), others, len(nom.sig.index)),
+                   round=c.round)
+
+
+def _views(band: LagBand, c: Candidate, model: tuple[tuple[str, dict], ...],
+           n: int) -> Candidate:
+    """`c` with its second view: a lag's or a hardening's in the wide band (lag_band.
+    second_view); against a model holding another effect of the spring's law or damping, a
+    backlash's or a spring damping's where it is visible (lag_band.where_visible: the weaker
+    of a pair against the model holding the stronger)."""
+    return where_visible(second_view(band, c, model), n, model)
 
 
 def _passes(c: Candidate) -> bool:

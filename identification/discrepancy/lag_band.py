@@ -120,7 +120,8 @@ from dataclasses import replace
 import numpy as np
 
 from jointbench.identification.band_choice import CONSISTENCY_Z, wide_settings
-from jointbench.identification.discrepancy.candidates import (Candidate, SecondView, candidate,
+from jointbench.identification.discrepancy.candidates import (CHOOSER, OWN_ROWS, Candidate,
+                                                              SecondView, candidate,
                                                               reference)
 from jointbench.identification.discrepancy.heldout import (FOLDS, SEGMENTS, evidence,
                                                            segment_of_rows)
@@ -296,3 +297,75 @@ def _deflection_view(nom: Nominal, c: Candidate, w: Candidate, label: str) -> Se
                       value=dw, agree=agree, detail=detail,
                       unphysical="; ".join(x for x in (w.unphysical, edge) if x),
                       acts_pct=ev.acts_pct, diluted=True, segments=ev.segments)
+
+
+# The effects between the motor and the link whose test against a model holding one of
+# BESIDE has a view where they are visible (`where_visible`): the dead band and the spring's
+# damping, beside another effect of the spring's law or damping.
+AT_THE_MODE = ("backlash", "spring_damping")
+BESIDE = (*AT_THE_MODE, HARDENING)
+VISIBLE_VIEWS = 2   # their tests against such a model: every segment, where it is visible
+
+
+def where_visible(c: Candidate, n: int, model: tuple[tuple[str, dict], ...]) -> Candidate:
+    """`c` itself unless it is a backlash or a spring damping (AT_THE_MODE) and `model` holds
+    another effect of the spring's law or damping (BESIDE); then `c` with its level split
+    over two views (Candidate.views), every segment and the half where its held-out
+    prediction changes most (`changed_most`), the second as its SecondView.
+
+    The weaker effect of a pair is tested against the model holding the stronger, and a
+    sweep shows a dead band or a spring damping where it swings the deflection and its rate:
+    near the mode, a few of the 40 segments (on a soft axis the chirp's first seconds). Once
+    the stronger cause is in the model, the other segments' residual is what the numerics
+    leave, and there the candidate's refit moves the held-out prediction by a share of that
+    small residual that varies from one segment to the next: their log-ratios carry the
+    MATERIAL margin and that noise, and the successive differences count the jump between
+    the few segments of the mode and the rest as noise too. A dead band that removes 96 % of
+    the held-out residual on top of a spring damping, all of it near the mode, then fails
+    over every segment. The half of the segments where its prediction changes most holds the
+    mode, and the test there is the lag's at the top of the sweep (module docstring): that
+    change is the difference of the two fold fits' predictions on the held-out rows, set by
+    their training rows and the held-out regressors, never by the held-out torque; under the
+    null hypothesis the kept segments' log-ratios have a negative mean as every segment's
+    do, and the segment test counts their number in its degrees of freedom. The split is
+    fixed by the effect and the round (a model holding a cause), never by what either view
+    finds: each view at half the level (Bonferroni within the hypothesis), so the chance of
+    naming an effect the log does not carry stays under the round's level. Against the
+    nominal (the first round) the stronger of a pair is tested as every effect is, over every
+    segment: the view is for the weaker, against the model holding the stronger.
+
+    Only beside another effect of the spring's law or damping, which acts where the sweep
+    swings the deflection as the candidate does: against a model holding a motor-side cause
+    (a torque lag, whose evidence and residual misfit sit at the top of the sweep), the half
+    where a dead band's prediction changes most is where that cause's own misfit is, and a
+    dead band takes it up there (a single lag on the prototype: a third of that half's
+    held-out residual). The view would then test the first cause's misfit, not a second
+    effect."""
+    if (c.effect not in AT_THE_MODE or not c.testable
+            or not any(name in BESIDE for name, _ in model)):
+        return c
+    c = replace(c, views=c.views * VISIBLE_VIEWS)
+    if (c.unphysical or not c.heldout_pct > 0 or c.heldout_errors is None
+            or c.reference_errors is None):
+        return c
+    rows = (EFFECTS[c.effect].block,) if c.rows == OWN_ROWS else c.acts
+    keep = changed_most(c, n, rows)
+    ev = evidence(c.reference_errors, c.heldout_errors, n, rows, keep)
+    value = next(iter(c.fixed.values()), math.nan) if c.fixed else math.nan
+    label = (f"{CHOOSER}{', ' + c.rows if c.rows else ''}, where it is visible ({ev.segments} "
+             f"of {SEGMENTS} segments: its held-out prediction changes most)")
+    return replace(c, second=SecondView(
+        band=label, heldout_pct=ev.explained_pct, t_stat=ev.t, p_heldout=ev.p,
+        value=float(value), agree=True, detail="the chooser's band's fit, its segments where "
+        "the held-out prediction changes most", acts_pct=ev.acts_pct, segments=ev.segments))
+
+
+def changed_most(c: Candidate, n: int, rows: tuple[int, ...] = ()) -> np.ndarray:
+    """The segments (a mask over heldout.SEGMENTS) where `c`'s held-out prediction changes
+    most: the upper half by the sum over the segment's rows of `rows` (the equation blocks of
+    n instants; () every block) of (e0 - e1)^2, e0 and e1 the reference's and `c`'s held-out
+    errors (top_of_sweep's measure, over the equations its test reads)."""
+    d = (c.reference_errors - c.heldout_errors).reshape(-1, n)
+    sq = (d[list(rows)] if rows else d) ** 2
+    size = np.bincount(segment_of_rows(n), sq.sum(axis=0), minlength=SEGMENTS)
+    return size >= np.median(size)

@@ -29,10 +29,23 @@ ordered pairs' level. A prototype with an offset and a torque ripple whose motor
 the last quarter of the log is such a case: at rest the residual is the offset plus the
 ripple frozen at the resting angle, so against the nominal (no ripple) the offset loses in
 those segments and wins in the others, and the ripple tested without the offset fails the
-same way; each on top of the other passes. When the pair passes but not each on top of the
-other, the answer is "inconclusive" (bench.analysis.diagnose.verdict), with the pair's share
-and every test: the log carries a discrepancy that the two describe together, and not one
-named with its own test against the other.
+same way; each on top of the other passes.
+
+**The stronger, then the weaker on top of it.** When the pair passes and one of the two
+passes on top of the other while the other does not (`lead`), the one that passes is named
+with that test: it explains, at the ordered pairs' level, something a reference holding the
+other cannot, and so something the nominal cannot (the Bonferroni over the ordered pairs
+holds whichever two the ranking picks). The rounds then go on on top of it
+(identification.discrepancy.inverse), and the other is tested there with every effect left,
+against the model holding the stronger, at the next round's Holm level, in the view where it
+is visible (lag_band: a lag at the top of the sweep, a hardening at large deflections, a
+backlash or a spring damping where its prediction changes most). A soft axis's backlash and
+spring damping are such a pair: against the nominal the damping's misfit, in the few
+segments of the mode, hides the dead band, and the reverse. When the pair passes but neither
+passes on top of the other, or one does but not the pair, the answer is "inconclusive"
+(bench.analysis.diagnose.verdict), with the pair's share and every test: the log carries a
+discrepancy that the two describe together, and not one named with its own test against
+the other.
 
 **An effect and the one it reduces to are one description here.** While the motor moves,
 an asymmetric friction's Coulomb part a FSm sign(qm') is a constant torque on each stretch
@@ -87,6 +100,24 @@ class MaskedPair:
                                         for t in (self.second_on_first, self.first_on_second))
 
     @property
+    def lead(self) -> Candidate | None:
+        """The stronger of the two, named first (module docstring: the stronger, then the
+        weaker on top of it): the pair passes and it alone passes on top of the other, above
+        the floor (MATERIAL of the held-out residual of the equations it acts in); its fit on
+        top of the other, with that test, its own values the reference of the next round
+        (`base` empty: the other is tested there, not held). None when both are named, the
+        pair fails or neither passes on top of the other."""
+        if self.named or not self.pair.passes:
+            return None
+        ok = [c for c, t in zip(self.on_top, (self.first_on_second, self.second_on_first))
+              if t.passes and t.own_share > 100 * MATERIAL]
+        return replace(ok[0], base=()) if len(ok) == 1 else None
+
+    def other(self, effect: str) -> str:
+        """The other of the two."""
+        return self.second if effect == self.first else self.first
+
+    @property
     def causes(self) -> tuple[Candidate, ...]:
         """The named causes (() when not `named`): `first` fitted on top of `second`, then
         `second` on top of `first` (its fit the joint one), each at its test's level."""
@@ -95,7 +126,11 @@ class MaskedPair:
     def describe(self) -> str:
         head = (f"no effect passes alone; {self.first} and {self.second} together explain "
                 f"{self.pair.heldout_pct:.3g} % of the held-out residual")
+        lead = self.lead
         what = ("each passes on top of the other: both are named" if self.named else
+                f"{lead.effect} passes on top of {self.other(lead.effect)}: {lead.effect} "
+                f"is named, and {self.other(lead.effect)} tested on top of it with the "
+                f"others" if lead is not None else
                 "they mask each other" if self.passes else
                 "neither that nor either on top of the other passes")
         left = "".join(f"; {e} left out of the pair: {why}" for e, why in self.skipped)
@@ -106,7 +141,9 @@ class MaskedPair:
 
     def to_json(self) -> dict:
         return {"first": self.first, "second": self.second, "passes": self.passes,
-                "named": self.named, "pair": self.pair.to_json(),
+                "named": self.named,
+                "lead": None if (lead := self.lead) is None else lead.effect,
+                "pair": self.pair.to_json(),
                 "second_on_first": self.second_on_first.to_json(),
                 "first_on_second": self.first_on_second.to_json(),
                 "skipped": [{"effect": e, "why": why} for e, why in self.skipped],
