@@ -10,6 +10,11 @@ simulator's tanh(q' / 1 mrad/s) and takes up part of the dead band's misfit at t
 reversals: tested against it with that law, the dead band fails its bar; with the law its
 own model fits best (the simulator's, within a factor of two), it passes.
 
+The feed-forward case: the same family with velocity feedforward, a backlash of half-width
+4.45 mrad (7 % visibility). Its evidence is in the harmonics of the dead band's kink, which
+the chooser's band cuts: there it fails, and the wide band's view over every segment
+confirms it at half the round's level (identification.discrepancy.lag_band).
+
 The lab-rig case: the independent simulator's lab rig, a soft spring behind a backlash of
 half-width 0.33 rad, where the link spends most of the log inside the band: the width lies
 beyond 0.8 of the deflection's 95th percentile, where the width's grid used to stop.
@@ -36,6 +41,9 @@ SOFT = Place("indep", "soft")
 SOFT_BACKLASH = ("backlash", 0.0024, {})
 SOFT_SEED = 1222795584
 V_S = 1e-3   # the simulator's Coulomb smoothing speed [rad/s] (tests/indep/simulator.py)
+
+FF_BACKLASH = ("backlash", 0.00445, {})
+FF_SEED = 98210002
 
 LAB = Place("lab", "lab_rig")
 LAB_BACKLASH = ("backlash", 0.3296, {})
@@ -88,6 +96,21 @@ def test_the_nominal_law_takes_part_of_the_dead_band(soft_log):
     assert held.p_heldout > held.level and not held.significant
     assert own.significant and own.p_heldout < own.level
     assert own.heldout_pct > held.heldout_pct > 0
+
+
+def test_the_wide_band_confirms_a_backlash_the_chooser_band_misses(soft_runner):
+    log = soft_runner.log(SOFT, (FF_BACKLASH,), FF_SEED, True, False)
+    _, f1, _ = soft_runner.scales(SOFT)
+    clean = soft_runner.log(SOFT, (), FF_SEED, True, False).tau_m
+    assert 0.05 < visibility(clean, log.tau_m, f1, soft_runner.rate_hz) < 0.10
+    d = diagnose(log, forward=False)
+    assert [c.effect for c in d.causes] == ["backlash"]
+    c = d.causes[0]
+    assert not c.own_test.passes and c.test.passes
+    assert c.test.view.startswith("wide band") and c.test.level <= c.alpha / 2
+    assert c.second.agree
+    assert c.parameters["backlash_rad"] == pytest.approx(0.00445, rel=0.25)
+    assert failing_claims(finite_json(d.to_json())) == []
 
 
 def test_the_wide_lab_backlash_is_within_the_grid(lab_log):
