@@ -468,11 +468,33 @@ def candidate(nom: Nominal, effect: str, ref: Reference | None = None) -> Candid
     # a cause searched with every cause after it already in place needs no refit alone
     last = len(ref.base.effects) - 1
     refit = [i for i in coupled if i < last] + _reducing(e, ref.base.effects)
-    if refit:
-        ref = _refitted(nom, ref, refit)
-    c = _searched(nom, e, ref, coupled)
+    beside = _beside(e, ref.base.effects)
+    if refit or beside:
+        ref = _refitted(nom, ref, refit + [i for i in beside if i not in refit])
+    c = _searched(nom, e, ref, coupled, beside)
     law = _own_law(nom, e, ref, c)
-    return c if law is nom else _searched(law, e, ref, coupled)
+    return c if law is nom else _searched(law, e, ref, coupled, beside)
+
+
+# The effects that act in parallel with the spring without a searched value of their own
+# (_beside).
+PARALLEL = ("spring_damping",)
+
+
+def _beside(e: Effect, base: tuple[tuple[str, dict], ...]) -> list[int]:
+    """The named causes of the spring law (spring_law: a backlash's width, a hardening's
+    engagement) whose value is searched again beside a candidate that acts in parallel with
+    the spring (PARALLEL: a spring damping D (qm' - q')). A dead band fitted alone under a
+    spring damping comes out narrower than it is (the damping's torque at the reversals,
+    where the deflection crosses the band, reads as a spring torque there): on an arm axis
+    with a backlash of 0.30 mrad and a spring damping, the width fitted alone is 0.265 mrad,
+    and the damping tested on top of it leaves three times the held-out residual it leaves on
+    top of 0.30 mrad, the width searched beside it, so that a hardening engaged near the band
+    with a damping beside it predicts better than the dead band with one. Against the causes
+    refitted alone (_refitted), as a coupled candidate is."""
+    if e.name not in PARALLEL:
+        return []
+    return [i for i, (name, _) in enumerate(base) if spring_law(EFFECTS[name])]
 
 
 def _own_law(nom: Nominal, e: Effect, ref: Reference, c: Candidate) -> Nominal:
@@ -503,9 +525,11 @@ def _on(rows: Nominal, ref: Reference) -> Stacked:
     return ref.base if ref.base.nom is rows else stacked(rows, ref.base.effects)
 
 
-def _searched(nom: Nominal, e: Effect, ref: Reference, coupled: list[int]) -> Candidate:
+def _searched(nom: Nominal, e: Effect, ref: Reference, coupled: list[int],
+              beside: list[int] = ()) -> Candidate:
     """The effect searched and fitted on `nom`'s rows (ref's causes applied to them: _on),
-    its evidence against `ref` (candidate)."""
+    its evidence against `ref` (candidate); the values of the causes `beside` (_beside)
+    searched again beside it, in turn."""
     fixed = e.reference(nom) if e.reference else {}
     records: list[Scores] = []
     trials: list[tuple[float | None, Stacked]] = []
@@ -542,6 +566,18 @@ def _searched(nom: Nominal, e: Effect, ref: Reference, coupled: list[int]) -> Ca
         fixed = {**fixed, e.search: float(v)}
     else:
         cost(None)
+        for i in beside:
+            under = best()[1]
+            name, fx = under.effects[i]
+            c = EFFECTS[name]
+            effects = list(under.effects)
+
+            def again(w: float) -> float:
+                effects[i] = (name, {**fx, c.search: float(w)})
+                return cost(None, stacked(nom, effects))
+
+            _search(again, c.grid(nom))
+        under = best()[1]
         if e.reference:
             # the values it is built with from the fit with it, not from the nominal that
             # lacked it: once more (a fixed point in one step on the bench)

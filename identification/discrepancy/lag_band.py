@@ -123,9 +123,13 @@ in the wide band, with its harmonics and three times the rows, t = 13. Its secon
 wide band's own test of it, over every segment (the segments that the deflection never
 takes out of the band carry the MATERIAL margin in both bands alike: a view over the others
 only would ask a t for a handful of segments, heldout.dof). Its level is split with the
-chooser's band's test, half each, as the hardening's. The guard is the lag's: the wide view
-only confirms a backlash that the chooser's band fits physically with a positive held-out
-share, whose wide fit is physical too, and whose two widths agree within CONSISTENCY_Z of
+chooser's band's test, half each, as the hardening's. The guard is the lag's, with a share
+above MATERIAL: the wide view only confirms a backlash that the chooser's band fits physically
+and that removes more than MATERIAL of the chooser's band's held-out residual (what a dead
+band removes in the wide band, its fundamental removes in part in the chooser's band; beside
+a spring damping whose value the wide band refits, a dead band of a fraction of a mrad took
+up a tenth of the wide band's residual where it removed under 1 % of the chooser's band's),
+whose wide fit is physical too, and whose two widths agree within CONSISTENCY_Z of
 their jackknife spreads' root-sum-square plus the width grid's step there (identification.
 effects.backlash.grid_step): a dead band is one width in every band, while a phase or a mode
 the nominal misses above the chooser's band pulls the wide band's width alone.
@@ -141,7 +145,7 @@ import numpy as np
 from jointbench.identification.band_choice import CONSISTENCY_Z, wide_settings
 from jointbench.identification.discrepancy.candidates import (Candidate, SecondView, candidate,
                                                               reference)
-from jointbench.identification.discrepancy.heldout import (FOLDS, SEGMENTS, evidence,
+from jointbench.identification.discrepancy.heldout import (FOLDS, MATERIAL, SEGMENTS, evidence,
                                                            segment_of_rows)
 from jointbench.identification.discrepancy.nominal import Nominal, nominal
 from jointbench.identification.effects import EFFECTS, backlash
@@ -241,9 +245,11 @@ def second_view(band: LagBand, c: Candidate,
     if c.effect not in SECOND or band.settings is None or not c.testable:
         return c
     c = replace(c, views=c.views * 2 * split)   # its rows' views besides (Candidate.views)
-    # a lag and a backlash must show a positive share in the chooser's band; a hardening's
-    # share there may be lost to a cause beside it (module docstring: the guard)
-    if c.unphysical or c.significant or not (c.heldout_pct > 0 or c.effect == HARDENING):
+    # a lag must show a positive share in the chooser's band, a backlash one above MATERIAL;
+    # a hardening's share there may be lost to a cause beside it (module docstring: the guard)
+    shown = {HARDENING: True, BACKLASH: c.heldout_pct > 100 * MATERIAL}.get(
+        c.effect, c.heldout_pct > 0)
+    if c.unphysical or c.significant or not shown:
         return c
     try:
         nom = band.nominal()
