@@ -125,12 +125,13 @@ takes out of the band carry the MATERIAL margin in both bands alike: a view over
 only would ask a t for a handful of segments, heldout.dof). Its level is split with the
 chooser's band's test, half each, as the hardening's. The guard is the lag's, with a share
 above MATERIAL: the wide view only confirms a backlash that the chooser's band fits physically
-and that removes more than MATERIAL of the chooser's band's held-out residual (what a dead
-band removes in the wide band, its fundamental removes in part in the chooser's band; beside
-a spring damping whose value the wide band refits, a dead band of a fraction of a mrad took
-up a tenth of the wide band's residual where it removed under 1 % of the chooser's band's),
-whose wide fit is physical too, and whose two widths agree within CONSISTENCY_Z of
-their jackknife spreads' root-sum-square plus the width grid's step there (identification.
+and that removes more than MATERIAL of the chooser's band's held-out residual, over the whole
+log and in its typical segment (the segment test's t > 0, short of its bar): what a dead band
+removes in the wide band, its fundamental removes in part in the chooser's band. Beside a
+spring damping whose value the wide band refits, a dead band of a fraction of a mrad took up
+a tenth to a half of the wide band's residual where the chooser's band's segments saw less
+than MATERIAL of theirs (t = -9.9 and -0.8). Its wide fit must be physical too, and the
+two widths agree within CONSISTENCY_Z of their jackknife spreads' root-sum-square plus the width grid's step there (identification.
 effects.backlash.grid_step): a dead band is one width in every band, while a phase or a mode
 the nominal misses above the chooser's band pulls the wide band's width alone.
 """
@@ -245,9 +246,11 @@ def second_view(band: LagBand, c: Candidate,
     if c.effect not in SECOND or band.settings is None or not c.testable:
         return c
     c = replace(c, views=c.views * 2 * split)   # its rows' views besides (Candidate.views)
-    # a lag must show a positive share in the chooser's band, a backlash one above MATERIAL;
-    # a hardening's share there may be lost to a cause beside it (module docstring: the guard)
-    shown = {HARDENING: True, BACKLASH: c.heldout_pct > 100 * MATERIAL}.get(
+    # a lag must show a positive share in the chooser's band, a backlash one above MATERIAL
+    # overall and in a typical segment (t > 0); a hardening's share there may be lost to a
+    # cause beside it (module docstring: the guard)
+    shown = {HARDENING: True,
+             BACKLASH: c.heldout_pct > 100 * MATERIAL and c.t_stat > 0}.get(
         c.effect, c.heldout_pct > 0)
     if c.unphysical or c.significant or not shown:
         return c
