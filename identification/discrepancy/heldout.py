@@ -55,7 +55,8 @@ from that rate alone. (With the 8 effects a log with q tests in the first round 
 t > 4.23, 7 in the second t > 4.18; 4 effects without q, t > 3.97.) A torque lag on a log
 whose excitation runs above the chooser's band is tested in that wider band too, each of its
 two tests at half its level (identification.discrepancy.lag_band: t > 4.50 in a first round
-of 8); so is a hardening, its second test there over the segments of large deflection only.
+of 8); so is a hardening, its second test there over the segments of large deflection only,
+and a backlash, its second test there over every segment.
 
 Among the significant effects the named one explains the most of the held-out residual,
 100 (1 - sum e1^2 / sum e0^2).

@@ -10,8 +10,8 @@ until one of them is named, so the round where that would first happen tests eac
 or less, m at least their number. (A bar of ALPHA / (every test run so far), 15 tests in the
 second round of a log with q, 7 of one without, asked EMPS's offset for t > 4.18 where it has
 3.93; Holm asks 3.86.) A torque lag's hypothesis is tested in two bands on a log with a wide
-band, each test at half its level, and so is a hardening's, its second view at large
-deflections (identification.discrepancy.lag_band). The named cause of a
+band, each test at half its level, and so are a hardening's, its second view at large
+deflections, and a backlash's (identification.discrepancy.lag_band). The named cause of a
 round is, among the significant ones, the one that explains the most of the held-out
 residual, unless a simpler significant
 one explains it as well: the richer is then named only if what it adds to the simpler is

@@ -1,5 +1,5 @@
-"""A second view of `torque_lag` in a band that reaches the excitation's top, and of
-`hardening` there at large deflections.
+"""A second view of `torque_lag` in a band that reaches the excitation's top, of
+`hardening` there at large deflections, and of `backlash` there over every segment.
 
 **Why the lag alone.** A first-order lag T shifts the applied torque's phase by about w T:
 its evidence grows with frequency, by physics. The chooser's band (identification.filter_choice:
@@ -7,7 +7,8 @@ decimated cutoff about 1.4 f1) keeps only the bottom of a sweep that runs far ab
 mode, so on a low-f1 axis a lag shows in the few segments of the chirp's top part (for a
 5 ms lag on a 4 Hz axis swept to 30 Hz: 0.15 rad at the 5.4 Hz cutoff, 0.8 rad at the
 sweep's top). The other effects act at low speed, small deflection or at the mode, which the
-chooser's band holds, so only the lag gets the second band.
+chooser's band holds, so only the lag gets a second band for its phase; the two kinks of the
+spring law, a hardening's and a dead band's, get one for their harmonics (below).
 
 **The band** is identification.band_choice.wide_settings's, as identify's band rule uses it:
 the chooser's Butterworth, the decimation lowered until the decimated cutoff reaches the
@@ -110,6 +111,29 @@ spring that engages at large deflections, and in the wide band such a column tak
 nominal and a named cause miss above the chooser's band (beside a spring damping whose value
 the wide band refits, it explained a fifth of the residual of the segments it covered, most of
 them). Such a fit is not a physical instance of the effect: SecondView.unphysical says why.
+
+**The backlash in the wide band.** A dead band K dz(qm - q, b) is a kink of the spring law
+at the band's edges, crossed at every link-torque reversal, and like a hardening's kink its
+evidence is in the harmonics it makes, which the chooser's band cuts; what that band keeps of
+it, the fundamental, is mostly a softer K. On an axis whose sweep passes the mode early (the
+soft family, f1 4 Hz) the deflection leaves the band in the log's first few segments only,
+with a dozen decimated rows each: tested over every segment of the chooser's band, a dead
+band of 7 % visibility that removes four fifths of the held-out residual has t = 2.9, and
+in the wide band, with its harmonics and three times the rows, t = 13. Its second view is the
+wide band's own test of it, over every segment (the segments that the deflection never
+takes out of the band carry the MATERIAL margin in both bands alike: a view over the others
+only would ask a t for a handful of segments, heldout.dof). Its level is split with the
+chooser's band's test, half each, as the hardening's. The guard is the lag's, with a share
+above MATERIAL: the wide view only confirms a backlash that the chooser's band fits physically
+and that removes more than MATERIAL of the chooser's band's held-out residual, over the whole
+log and in its typical segment (the segment test's t > 0, short of its bar): what a dead band
+removes in the wide band, its fundamental removes in part in the chooser's band. Beside a
+spring damping whose value the wide band refits, a dead band of a fraction of a mrad took up
+a tenth to a half of the wide band's residual where the chooser's band's segments saw less
+than MATERIAL of theirs (t = -9.9 and -0.8). Its wide fit must be physical too, and the
+two widths agree within CONSISTENCY_Z of their jackknife spreads' root-sum-square plus the width grid's step there (identification.
+effects.backlash.grid_step): a dead band is one width in every band, while a phase or a mode
+the nominal misses above the chooser's band pulls the wide band's width alone.
 """
 
 from __future__ import annotations
@@ -123,16 +147,17 @@ from jointbench.identification.band_choice import CONSISTENCY_Z, wide_settings
 from jointbench.identification.discrepancy.candidates import (CHOOSER, OWN_ROWS, Candidate,
                                                               SecondView, candidate,
                                                               reference)
-from jointbench.identification.discrepancy.heldout import (FOLDS, SEGMENTS, evidence,
+from jointbench.identification.discrepancy.heldout import (FOLDS, MATERIAL, SEGMENTS, evidence,
                                                            segment_of_rows)
 from jointbench.identification.discrepancy.nominal import Nominal, nominal
-from jointbench.identification.effects import EFFECTS
+from jointbench.identification.effects import EFFECTS, backlash
 from jointbench.identification.filtering import FilterSettings, stencil_gain
 from jointbench.identification.log import Log
 
 LAG = "torque_lag"
 HARDENING = "hardening"
-SECOND = (LAG, HARDENING)   # the effects tested in a second view
+BACKLASH = "backlash"
+SECOND = (LAG, HARDENING, BACKLASH)   # the effects tested in a second view
 WIDE_VIEWS = 2   # the lag's tests in the wide band (every segment, the top of the sweep)
 
 
@@ -207,12 +232,14 @@ def grid_step(nom: Nominal, value: float) -> float:
 
 def second_view(band: LagBand, c: Candidate,
                 causes: tuple[tuple[str, dict], ...], split: int = 1) -> Candidate:
-    """`c` itself unless it is a torque lag or a hardening and the log has a wide band; then
+    """`c` itself unless it is a torque lag, a hardening or a backlash and the log has a wide
+    band; then
     `c` with its level split over its two bands (Candidate.views = 2) and, when the chooser's
     band fits it physically with a positive held-out share but does not find it significant
     at that level, the wide band's view (Candidate.second): the lag's over every segment and
     at the top of the sweep, the two sharing the band's level (SecondView.split), the
-    hardening's over its large deflections (module docstring). `causes`: the named causes
+    hardening's over its large deflections, the backlash's over every segment (module
+    docstring). `causes`: the named causes
     with their values (the round's reference). `split`: the views the hypothesis is split
     over besides the two bands (a clipped log's two inverse views, bench.analysis.diagnose.
     clipped): each band's test is then at alpha / (2 split), and the wide band's view is
@@ -220,9 +247,13 @@ def second_view(band: LagBand, c: Candidate,
     if c.effect not in SECOND or band.settings is None or not c.testable:
         return c
     c = replace(c, views=c.views * 2 * split)   # its rows' views besides (Candidate.views)
-    # a lag must show a positive share in the chooser's band; a hardening's share there may
-    # be lost to a cause beside it (module docstring: the guard)
-    if c.unphysical or c.significant or not (c.heldout_pct > 0 or c.effect == HARDENING):
+    # a lag must show a positive share in the chooser's band, a backlash one above MATERIAL
+    # overall and in a typical segment (t > 0); a hardening's share there may be lost to a
+    # cause beside it (module docstring: the guard)
+    shown = {HARDENING: True,
+             BACKLASH: c.heldout_pct > 100 * MATERIAL and c.t_stat > 0}.get(
+        c.effect, c.heldout_pct > 0)
+    if c.unphysical or c.significant or not shown:
         return c
     try:
         nom = band.nominal()
@@ -231,6 +262,8 @@ def second_view(band: LagBand, c: Candidate,
         return c   # no second view (LogError is a ValueError: too short for the band)
     if c.effect == HARDENING:
         return replace(c, second=_deflection_view(nom, c, w, band.label))
+    if c.effect == BACKLASH:
+        return replace(c, second=_width_view(nom, c, w, band.label))
     tc, tw = c.fixed["lag_s"], w.fixed["lag_s"]
     sc, sw = jackknife(c.fold_values), jackknife(w.fold_values)
     allowed = CONSISTENCY_Z * math.hypot(sc, sw) + discretisation(band.settings, tc)
@@ -330,7 +363,10 @@ def where_visible(c: Candidate, n: int, model: tuple[tuple[str, dict], ...]) -> 
     do, and the segment test counts their number in its degrees of freedom. The split is
     fixed by the effect and the round (a model holding a cause), never by what either view
     finds: each view at half the level (Bonferroni within the hypothesis), so the chance of
-    naming an effect the log does not carry stays under the round's level. Against the
+    naming an effect the log does not carry stays under the round's level. A backlash whose
+    level second_view has already split over its two bands has it split again here (each of
+    its three tests at a quarter of the level), and keeps the wide band's view when that one
+    confirms. Against the
     nominal (the first round) the stronger of a pair is tested as every effect is, over every
     segment: the view is for the weaker, against the model holding the stronger.
 
@@ -354,6 +390,8 @@ def where_visible(c: Candidate, n: int, model: tuple[tuple[str, dict], ...]) -> 
     value = next(iter(c.fixed.values()), math.nan) if c.fixed else math.nan
     label = (f"{CHOOSER}{', ' + c.rows if c.rows else ''}, where it is visible ({ev.segments} "
              f"of {SEGMENTS} segments: its held-out prediction changes most)")
+    if c.second is not None and c.second.confirms(c.level):
+        return c   # the wide band's view (second_view) confirms it at the split level
     return replace(c, second=SecondView(
         band=label, heldout_pct=ev.explained_pct, t_stat=ev.t, p_heldout=ev.p,
         value=float(value), agree=True, detail="the chooser's band's fit, its segments where "
@@ -369,3 +407,23 @@ def changed_most(c: Candidate, n: int, rows: tuple[int, ...] = ()) -> np.ndarray
     sq = (d[list(rows)] if rows else d) ** 2
     size = np.bincount(segment_of_rows(n), sq.sum(axis=0), minlength=SEGMENTS)
     return size >= np.median(size)
+
+
+def _width_view(nom: Nominal, c: Candidate, w: Candidate, label: str) -> SecondView:
+    """The backlash `w` fitted in the wide band (`nom`), its own held-out test there over
+    every segment (the rows its candidate test is over; where that is split between two
+    sets of rows, candidates._test, so is the view's level: SecondView.split), and its width
+    against the chooser's band's `c` (module docstring: the backlash)."""
+    bc, bw = c.fixed["backlash_rad"], w.fixed["backlash_rad"]
+    sc, sw = jackknife(c.fold_values), jackknife(w.fold_values)
+    allowed = CONSISTENCY_Z * math.hypot(sc, sw) + backlash.grid_step(nom, max(bc, bw))
+    agree = abs(bw - bc) <= allowed
+    detail = (f"width {1e3 * bw:.3g} +- {1e3 * sw:.2g} mrad against {1e3 * bc:.3g} +- "
+              f"{1e3 * sc:.2g} mrad in the chooser's band, "
+              + ("within" if agree else "more than") + f" the {1e3 * allowed:.2g} mrad allowed "
+              f"({CONSISTENCY_Z:g} sigma and the search grid's step)")
+    rows = f", {w.rows}" if w.rows else ""
+    return SecondView(band=f"{label}, over every segment{rows}", heldout_pct=w.heldout_pct,
+                      t_stat=w.t_stat, p_heldout=w.p_heldout, value=bw, agree=agree,
+                      detail=detail, unphysical=w.unphysical, acts_pct=w.acts_pct,
+                      split=w.views)

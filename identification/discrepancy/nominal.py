@@ -87,7 +87,9 @@ def link_law(sig: Signals, y: np.ndarray, W: np.ndarray, names: tuple[str, ...],
     link residual is 0.49 N m with the sign and 0.04 with the simulator's own law, found
     here. The law is the nominal's, part of the reference every effect is tested against,
     never a cause; a log whose link friction is a sign keeps v0 = 0 or one under its
-    resolution."""
+    resolution. Conversely, searched without a dead band the law takes part of the dead
+    band's misfit up: an extended model that holds a backlash holds its own law, searched on
+    its design (identification.discrepancy.candidates._own_law)."""
     j = names.index("FS")
     top = float(np.percentile(np.abs(np.nan_to_num(sig.qd[sig.sl])), LAW_TOP))
     if top <= 0:

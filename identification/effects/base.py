@@ -85,6 +85,11 @@ class Effect:
     # forward view judges it only where a replay keeps its phase
     # (bench.analysis.diagnose.forward). "" for none.
     period: str = ""
+    # Its extended model holds its own link friction law near zero speed, searched on its
+    # design (identification.discrepancy.candidates._own_law): its misfit sits where the law
+    # acts (a dead band's, at the link-torque reversals) and the nominal's law, searched
+    # without it, takes part of it up.
+    own_link_law: bool = False
 
     def unit_for(self, prismatic: bool) -> str:
         return self.unit_prismatic if prismatic else self.unit

@@ -78,15 +78,17 @@ def test_a_hardening_beside_a_backlash_is_named_from_its_band():
 
 
 def test_the_hardening_and_the_lag_split_their_level():
-    """On a log with a wide band the two effects with a second view test their hypothesis
-    twice, each at half its level; every other effect keeps the round's level (Holm)."""
+    """On a log with a wide band the three effects with a second view (a lag, a hardening, a
+    backlash) test their hypothesis twice, each at half its level; every other effect keeps
+    the round's level (Holm)."""
     from jointbench.testing import FAMILIES, simulate
     log = simulate(FAMILIES["soft"], seed=2, duration=DURATION)
     inv = diagnose_inverse(log, diagnosis_settings(log)[0])
     assert inv.causes == ()
     tested = {c.effect: c for c in inv.candidates if c.testable}
     assert {c.alpha for c in tested.values()} == {ALPHA / 8}
-    assert {e for e, c in tested.items() if c.views == 2} == {"torque_lag", "hardening"}
+    assert {e for e, c in tested.items() if c.views == 2} == {"torque_lag", "hardening",
+                                                                  "backlash"}
     assert all(c.level == c.alpha / c.views for c in tested.values())
 
 

@@ -55,7 +55,8 @@ def test_a_clean_low_mode_log_stays_clean_in_the_wide_view(clean_soft):
     """The same axis without the lag: nothing named, and the lag tested in the wide band
     whatever the chooser's band says (the view itself runs only after a positive held-out
     share there) stays far under its bar (t > 4.50: half the level of a round of 8); every
-    other effect keeps the round's level, the lag's tests half of it each."""
+    other effect keeps the round's level, the lag's tests half of it each (and the
+    hardening's and the backlash's, the other effects with a wide view)."""
     log = clean_soft
     settings = diagnosis_settings(log)[0]
     inv = diagnose_inverse(log, settings)
@@ -67,7 +68,8 @@ def test_a_clean_low_mode_log_stays_clean_in_the_wide_view(clean_soft):
     assert wide.t_stat < t_bar(bar(8) / 2) - 1.0
     tested = {c.effect: c for c in inv.candidates if c.testable}
     assert {c.alpha for c in tested.values()} == {ALPHA / 8}
-    assert {c.effect for c in tested.values() if c.level < c.alpha} == {"torque_lag", "hardening"}
+    assert {c.effect for c in tested.values() if c.level < c.alpha} == {"torque_lag", "hardening",
+                                                                           "backlash"}
     assert tested["torque_lag"].level == ALPHA / 16
 
 
