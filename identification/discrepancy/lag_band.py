@@ -109,9 +109,10 @@ the segment test (heldout.segment_t: the MATERIAL margin, the successive differe
 spread in time order, their number in its degrees of freedom) runs over those values. The
 runs are set by the deflection and the folds' engagements, which the training rows chose,
 never by the held-out residual. Two runs are apart by at least one decimated row where the
-spring is not engaged, and the wide band's decimated cutoff lies near the decimated Nyquist
-frequency (identification.band_choice), so its impulse response spans a row or two: the
-runs' errors are close to independent, as the segments' are. Under the null hypothesis each
+spring is not engaged, and the wide band's decimated cutoff is 0.8 of the decimated Nyquist
+frequency (identification.band_choice.wide_settings: Nd = ceil(0.8 Fs / (2 top))), so its
+impulse response spans a row or two: the runs' errors are close to independent, as the
+segments' are. Under the null hypothesis each
 run's log-ratio has a negative mean (the column adds only estimation variance there), so the
 view's p-value stays valid, the two views' Bonferroni split keeps the chance of naming a
 hardening that the log does not carry under the hypothesis' level, and Holm's step-down
@@ -237,9 +238,12 @@ def engagements(nom: Nominal, engagement: tuple[float, ...]) -> np.ndarray | Non
 
 
 def engagement_log_ratios(e0: np.ndarray, e1: np.ndarray, n: int, blocks: tuple[int, ...],
-                          runs: np.ndarray) -> np.ndarray:
+                          runs: np.ndarray | None) -> np.ndarray:
     """log(sum e0^2 / sum e1^2) over each engagement `runs` labels (engagements), over the
-    rows of `blocks` (every block for ()), in time order; where both sums are positive."""
+    rows of `blocks` (every block for ()), in time order; where both sums are positive (none
+    when `runs` is None)."""
+    if runs is None:
+        return np.zeros(0)
     sq0, sq1 = ((e ** 2).reshape(-1, n) for e in (e0, e1))
     rows = list(blocks) if blocks else slice(None)
     on = runs >= 0
