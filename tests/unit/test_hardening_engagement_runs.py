@@ -85,3 +85,17 @@ def test_the_view_is_valid_under_the_null():
     sd = np.sqrt(0.05 * 0.95 / draws)   # a 5 % rate's binomial spread over the draws
     assert abs(plain / draws - 0.05) < 3 * sd
     assert margin / draws < 0.01
+
+
+def test_a_view_over_the_engaged_rows_must_explain_a_material_share():
+    """A hardening's view at large deflections (diluted) confirms only when it explains
+    more than MATERIAL of its rows' held-out residual, whatever its t; a lag's wide view
+    asks a positive share."""
+    from jointbench.identification.discrepancy.candidates import SecondView
+    share = 100 * heldout.MATERIAL
+    seen = SecondView(band="wide, at large deflections", heldout_pct=2 * share, t_stat=9.0,
+                      p_heldout=1e-9, value=0.02, agree=True, detail="", diluted=True)
+    assert seen.confirms(1e-4)
+    small = SecondView(**{**seen.__dict__, "heldout_pct": share / 2})
+    assert not small.confirms(1e-4)
+    assert SecondView(**{**small.__dict__, "diluted": False}).confirms(1e-4)
