@@ -135,9 +135,9 @@ the wide band refits, it explained a fifth of the residual of the segments it co
 them). Such a fit is not a physical instance of the effect: SecondView.unphysical says why.
 Last, the view must explain more than MATERIAL of the held-out residual of the rows it is
 over (SecondView.confirms, `diluted`): it tests the typical engagement, and a column that
-fits a small misfit in the many quiet engagements of an engagement near the grid's bottom can
-pass there while the rows keep their residual (beside a lag on the soft family, 0.6 % of it
-with t = 4.2 over 44 engagements); the floor of later rounds asks a cause the same.
+fits a small misfit in the many quiet engagements of a spring engaged near its grid's
+bottom can pass there while the rows keep their residual (beside a lag on the soft family,
+0.6 % of it with t = 4.2 over 44 engagements); the floor of later rounds asks the same.
 """
 
 from __future__ import annotations
