@@ -50,7 +50,14 @@ class SecondView:
     split: int = 1
 
     def confirms(self, alpha: float) -> bool:
-        return (not self.unphysical and self.agree and self.heldout_pct > 0
+        """Physical, agreeing, significant at its level, and explaining a positive share of
+        its rows' held-out residual; more than MATERIAL of it for a view over the rows where
+        the effect acts (`diluted`: lag_band's hardening at large deflections). That view
+        tests the typical engagement, and its units are many and short: a column that fits
+        a small misfit in the quiet ones can pass there while the rows it is over keep
+        their residual, so it also asks what the floor of later rounds asks of a cause."""
+        floor = 100 * MATERIAL if self.diluted else 0.0
+        return (not self.unphysical and self.agree and self.heldout_pct > floor
                 and self.p_heldout < alpha / self.split)
 
     def to_json(self, alpha: float) -> dict:

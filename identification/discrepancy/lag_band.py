@@ -91,11 +91,34 @@ those instants add nearly the same error to both sums and pull each segment's ra
 by a share that changes from segment to segment with how long the spring stays engaged, which
 the successive differences count as noise. Under the null hypothesis the kept segments'
 log-ratios have a negative mean as every segment's do (the column adds only estimation
-variance, and it adds it on the very instants where the column is not zero), and the segment
-test counts their number in its degrees of freedom (heldout.dof): a view over few segments
-asks for a larger t. Its level is split with the
-chooser's band's test, half each (t > 4.50 in either view over every segment in a first
-round of 8; the wide band's one view keeps the whole half, where the lag's two share it).
+variance, and it adds it on the very instants where the column is not zero). Its level is
+split with the chooser's band's test, half each (t > 4.50 in either view over every segment
+in a first round of 8; the wide band's one view keeps the whole half, where the lag's two
+share it).
+
+**The unit of the hardening's view: an engagement, not a segment.** The spring engages once
+in each half-cycle of the deflection near the mode, and each engagement is one observation
+of the second spring. Counted by segments, a low-f1 axis whose mode the sweep passes in its
+first seconds has four that reach the engagement, and a t over four values has 2.25 degrees
+of freedom (heldout.dof): at half the level of a second round of 7 it asks for t > 55,
+however much the hardening explains (beside a ripple, 99 % of the held-out residual of the
+engaged instants, with t = 31 over those four segments, fails). So the view's log-ratios are
+taken over the engagements (`engagements`): each maximal run of consecutive engaged instants
+within one segment that reaches the engagement (within one segment, so that one fold's fit
+holds each run out), log(sum e0^2 / sum e1^2) over the equations the hardening acts in, and
+the segment test (heldout.segment_t: the MATERIAL margin, the successive differences'
+spread in time order, their number in its degrees of freedom) runs over those values. The
+runs are set by the deflection and the folds' engagements, which the training rows chose,
+never by the held-out residual. Two runs are apart by at least one decimated row where the
+spring is not engaged, and the wide band's decimated cutoff is 0.8 of the decimated Nyquist
+frequency (identification.band_choice.wide_settings: Nd = ceil(0.8 Fs / (2 top))), so its
+impulse response spans a row or two: the runs' errors are close to independent, as the
+segments' are. Under the null hypothesis each
+run's log-ratio has a negative mean (the column adds only estimation variance there), so the
+view's p-value stays valid, the two views' Bonferroni split keeps the chance of naming a
+hardening that the log does not carry under the hypothesis' level, and Holm's step-down
+keeps that of naming anything on a clean log under ALPHA (identification.discrepancy.
+inverse).
 
 The guard differs from the lag's. The wide view confirms only a hardening that the chooser's
 band fits physically (its overall share there need not be positive: beside a backlash the
@@ -111,6 +134,11 @@ spring that engages at large deflections, and in the wide band such a column tak
 nominal and a named cause miss above the chooser's band (beside a spring damping whose value
 the wide band refits, it explained a fifth of the residual of the segments it covered, most of
 them). Such a fit is not a physical instance of the effect: SecondView.unphysical says why.
+Last, the view must explain more than MATERIAL of the held-out residual of the rows it is
+over (SecondView.confirms, `diluted`): it tests the typical engagement, and a column that
+fits a small misfit in the many quiet engagements of a spring engaged near its grid's
+bottom can pass there while the rows keep their residual (beside a lag on the soft family,
+0.6 % of it with t = 4.2 over 44 engagements); the floor of later rounds asks the same.
 
 **The backlash in the wide band.** A dead band K dz(qm - q, b) is a kink of the spring law
 at the band's edges, crossed at every link-torque reversal, and like a hardening's kink its
@@ -131,9 +159,10 @@ removes in the wide band, its fundamental removes in part in the chooser's band.
 spring damping whose value the wide band refits, a dead band of a fraction of a mrad took up
 a tenth to a half of the wide band's residual where the chooser's band's segments saw less
 than MATERIAL of theirs (t = -9.9 and -0.8). Its wide fit must be physical too, and the
-two widths agree within CONSISTENCY_Z of their jackknife spreads' root-sum-square plus the width grid's step there (identification.
-effects.backlash.grid_step): a dead band is one width in every band, while a phase or a mode
-the nominal misses above the chooser's band pulls the wide band's width alone.
+two widths agree within CONSISTENCY_Z of their jackknife spreads' root-sum-square plus the
+width grid's step there (identification.effects.backlash.grid_step): a dead band is one
+width in every band, while a phase or a mode the nominal misses above the chooser's band pulls
+the wide band's width alone.
 """
 
 from __future__ import annotations
@@ -148,7 +177,7 @@ from jointbench.identification.discrepancy.candidates import (CHOOSER, OWN_ROWS,
                                                               SecondView, candidate,
                                                               reference)
 from jointbench.identification.discrepancy.heldout import (FOLDS, MATERIAL, SEGMENTS, evidence,
-                                                           segment_of_rows)
+                                                           segment_of_rows, segment_t)
 from jointbench.identification.discrepancy.nominal import Nominal, nominal
 from jointbench.identification.effects import EFFECTS, backlash
 from jointbench.identification.filtering import FilterSettings, stencil_gain
@@ -221,6 +250,40 @@ def engaged(nom: Nominal, engagement: tuple[float, ...]) -> np.ndarray | None:
         return None
     d = np.abs((sig.qm - sig.q)[sig.index])
     return d > np.asarray(engagement, float)[segment_of_rows(len(d)) % FOLDS]
+
+
+def engagements(nom: Nominal, engagement: tuple[float, ...]) -> np.ndarray | None:
+    """Each of `nom`'s instants' engagement of the spring (module docstring: the unit of the
+    hardening's view): 0, 1, ... for the maximal runs of consecutive engaged instants
+    (`engaged`) within one segment that reaches the engagement (`large_deflections`), in
+    time order, -1 elsewhere; None when the folds' values are not given."""
+    on = engaged(nom, engagement)
+    if on is None:
+        return None
+    seg = segment_of_rows(len(on))
+    on &= large_deflections(nom, engagement)[seg]
+    rows = np.flatnonzero(on)
+    out = np.full(len(on), -1)
+    starts = np.r_[True, (np.diff(rows) > 1) | (np.diff(seg[rows]) != 0)]
+    out[rows] = np.cumsum(starts) - 1
+    return out
+
+
+def engagement_log_ratios(e0: np.ndarray, e1: np.ndarray, n: int, blocks: tuple[int, ...],
+                          runs: np.ndarray | None) -> np.ndarray:
+    """log(sum e0^2 / sum e1^2) over each engagement `runs` labels (engagements), over the
+    rows of `blocks` (every block for ()), in time order; where both sums are positive (none
+    when `runs` is None)."""
+    if runs is None:
+        return np.zeros(0)
+    sq0, sq1 = ((e ** 2).reshape(-1, n) for e in (e0, e1))
+    rows = list(blocks) if blocks else slice(None)
+    on = runs >= 0
+    k = int(runs.max()) + 1 if on.any() else 0
+    h0 = np.bincount(runs[on], sq0[rows].sum(axis=0)[on], k)
+    h1 = np.bincount(runs[on], sq1[rows].sum(axis=0)[on], k)
+    ok = (h0 > 0) & (h1 > 0)
+    return np.log(h0[ok] / h1[ok])
 
 
 def grid_step(nom: Nominal, value: float) -> float:
@@ -310,8 +373,13 @@ def _deflection_view(nom: Nominal, c: Candidate, w: Candidate, label: str) -> Se
     deflections when that engagement is in the first step of its search grid (module
     docstring: the guard)."""
     within = large_deflections(nom, w.fold_values)
-    ev = evidence(w.reference_errors, w.heldout_errors, len(nom.sig.index), w.acts, within,
+    n = len(nom.sig.index)
+    ev = evidence(w.reference_errors, w.heldout_errors, n, w.acts, within,
                   engaged(nom, w.fold_values))
+    # the segment test over the engagements of the spring, not the segments they lie in
+    runs = engagements(nom, w.fold_values)
+    l = engagement_log_ratios(w.reference_errors, w.heldout_errors, n, w.acts, runs)
+    t, p = segment_t(l + math.log(1 - MATERIAL))
     dc, dw = c.fixed["deflection_rad"], w.fixed["deflection_rad"]
     sc, sw = jackknife(c.fold_values), jackknife(w.fold_values)
     allowed = CONSISTENCY_Z * math.hypot(sc, sw) + grid_step(nom, max(dc, dw))
@@ -325,11 +393,11 @@ def _deflection_view(nom: Nominal, c: Candidate, w: Candidate, label: str) -> Se
               + ("within" if agree else "more than") + f" the {1e3 * allowed:.2g} mrad allowed "
               f"({CONSISTENCY_Z:g} sigma and the search grid's step)")
     label = (f"{label}, at large deflections ({int(within.sum())} of {SEGMENTS} segments "
-             "reach the engagement)")
-    return SecondView(band=label, heldout_pct=ev.explained_pct, t_stat=ev.t, p_heldout=ev.p,
+             f"reach the engagement, {len(l)} engagements)")
+    return SecondView(band=label, heldout_pct=ev.explained_pct, t_stat=t, p_heldout=p,
                       value=dw, agree=agree, detail=detail,
                       unphysical="; ".join(x for x in (w.unphysical, edge) if x),
-                      acts_pct=ev.acts_pct, diluted=True, segments=ev.segments)
+                      acts_pct=ev.acts_pct, diluted=True, segments=len(l))
 
 
 # The effects between the motor and the link whose test against a model holding one of

