@@ -32,8 +32,7 @@ def _hardening(inv):
 
 
 def _named_at_large_deflections(inv, engaged: float):
-    assert inv.causes and inv.causes[0].effect == "hardening"
-    named = inv.causes[0]
+    named = next(c for c in inv.causes if c.effect == "hardening")
     test = named.test
     assert test.passes and test.p < named.alpha / 2          # half the hypothesis' level
     assert test.view != CHOOSER and "large deflections" in test.view
@@ -73,10 +72,12 @@ def test_a_hardening_at_large_deflections_is_named_from_its_band():
 
 
 def test_a_hardening_beside_a_backlash_is_named_from_its_band():
-    """A backlash of 2 mrad beside a stronger hardening (ratio 0.5 at 30 mrad): the hardening
-    is named with its test at large deflections."""
+    """A backlash of 2 mrad beside a stronger hardening (ratio 0.5 at 30 mrad): both are
+    named, the hardening with its test at large deflections (first or second: both pass in
+    the first round, and which the look-ahead puts first is not what this test is about)."""
     log = _soft("backlash=0.002,hardening=0.5:deflection=0.03")
     inv = diagnose_inverse(log, diagnosis_settings(log)[0])
+    assert sorted(c.effect for c in inv.causes) == ["backlash", "hardening"]
     _named_at_large_deflections(inv, 0.03)
 
 
