@@ -553,20 +553,24 @@ def _searched(nom: Nominal, e: Effect, ref: Reference, coupled: list[int],
         # the trial of least weighted RSS on all rows among every one (grid and refinement)
         return trials[int(np.argmin([r.full for r in records]))]
 
+    def again(i: int, v: float | None, under: Stacked) -> None:
+        # the value of `under`'s cause i searched again, this effect at `v`
+        name, fx = under.effects[i]
+        c = EFFECTS[name]
+        effects = list(under.effects)
+
+        def at(w: float) -> float:
+            effects[i] = (name, {**fx, c.search: float(w)})
+            return cost(v, stacked(nom, effects))
+
+        _search(at, c.grid(nom))
+
     under = base
     if e.search:
         _search(cost, e.grid(nom))
         for i in coupled:
             v, under = best()
-            name, fx = under.effects[i]
-            c = EFFECTS[name]
-            effects = list(under.effects)
-
-            def again(w: float) -> float:
-                effects[i] = (name, {**fx, c.search: float(w)})
-                return cost(v, stacked(nom, effects))
-
-            _search(again, c.grid(nom))
+            again(i, v, under)
             under = best()[1]
             _search(lambda w: cost(w, under), e.grid(nom))
         v, under = best()
@@ -574,16 +578,7 @@ def _searched(nom: Nominal, e: Effect, ref: Reference, coupled: list[int],
     else:
         cost(None)
         for i in beside:
-            under = best()[1]
-            name, fx = under.effects[i]
-            c = EFFECTS[name]
-            effects = list(under.effects)
-
-            def again(w: float) -> float:
-                effects[i] = (name, {**fx, c.search: float(w)})
-                return cost(None, stacked(nom, effects))
-
-            _search(again, c.grid(nom))
+            again(i, None, best()[1])
         under = best()[1]
         if e.reference:
             # the values it is built with from the fit with it, not from the nominal that
