@@ -185,8 +185,6 @@ from jointbench.identification.log import Log
 
 LAG = "torque_lag"
 HARDENING = "hardening"
-BACKLASH = "backlash"
-SECOND = (LAG, HARDENING, BACKLASH)   # the effects tested in a second view
 WIDE_VIEWS = 2   # the lag's tests in the wide band (every segment, the top of the sweep)
 
 
@@ -307,15 +305,16 @@ def second_view(band: LagBand, c: Candidate,
     over besides the two bands (a clipped log's two inverse views, bench.analysis.diagnose.
     clipped): each band's test is then at alpha / (2 split), and the wide band's view is
     run whenever the chooser's band fails at that level."""
-    if c.effect not in SECOND or band.settings is None or not c.testable:
+    view = EFFECTS[c.effect].wide_view if c.effect in EFFECTS else ""
+    if not view or band.settings is None or not c.testable:
         return c
     c = replace(c, views=c.views * 2 * split)   # its rows' views besides (Candidate.views)
     # a lag must show a positive share in the chooser's band, a backlash one above MATERIAL
     # overall and in a typical segment (t > 0); a hardening's share there may be lost to a
     # cause beside it (module docstring: the guard)
-    shown = {HARDENING: True,
-             BACKLASH: c.heldout_pct > 100 * MATERIAL and c.t_stat > 0}.get(
-        c.effect, c.heldout_pct > 0)
+    shown = {"deflection": True,
+             "width": c.heldout_pct > 100 * MATERIAL and c.t_stat > 0}.get(
+        view, c.heldout_pct > 0)
     if c.unphysical or c.significant or not shown:
         return c
     try:
@@ -323,9 +322,9 @@ def second_view(band: LagBand, c: Candidate,
         w = candidate(nom, c.effect, reference(nom, causes))
     except (ValueError, ArithmeticError, np.linalg.LinAlgError):
         return c   # no second view (LogError is a ValueError: too short for the band)
-    if c.effect == HARDENING:
+    if view == "deflection":
         return replace(c, second=_deflection_view(nom, c, w, band.label))
-    if c.effect == BACKLASH:
+    if view == "width":
         return replace(c, second=_width_view(nom, c, w, band.label))
     tc, tw = c.fixed["lag_s"], w.fixed["lag_s"]
     sc, sw = jackknife(c.fold_values), jackknife(w.fold_values)
@@ -400,17 +399,22 @@ def _deflection_view(nom: Nominal, c: Candidate, w: Candidate, label: str) -> Se
                       acts_pct=ev.acts_pct, diluted=True, segments=len(l))
 
 
-# The effects between the motor and the link whose test against a model holding one of
-# BESIDE has a view where they are visible (`where_visible`): the dead band and the spring's
-# damping, beside another effect of the spring's law or damping.
-AT_THE_MODE = ("backlash", "spring_damping")
-BESIDE = (*AT_THE_MODE, HARDENING)
+# The effects seen at the mode (Effect.at_the_mode: the dead band, the spring's damping)
+# have a view where they are visible (`where_visible`) beside another effect of the spring.
 VISIBLE_VIEWS = 2   # their tests against such a model: every segment, where it is visible
 
 
+def _spring(name: str, at_the_mode: bool = False) -> bool:
+    """Whether the effect `name` acts in the spring's law or damping (Effect.in_spring),
+    and, with `at_the_mode`, is seen where the sweep passes the mode (Effect.at_the_mode)."""
+    e = EFFECTS.get(name)
+    return e is not None and e.in_spring and (e.at_the_mode or not at_the_mode)
+
+
 def where_visible(c: Candidate, n: int, model: tuple[tuple[str, dict], ...]) -> Candidate:
-    """`c` itself unless it is a backlash or a spring damping (AT_THE_MODE) and `model` holds
-    another effect of the spring's law or damping (BESIDE); then `c` with its level split
+    """`c` itself unless it is seen at the mode (Effect.at_the_mode: a backlash, a spring
+    damping) and `model` holds another effect of the spring's law or damping
+    (Effect.in_spring); then `c` with its level split
     over two views (Candidate.views), every segment and the half where its held-out
     prediction changes most (`changed_most`), the second as its SecondView.
 
@@ -445,8 +449,8 @@ def where_visible(c: Candidate, n: int, model: tuple[tuple[str, dict], ...]) -> 
     dead band takes it up there (a single lag on the prototype: a third of that half's
     held-out residual). The view would then test the first cause's misfit, not a second
     effect."""
-    if (c.effect not in AT_THE_MODE or not c.testable
-            or not any(name in BESIDE for name, _ in model)):
+    if (not _spring(c.effect, at_the_mode=True) or not c.testable
+            or not any(_spring(name) for name, _ in model)):
         return c
     c = replace(c, views=c.views * VISIBLE_VIEWS)
     if (c.unphysical or not c.heldout_pct > 0 or c.heldout_errors is None

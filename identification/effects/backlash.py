@@ -61,4 +61,5 @@ EFFECT = Effect(
     "backlash", "backlash_rad", "rad", "m",
     "dead zone of half-width b in the transmission deflection qm - q",
     needs_link=True, rigid_axis=False, block=1, k=1, design=design, params=params,
-    check=check, search="backlash_rad", grid=grid, own_link_law=True)
+    check=check, search="backlash_rad", grid=grid, own_link_law=True,
+    wide_view="width", in_spring=True, at_the_mode=True)

@@ -90,6 +90,17 @@ class Effect:
     # acts (a dead band's, at the link-torque reversals) and the nominal's law, searched
     # without it, takes part of it up.
     own_link_law: bool = False
+    # The view it gets in a band reaching the excitation's top when the chooser's band does
+    # not find it (identification.discrepancy.lag_band.second_view): "sweep" (every segment
+    # and the top of the sweep), "deflection" (the spring's engagements at large
+    # deflections), "width" (every segment, its width against the chooser's band's); ""
+    # none.
+    wide_view: str = ""
+    # It acts in the spring's law or its damping (the deflection and its rate), and whether
+    # the sweep shows it where it passes the mode: tested against a model holding another
+    # effect of the spring it gets a view where it is visible (lag_band.where_visible).
+    in_spring: bool = False
+    at_the_mode: bool = False
 
     def unit_for(self, prismatic: bool) -> str:
         return self.unit_prismatic if prismatic else self.unit

@@ -45,4 +45,5 @@ EFFECT = Effect(
     "hardening", "hardening_ratio", "", "",
     "stiffness that rises with deflection (piecewise linear)",
     needs_link=True, rigid_axis=False, block=1, k=2, design=design, params=params,
-    check=check, search="deflection_rad", grid=grid)
+    check=check, search="deflection_rad", grid=grid, wide_view="deflection",
+    in_spring=True)

@@ -20,4 +20,5 @@ EFFECT = Effect(
     "spring_damping", "D", "N m s/rad", "N s/m",
     "viscous damping D (qmd - qd) in parallel with the joint spring",
     needs_link=True, rigid_axis=False, block=1, k=1, design=design,
-    params=column_value("D", "D"), check=check)
+    params=column_value("D", "D"), check=check, in_spring=True,
+    at_the_mode=True)

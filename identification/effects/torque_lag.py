@@ -71,4 +71,5 @@ EFFECT = Effect(
     "torque_lag", "lag_s", "s", "s",
     "the applied torque lags the command (first-order current-loop lag)",
     needs_link=False, rigid_axis=True, block=0, k=1, design=design,
-    params=searched_value("lag_s"), search="lag_s", grid=grid)
+    params=searched_value("lag_s"), search="lag_s", grid=grid,
+    wide_view="sweep")
