@@ -21,6 +21,21 @@ from jointbench.bench.campaign.battery import plan, run_spec
 CASES = (0, 60, 65, 89, 93, 96, 100, 102)
 
 
+def specs_of(cases: list[int], seed: int) -> list:
+    """The battery plan's specs of `cases` (indices of benchmarks/battery.py's plan with
+    `seed`); a ValueError naming the first index outside the plan."""
+    specs = plan(battery.PLACES, 8, 24, 20, seed)
+    bad = [i for i in cases if not 0 <= i < len(specs)]
+    if bad:
+        raise ValueError(f"case {bad[0]}: no such case (0-{len(specs) - 1})")
+    return [specs[i] for i in cases]
+
+
+def make_log(spec):
+    """The case's log, made by the battery's runner (its strength by visibility)."""
+    return run_spec(spec, battery._RUNNERS[spec.place.source], battery._CACHE).log
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("cases", type=int, nargs="*", default=list(CASES))
@@ -29,18 +44,18 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     from jointbench.bench.analysis.diagnose import diagnose
 
-    specs = plan(battery.PLACES, 8, 24, 20, args.seed)
+    try:
+        specs = specs_of(args.cases, args.seed)
+    except ValueError as e:
+        print(e, file=sys.stderr)
+        return 2
     battery._init(args.duration)
     print(f"diagnose on {args.duration:g} s logs (battery seed {args.seed})")
     worst = 0.0
-    for i in args.cases:
-        if not 0 <= i < len(specs):
-            print(f"case {i}: no such case (0-{len(specs) - 1})", file=sys.stderr)
-            return 2
-        s = specs[i]
-        out = run_spec(s, battery._RUNNERS[s.place.source], battery._CACHE)
+    for i, s in zip(args.cases, specs):
+        log = make_log(s)
         w0, c0 = time.perf_counter(), time.process_time()
-        d = diagnose(out.log)
+        d = diagnose(log)
         wall, cpu = time.perf_counter() - w0, time.process_time() - c0
         worst = max(worst, wall)
         what = "+".join(s.effects) or "clean"

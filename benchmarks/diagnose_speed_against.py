@@ -21,9 +21,8 @@ import tempfile
 from pathlib import Path
 
 import battery
-from diagnose_speed import CASES
+from diagnose_speed import CASES, make_log, specs_of
 
-from jointbench.bench.campaign.battery import plan, run_spec
 from jointbench.identification.log.write import write_log
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -60,20 +59,20 @@ def main(argv=None) -> int:
         print(f"{args.other}: no .venv/bin/python there (make .venv/.installed)",
               file=sys.stderr)
         return 2
-    specs = plan(battery.PLACES, 8, 24, 20, args.seed)
+    try:
+        specs = specs_of(args.cases, args.seed)
+    except ValueError as e:
+        print(e, file=sys.stderr)
+        return 2
     battery._init(args.duration)
     folder = args.out or Path(tempfile.mkdtemp(prefix="diagnose_speed_"))
     folder.mkdir(parents=True, exist_ok=True)
     print(f"diagnose CPU time on {args.duration:g} s logs (battery seed {args.seed}): "
           f"this checkout ({ROOT}) against {args.other}")
     worst = 0.0
-    for i in args.cases:
-        if not 0 <= i < len(specs):
-            print(f"case {i}: no such case (0-{len(specs) - 1})", file=sys.stderr)
-            return 2
-        s = specs[i]
+    for i, s in zip(args.cases, specs):
         path = folder / f"case{i:03d}.csv"
-        write_log(run_spec(s, battery._RUNNERS[s.place.source], battery._CACHE).log, path)
+        write_log(make_log(s), path)
         ours, theirs = [], []
         for _ in range(args.repeat):
             theirs.append(_time(args.other, path))
