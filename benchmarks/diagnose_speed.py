@@ -31,6 +31,25 @@ def specs_of(cases: list[int], seed: int) -> list:
     return [specs[i] for i in cases]
 
 
+def add_case_args(ap: argparse.ArgumentParser) -> None:
+    """The arguments both diagnose-speed benchmarks take: the cases, the log length, the seed."""
+    ap.add_argument("cases", type=int, nargs="*", default=list(CASES))
+    ap.add_argument("--duration", type=float, default=60.0, help="log length [s] (default 60)")
+    ap.add_argument("--seed", type=int, default=2026)
+
+
+def case_specs(args: argparse.Namespace) -> list | None:
+    """The specs of `args.cases` with the battery set up for `args.duration`; None, after
+    printing why to stderr, when an index is outside the plan."""
+    try:
+        specs = specs_of(args.cases, args.seed)
+    except ValueError as e:
+        print(e, file=sys.stderr)
+        return None
+    battery._init(args.duration)
+    return specs
+
+
 def make_log(spec):
     """The case's log, made by the battery's runner (its strength by visibility)."""
     return run_spec(spec, battery._RUNNERS[spec.place.source], battery._CACHE).log
@@ -38,18 +57,13 @@ def make_log(spec):
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("cases", type=int, nargs="*", default=list(CASES))
-    ap.add_argument("--duration", type=float, default=60.0, help="log length [s] (default 60)")
-    ap.add_argument("--seed", type=int, default=2026)
+    add_case_args(ap)
     args = ap.parse_args(argv)
     from jointbench.bench.analysis.diagnose import diagnose
 
-    try:
-        specs = specs_of(args.cases, args.seed)
-    except ValueError as e:
-        print(e, file=sys.stderr)
+    specs = case_specs(args)
+    if specs is None:
         return 2
-    battery._init(args.duration)
     print(f"diagnose on {args.duration:g} s logs (battery seed {args.seed})")
     worst = 0.0
     for i, s in zip(args.cases, specs):

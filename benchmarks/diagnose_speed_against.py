@@ -20,8 +20,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-import battery
-from diagnose_speed import CASES, make_log, specs_of
+from diagnose_speed import add_case_args, case_specs, make_log
 
 from jointbench.identification.log.write import write_log
 
@@ -49,9 +48,7 @@ def _time(checkout: Path, path: Path) -> dict:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("other", type=Path, help="another checkout with its own .venv")
-    ap.add_argument("cases", type=int, nargs="*", default=list(CASES))
-    ap.add_argument("--duration", type=float, default=60.0, help="log length [s] (default 60)")
-    ap.add_argument("--seed", type=int, default=2026)
+    add_case_args(ap)
     ap.add_argument("--repeat", type=int, default=1, help="timings per log and checkout")
     ap.add_argument("--out", type=Path, default=None, help="folder for the logs (default: temp)")
     args = ap.parse_args(argv)
@@ -59,12 +56,9 @@ def main(argv=None) -> int:
         print(f"{args.other}: no .venv/bin/python there (make .venv/.installed)",
               file=sys.stderr)
         return 2
-    try:
-        specs = specs_of(args.cases, args.seed)
-    except ValueError as e:
-        print(e, file=sys.stderr)
+    specs = case_specs(args)
+    if specs is None:
         return 2
-    battery._init(args.duration)
     folder = args.out or Path(tempfile.mkdtemp(prefix="diagnose_speed_"))
     folder.mkdir(parents=True, exist_ok=True)
     print(f"diagnose CPU time on {args.duration:g} s logs (battery seed {args.seed}): "
