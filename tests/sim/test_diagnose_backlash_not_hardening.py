@@ -4,8 +4,9 @@ inverse._ahead, _still_physical).
 The case: the bench's prototype without velocity feedforward, with torque noise, a backlash
 of half-width 5.05 mrad and a spring damping of 991 N m s/rad (visibilities 20 % and 12 %).
 Against the nominal, a hardening engaged at the band's edge, its stiffness below the
-engagement well above a quarter of the nominal K, explains the dead band's misfit as well as the dead band
-does, and more of the damping's torque at the reversals: it is named first. The damping,
+engagement well above a quarter of the nominal K, explains the dead band's misfit as well as
+the dead band does, and more of the damping's torque at the reversals: it is named first.
+The damping,
 tested on top of it, passes; but in their joint fit the hardening's stiffness below the
 engagement falls below a quarter of the nominal K, its own check (a dead band is a
 backlash): the pair is a dead band and a damping, not a hardening and a damping. That chain
