@@ -266,13 +266,47 @@ def _tied(top: Candidate, b: Candidate, n: int, later: bool) -> bool:
     return _better(b, top, n)[1] >= DECIDE and _better(top, b, n)[1] >= DECIDE
 
 
-def _chain_errors(first: Candidate, after: Round) -> tuple[np.ndarray, str]:
+def _chain_errors(nom: Nominal, first: Candidate, after: Round) -> tuple[np.ndarray, str]:
     """The held-out errors of `first` with the cause the next round names on top of it (if
-    its test passes there, above the floor), and that cause's name ("" for none)."""
+    its test passes there, above the floor, and `first` stays a physical instance of its
+    effect in their joint fit: _still_physical), and that cause's name ("" for none)."""
     r = after[0]
-    if r and r[0].significant and r[0].test.own_share > 100 * FLOOR:
+    if (r and r[0].significant and r[0].test.own_share > 100 * FLOOR
+            and _still_physical(nom, first, r[0])):
         return r[0].heldout_errors, r[0].effect
     return first.heldout_errors, ""
+
+
+def _turned(nom: Nominal, first: Candidate, after: Round) -> str:
+    """Why `first` fails its own check in the joint fit with the cause its next round names
+    (`after`'s top, when that passes there above the floor: _still_physical); "" when it
+    does not, or when that round names nothing."""
+    r = after[0]
+    if not (r and r[0].significant and r[0].test.own_share > 100 * FLOOR):
+        return ""
+    return _check(nom, first, r[0])
+
+
+def _check(nom: Nominal, first: Candidate, then: Candidate) -> str:
+    """`first`'s effect's own check (Effect.check) with the values of `then`'s fit: its
+    searched value as `then`'s base has it, its columns as the joint fit has them; "" when
+    it passes or has none."""
+    check = EFFECTS[first.effect].check
+    fixed = dict(then.base).get(first.effect)
+    if check is None or fixed is None:
+        return ""
+    return check({**fixed, **dict(zip(then.names, then.X))}, nom)
+
+
+def _still_physical(nom: Nominal, first: Candidate, then: Candidate) -> bool:
+    """`first`'s effect passes its own check (Effect.check) with the values of the fit of
+    `then`, the cause named on top of it: its searched value as `then`'s base has it, its
+    columns as the joint fit has them. A next cause that passes only where the first turns
+    into another effect (a hardening whose stiffness below the engagement falls to 0 once a
+    spring damping beside it takes the torque at the reversals: a dead band, which is
+    backlash) does not continue the first's chain: that pair is not the first cause and a
+    second one, and it cannot outpredict a chain whose first cause stays what it is."""
+    return not _check(nom, first, then)
 
 
 def _ahead(nom: Nominal, round_: list[Candidate], note: str, alt: Alternative | None,
@@ -290,13 +324,14 @@ def _ahead(nom: Nominal, round_: list[Candidate], note: str, alt: Alternative | 
     the next round is run on top of each, and a tied candidate is named in the top's place
     when it with the cause its next round names predicts the held-out rows better than the
     top with its own (the segment test without margin over every row, at DECIDE, and the
-    converse not). Returns the round (the chosen first), its note and alternative (dropped
-    when about the top left), the next round on the chosen (None when no look-ahead ran) and
-    the top left, listed with why."""
+    converse not). So are the round's other significant candidates when the cause the top's
+    next round names passes only by turning the top into another effect (_still_physical:
+    that chain is the top alone). Returns the round (the chosen first), its note and
+    alternative (dropped when about the top left), the next round on the chosen and the top
+    left, listed with why."""
     top, n = round_[0], len(nom.sig.index)
     later = bool(causes)
-    if not any(_tied(top, b, n, later) for b in round_[1:]):
-        return round_, note, alt, None, []
+    tied = any(_tied(top, b, n, later) for b in round_[1:])
 
     def after(c: Candidate) -> Round:
         rest = [x.effect for x in round_ if x is not c and x.testable]
@@ -307,7 +342,7 @@ def _ahead(nom: Nominal, round_: list[Candidate], note: str, alt: Alternative | 
     def chain(c: Candidate) -> tuple[Round, np.ndarray, str]:
         if c.effect not in chains:
             a = after(c)
-            chains[c.effect] = (a, *_chain_errors(c, a))
+            chains[c.effect] = (a, *_chain_errors(nom, c, a))
         return chains[c.effect]
 
     def compare(a: Candidate, b: Candidate) -> tuple[float, float, float, float]:
@@ -316,11 +351,21 @@ def _ahead(nom: Nominal, round_: list[Candidate], note: str, alt: Alternative | 
         return (*segment_t(segment_log_ratios(ea, eb, n)),
                 *segment_t(segment_log_ratios(eb, ea, n)))
 
+    # the top's next round, which the rounds run anyway: where the cause it names passes
+    # only by turning the top into another effect (_still_physical), the round's other
+    # significant candidates are weighed against it as tied ones are
+    broken = not tied and _turned(nom, top, chain(top)[0])
+    if not (tied or broken):
+        return round_, note, alt, chains[top.effect][0], []
+
+    def rival(best: Candidate, b: Candidate) -> bool:
+        return _tied(best, b, n, later) or (broken and best is top and b.significant)
+
     best = top
     while True:   # the candidates tied with the one chosen so far, until none does better
         better = None
         for b in round_:
-            if b.effect in chains and b is not best or b is best or not _tied(best, b, n, later):
+            if b.effect in chains and b is not best or b is best or not rival(best, b):
                 continue
             t, p, t2, p2 = compare(best, b)
             if p < DECIDE <= p2:
@@ -340,8 +385,12 @@ def _ahead(nom: Nominal, round_: list[Candidate], note: str, alt: Alternative | 
         if not p < DECIDE <= p2:
             continue
         next_b = chains[b.effect][2]
+        turned = _turned(nom, b, chains[b.effect][0])
+        alone = (f"with {chains[b.effect][0][0][0].effect} on top of it, its fit is not a "
+                 f"{b.effect} ({turned})" if turned else
+                 f"alone the log cannot tell it from {best.effect}")
         out.append(NotNamed(b.effect, "left_out", (
-            f"round {k}: alone the log cannot tell it from {best.effect} (held out "
+            f"round {k}: {alone} (held out "
             f"{b.effect} explains {b.heldout_pct:.3g} %, {best.effect} {best.heldout_pct:.3g} "
             f"%), but {best.effect}{f' and {next_best}' if next_best else ''} predict the "
             f"held-out rows better than {b.effect}{f' and {next_b}' if next_b else ''} (t = "
