@@ -929,6 +929,16 @@ def _before(inv: InverseDiagnosis, k: int) -> str:
     return ", ".join(c.effect for c in inv.causes if 0 < c.round < k)
 
 
+def _holds(c: Candidate, lost: list[NotNamed]) -> bool:
+    """`c` holds a cause that reduces to it (registry `reduces_to`: an offset beside an
+    asymmetric friction): without `c` that cause, fitted again on the others (_chain), no
+    longer passes (its own fit unphysical: an asymmetry whose Coulomb part exceeds the
+    fitted Coulomb friction, the constant `c` held). The model of all the others that `c`
+    added nothing to then holds that cause as no physical instance of it, a reference the
+    log's own causes cannot be, and `c` stays."""
+    return any(EFFECTS[x.effect].reduces_to == c.effect for x in lost)
+
+
 def _pruned(nom: Nominal, causes: tuple[Candidate, ...],
             notes: tuple[tuple[str, str], ...],
             band: LagBand) -> tuple[tuple[Candidate, ...], tuple[tuple[str, str], ...],
@@ -944,7 +954,10 @@ def _pruned(nom: Nominal, causes: tuple[Candidate, ...],
     asymmetric friction named beside the offset it reduces to, in either order, must add
     to all the others, the offset included (an offset of 182 N m beside a backlash, with the
     evidence in the motor equation alone: asymmetric friction first, then backlash, offset
-    and hardening)."""
+    and hardening). A cause is not dropped where the others, fitted again without it, lose
+    the one that reduces to it (_holds: an asymmetry that took up the offset's constant as
+    its Coulomb part is then unphysical): the model of all the others it was tested
+    against held that cause as no physical instance of it."""
     n, i = len(nom.sig.index), 0
     out: list[NotNamed] = []
     while i < len(causes):
@@ -961,6 +974,10 @@ def _pruned(nom: Nominal, causes: tuple[Candidate, ...],
         if p < c.alpha and not again.unphysical:
             i += 1
             continue
+        chain, lost = _chain(nom, _in_place(causes, i), band)
+        if _holds(c, lost):
+            i += 1
+            continue
         out.append(NotNamed(c.effect, "left_out",
                             "fitted on top of all the other causes it adds nothing the log "
                             f"supports (what it adds has t = {t:.3g}, p = {p:.2g}, the bar "
@@ -969,7 +986,7 @@ def _pruned(nom: Nominal, causes: tuple[Candidate, ...],
                             HeldOutTest("on top of all the others, no margin",
                                         again.heldout_pct, t, p, c.alpha,
                                         acts_pct=again.acts_pct), c.round))
-        causes, lost = _chain(nom, _in_place(causes, i), band)
+        causes = chain
         out += lost
         kept = {o.effect for o in causes}
         notes, i = tuple(x for x in notes if x[0] in kept), 0
