@@ -9,6 +9,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from typing import Callable, Sequence
 
+import dataclasses
+
 import numpy as np
 from scipy import optimize, stats
 
@@ -18,6 +20,7 @@ from jointbench.identification.discrepancy.heldout import (FOLDS, MATERIAL, SEGM
                                                            scores, t_bar)
 from jointbench.identification.discrepancy.nominal import (Nominal, transmitted_rms,
                                                            with_link_law)
+from jointbench.identification.discrepancy.signals import stack
 from jointbench.identification.discrepancy.stacked import Stacked, apply, design_many, stacked
 from jointbench.identification.effects import EFFECTS
 from jointbench.identification.effects.base import FOLD_FITS, Design, Effect
@@ -468,7 +471,8 @@ def candidate(nom: Nominal, effect: str, ref: Reference | None = None) -> Candid
     cause was named after the coupled one; a named cause that reduces to the effect has its
     searched value searched again on the causes alone (_reducing). An effect whose model
     holds its own link friction law (Effect.own_link_law, _own_law) is searched and fitted
-    once more with the law searched on its extended design, against the same `ref`."""
+    once more with the law searched on its extended design, against the same `ref`; an effect
+    with a limit (Effect.limit) is weighed against `ref` extended by it (beyond_limit)."""
     ref = ref or reference(nom)
     e = _effect(effect)
     coupled = _coupled(e, ref.base.effects)
@@ -480,7 +484,59 @@ def candidate(nom: Nominal, effect: str, ref: Reference | None = None) -> Candid
         ref = _refitted(nom, ref, refit + [i for i in beside if i not in refit])
     c = _searched(nom, e, ref, coupled, beside)
     law = _own_law(nom, e, ref, c)
-    return c if law is nom else _searched(law, e, ref, coupled, beside)
+    c = c if law is nom else _searched(law, e, ref, coupled, beside)
+    return beyond_limit(nom, e, ref, c)
+
+
+def beyond_limit(nom: Nominal, e: Effect, ref: Reference, c: Candidate) -> Candidate:
+    """`c` with its evidence against `ref` extended by `e`'s limit (Effect.limit: the columns
+    its design tends to as its searched value goes to 0, a dead band's torque of the spring's
+    sign) where that evidence is the weaker (the larger p); `c` itself otherwise, or for an
+    effect without a limit. The claim is that it explains what both references leave: the
+    larger of the two p-values is a valid p-value of that claim at the round's level, with no
+    split of the level (an intersection-union test), and a reference with one column more
+    never makes a cause easier to name than the round's own reference does.
+
+    It is the reference of a later round only, on top of causes none of which acts in the
+    spring (Effect.in_spring): the question there is what is left beyond the named causes,
+    and their residual misfit joins the nominal's near zero speed (a ripple that makes the
+    motor stick, the link creeping behind it). In the first round the candidates are weighed
+    against the nominal and each other (ranking, parsimony); beside a named cause of the
+    spring, the spring's torque at its reversals is that cause's model, whose own first
+    order (a dead band's K b s(qm - q)) or reversal torque (a damping's) the column would
+    duplicate.
+
+    The limit is a linear column that the nominal's own misfit near zero speed also takes
+    (a sticking link held by friction against the spring: identification.effects.base.
+    spring_sign), so a cause credited with it would be named for that misfit. The extended model
+    is the same (its fit, parameters and held-out errors); only the reference it is weighed
+    against holds one column more, fitted on the same folds, so that what it is credited
+    with is what its searched value adds beyond its first order: for a dead band, the band
+    itself. The equations it acts in stay those it changes against `ref`. The reference
+    holds its own link friction law (nominal.with_link_law), searched on its design with the
+    limit, as the extended model holds its own (_own_law): the limit and the law near zero
+    speed share the rows where the link sticks."""
+    named = ref.base.effects
+    if (e.limit is None or not c.testable or c.heldout_errors is None or not named
+            or any(EFFECTS[name].in_spring for name, _ in named)):
+        return c
+    sig = nom.sig
+    cols = tuple((name, stack(sig, m, li)) for name, m, li in e.limit(nom))
+    base = dataclasses.replace(ref.base, extra=ref.base.extra + cols)
+    law = with_link_law(nom, base.design())
+    if law is not nom:
+        under = _on(law, ref)
+        base = dataclasses.replace(under, extra=under.extra + cols)
+    y, W, _ = base.design()
+    lim = replace(ref, base=base, scores=scores(law, ref.folds, y, W))
+    ev, views, rows = _test(e, lim, c.heldout_errors, len(sig.index), c.acts)
+    if not ev.p > c.p_heldout:
+        return c
+    rss0 = lim.scores.full
+    return replace(c, reference_errors=lim.scores.errors,
+                   explained_pct=100 * (rss0 - c.rss) / rss0 if rss0 > 0 else 0.0,
+                   heldout_pct=ev.explained_pct, acts_pct=ev.acts_pct, t_stat=ev.t,
+                   p_heldout=ev.p, views=views, rows=rows)
 
 
 # The effects that act in parallel with the spring without a searched value of their own

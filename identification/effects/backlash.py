@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from jointbench.identification.effects.base import Design, Effect, Rows, deadzone
+from jointbench.identification.effects.base import (Design, Effect, Rows, deadzone,
+                                                    spring_sign)
 
 ORDER = 40
 
@@ -62,4 +63,4 @@ EFFECT = Effect(
     "dead zone of half-width b in the transmission deflection qm - q",
     needs_link=True, rigid_axis=False, block=1, k=1, design=design, params=params,
     check=check, search="backlash_rad", grid=grid, own_link_law=True,
-    wide_view="width", in_spring=True, at_the_mode=True)
+    wide_view="width", in_spring=True, at_the_mode=True, limit=spring_sign)

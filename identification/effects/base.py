@@ -101,6 +101,12 @@ class Effect:
     # effect of the spring it gets a view where it is visible (lag_band.where_visible).
     in_spring: bool = False
     at_the_mode: bool = False
+    # The columns its design tends to, beyond the nominal's, as its searched value goes to 0
+    # (a dead band's first order in its width: a torque of the spring's sign): it is tested
+    # against the reference extended by them (identification.discrepancy.candidates.
+    # beyond_limit), so that what it is credited with is what that limit cannot explain.
+    # None: its limit is the nominal itself.
+    limit: Callable[[Rows], tuple[Column, ...]] | None = None
 
     def unit_for(self, prismatic: bool) -> str:
         return self.unit_prismatic if prismatic else self.unit
@@ -137,6 +143,26 @@ def spread(folds: tuple[dict, ...], f: Callable[[dict], float]) -> float:
 def sign0(x: np.ndarray) -> np.ndarray:
     """sign(x) with NaN (undefined derivative samples) counted as 0."""
     return np.sign(np.nan_to_num(x))
+
+
+def spring_sign(rows: Rows) -> tuple[Column, ...]:
+    """The first order of a spring law with a dead band in its searched value (Effect.limit):
+    the spring torque's sign s(qm - q), in both equations (action and reaction, eqs. 5-6),
+    hat-weighted as the nominal's deflection (hat).
+
+    Beyond a band of half-width b, dz(d, b) = d - b s(d) (d = qm - q): a backlash K dz(d, b)
+    and a hardening K d + Kh dz(d, dh) whose band is narrower than the deflections the
+    spring spends its time at add to the nominal's K d a torque of the spring's sign, and
+    differ from it only on the rows inside the band. A torque of the spring's sign is also
+    part of the nominal's own misfit near zero speed: a link or motor that sticks is held by
+    friction against the spring, with the spring torque's sign, where the friction law
+    claims FS tanh(q' / v0) of the filtered speed and the motor's FSm s(qm'). On an axis
+    whose motor a torque ripple makes stick, a band of a few link-encoder counts takes that
+    misfit up at the link's reversals late in the sweep, where the link creeps, and passes
+    its test. What only the spring law explains is the band (the spring holding no torque,
+    or K alone, inside it): it is tested against the reference holding this column."""
+    s = hat(sign0(rows.sig.qm - rows.sig.q))
+    return (("spring_sign", s, -s),)
 
 
 def deadzone(d: np.ndarray, b: float) -> np.ndarray:

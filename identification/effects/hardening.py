@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from jointbench.identification.effects.base import Design, Effect, Rows, deadzone, hat
+from jointbench.identification.effects.base import (Design, Effect, Rows, deadzone, hat,
+                                                    spring_sign)
 
 ORDER = 70
 
@@ -46,4 +47,4 @@ EFFECT = Effect(
     "stiffness that rises with deflection (piecewise linear)",
     needs_link=True, rigid_axis=False, block=1, k=2, design=design, params=params,
     check=check, search="deflection_rad", grid=grid, wide_view="deflection",
-    in_spring=True)
+    in_spring=True, limit=spring_sign)
