@@ -153,6 +153,11 @@ def _fit(resp: _Response, motor: bool, checks: bool = True) -> tuple[float, floa
     if not coef[1] < 0:
         return _nan(f"the phase rises through the peak at {f[k]:.3g} Hz: no resonance")
     f1 = float(f[k] + (target - coef[0]) / coef[1])
+    span = f[win]   # the window the crossing was found in (phase.max() > target > phase.min())
+    if not span.min() <= f1 <= span.max():
+        return _nan(f"the phase line through the peak at {f[k]:.3g} Hz crosses "
+                    f"{np.degrees(target):+.0f} deg at {f1:.3g} Hz, outside the window it was "
+                    f"found in ({span.min():.3g}-{span.max():.3g} Hz): no resonance")
     why = _overdamped(f1, float(coef[1])) if checks else ""
     if why:
         return _nan(why)
