@@ -30,6 +30,11 @@ answer is then "inconclusive", with the reason.
   gain under 1 overrules only when the same segment test does not find the extended model's
   replay better (log(sum e_nom^2 / sum e_ext^2), at ALPHA): the loss is then in the loud
   segments that another cause dominates, and the replay confirms the named one elsewhere.
+  Nor does it overrule when the same segment test finds the extended replay's envelope closer
+  to the log's (each segment's RMS torque, `envelope_better`): a model with the right
+  damping at a lightly damped mode (a torque lag) rings with the log's amplitude but a
+  fraction of a cycle off, which a sample-by-sample error penalises against a more damped
+  replay that rings less.
 - **"None" from a small part of the experiment.** Rows within reach of a clipped torque sample
   are left out (identification.saturation). When no effect passes and the rows left are under
   half of the experiment's, "none" would speak for the whole experiment from the minority of
@@ -111,10 +116,12 @@ def gain_reason(d: Diagnosis) -> str:
                     f"experiment's segments with t = {t:.3g}, p = {p:.2g} < {ALPHA:g}), "
                     f"{improves}: the fit does not describe the experiment")
         if not eb < ea and not forward_worse(d.log.tau_m, b.tau_m, a.tau_m,
-                                             scope.keep)[1] < ALPHA:
+                                             scope.keep)[1] < ALPHA \
+                and not envelope_better(d.log.tau_m, a.tau_m, b.tau_m, scope.keep)[1] < ALPHA:
             # no named effect whose extended model has a gain below 1, even when the
             # replay's noise could explain the loss: the replay does not confirm it; unless
-            # its replay is significantly better segment by segment (module docstring)
+            # its replay is significantly better segment by segment, sample by sample or in
+            # its envelope (module docstring)
             return (f"{c.effect}'s extended model does not improve the forward view{where}: "
                     f"torque error {ea:.3g} % -> {eb:.3g} % ({gain}, under 1; "
                     f"within the experiment's spread, t = {t:.3g}, p = {p:.2g}), {improves}: "
@@ -141,6 +148,28 @@ def forward_worse(tau: np.ndarray, nominal: np.ndarray, extended: np.ndarray,
     h1 = segment_sums((np.asarray(extended) - tau) ** 2)
     ok = (h0 > 0) & (h1 > 0) & (True if keep is None else keep)
     return segment_t(np.log(h1[ok] / h0[ok]))
+
+
+def envelope_better(tau: np.ndarray, nominal: np.ndarray, extended: np.ndarray,
+                    keep: np.ndarray | None = None) -> tuple[float, float]:
+    """Is the extended model's replayed torque significantly closer to the logged one in its
+    envelope than the nominal's? Per segment (the held-out test's SEGMENTS contiguous
+    segments; only those `keep` marks when given) the replay's RMS torque against the log's,
+    e = (rms replayed - rms logged)^2, and the segment test (heldout.segment_t) on
+    log(e_nom / e_ext): t and its one-sided p-value. The RMS over a segment does not depend
+    on the replay's phase: near a lightly damped mode the phase of a replay moves by about
+    1 / zeta radians per relative error of the mode's frequency, so a model with the right
+    damping (a torque lag, which takes phase margin from the loop) rings with the log's
+    amplitude a fraction of a cycle off, and its sample-by-sample error, 2 (1 - rho) of the
+    segment's power at a correlation rho, exceeds that of a more damped replay that rings
+    less. A replay's envelope that is no closer to the log's leaves that loss standing."""
+    tau = np.asarray(tau, float)
+    n = segment_sums(np.ones(len(tau)))
+    rms = [np.sqrt(segment_sums(np.asarray(x, float) ** 2) / np.maximum(n, 1))
+           for x in (tau, nominal, extended)]
+    e0, e1 = (rms[1] - rms[0]) ** 2, (rms[2] - rms[0]) ** 2
+    ok = (e0 > 0) & (e1 > 0) & (True if keep is None else keep)
+    return segment_t(np.log(e0[ok] / e1[ok]))
 
 
 def every_row_reason(d: Diagnosis) -> str:
