@@ -90,6 +90,18 @@ def _diagnosis(q_m: np.ndarray, off_nominal: np.ndarray, off_extended: np.ndarra
                            extended_parameters={"ripple_period_rad": PERIOD})
 
 
+def _replayed(d, tau: np.ndarray, nominal: np.ndarray, extended: np.ndarray, effect: str):
+    """`d` with the logged torque `tau` and the two replays' torques, their relative errors,
+    and a named `effect` whose inverse view halves the residual."""
+    d.log.tau_m = tau
+    for view, t in ((d.forward_nominal, nominal), (d.forward_extended, extended)):
+        view.tau_m = t
+        view.tau_rel_pct = 100 * np.linalg.norm(t - tau) / np.linalg.norm(tau)
+    d.inverse = SimpleNamespace(named=SimpleNamespace(effect=effect, before_pct=20.0,
+                                                      after_pct=10.0))
+    return d
+
+
 def test_forward_scope():
     q = np.zeros(N)
     seg = np.arange(N) * SEGMENTS // N
@@ -150,14 +162,8 @@ def test_gain_reason_judges_a_ripple_where_the_phase_is_kept():
     extended_tau = tau + np.where(seg < 20, 1.2, 0.1) * rng.standard_normal(N)
 
     def diagnosis(off_extended):
-        d = _diagnosis(q, small, off_extended)
-        d.log.tau_m = tau
-        for view, t in ((d.forward_nominal, nominal_tau), (d.forward_extended, extended_tau)):
-            view.tau_m = t
-            view.tau_rel_pct = 100 * np.linalg.norm(t - tau) / np.linalg.norm(tau)
-        d.inverse = SimpleNamespace(named=SimpleNamespace(effect="torque_ripple",
-                                                          before_pct=20.0, after_pct=10.0))
-        return d
+        return _replayed(_diagnosis(q, small, off_extended), tau, nominal_tau, extended_tau,
+                         "torque_ripple")
 
     d = diagnosis(np.where(seg < 20, small, large))
     assert d.forward_extended.tau_rel_pct < d.forward_nominal.tau_rel_pct   # gain > 1 overall
@@ -222,13 +228,8 @@ def test_a_replay_that_rings_right_but_out_of_phase_is_judged_by_its_envelope():
     assert envelope_better(tau, nominal, wrong)[1] > 0.5
 
     q = np.zeros(N)
-    d = _diagnosis(q, q, q, effect="torque_lag")
-    d.log.tau_m = tau
-    for view, t in ((d.forward_nominal, nominal), (d.forward_extended, extended)):
-        view.tau_m = t
-        view.tau_rel_pct = 100 * np.linalg.norm(t - tau) / np.linalg.norm(tau)
-    d.inverse = SimpleNamespace(named=SimpleNamespace(effect="torque_lag",
-                                                      before_pct=20.0, after_pct=10.0))
+    d = _replayed(_diagnosis(q, q, q, effect="torque_lag"), tau, nominal, extended,
+                  "torque_lag")
     assert gain_reason(d) == ""
     d.forward_extended.tau_m = wrong
     d.forward_extended.tau_rel_pct = 100 * np.linalg.norm(wrong - tau) / np.linalg.norm(tau)
