@@ -655,7 +655,10 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
                                                         + first)),
                            rounds=tuple(tuple(r) for r in rounds), alternatives=alternatives,
                            stopped=stopped, masked=masked)
-    return replace(inv, not_named=not_named(inv, tuple(dropped)))
+    inv = replace(inv, not_named=not_named(inv, tuple(dropped)))
+    nom.sig.release()
+    band.release()
+    return inv
 
 
 def _rounds(nom: Nominal, first: Round, causes: tuple[Candidate, ...], band: LagBand,

@@ -208,6 +208,11 @@ class LagBand:
                                     self._limit)
         return self._nominal
 
+    def release(self) -> None:
+        """Drop the wide band's kept decimations (Signals.release)."""
+        if self._nominal is not None:
+            self._nominal.sig.release()
+
 
 def jackknife(values: tuple[float, ...]) -> float:
     """The delete-a-group jackknife's standard error of an estimate from the k fold fits'

@@ -4,7 +4,9 @@ discrepancy regression is built from, and their common decimation."""
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
+import hashlib
+from collections import OrderedDict
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import signal
@@ -33,6 +35,11 @@ class Signals:
     sl: slice                # raw samples that every derivative defines
     index: np.ndarray        # raw index of each decimated row (kept rows only)
     keep: np.ndarray | None = None   # decimated rows kept (None: all): clipped torque out
+    # dec's results by the content of the column: the rounds rebuild the same trial columns
+    # from fresh arrays (each look-ahead chain, each refit), and a decimation costs a
+    # thousand times a hash. init=False: a dataclasses.replace gets an empty one.
+    _decimated: OrderedDict = field(init=False, default_factory=OrderedDict, compare=False,
+                                    repr=False)
 
     @property
     def has_link(self) -> bool:
@@ -42,35 +49,79 @@ class Signals:
         s = self.settings
         return lowpass(x, s.wn, s.ts, s.m)
 
+    def release(self) -> None:
+        """Drop dec's kept results (a diagnosis's answer holds its rows, not its trials)."""
+        self._decimated.clear()
+
     def dec(self, x: np.ndarray) -> np.ndarray:
         """The raw-rate column x on the decimated rows (scipy.signal.decimate, zero phase:
         its order-8 Chebyshev I at 0.8 / Nd, designed once per Nd)."""
         s = self.settings
-        x = np.asarray(x, dtype=float)[self.sl]
+        x = np.ascontiguousarray(np.asarray(x, dtype=float)[self.sl])
+        key = (x.shape, hashlib.sha256(x.data).digest())
+        kept = self._decimated
+        hit = kept.get(key)
+        if hit is not None:
+            kept.move_to_end(key)
+            return hit.copy()
         xd = _filtfilt(s.Nd, x)[::s.Nd] if s.Nd > 1 else x
         e = s.edge
         xd = xd[e:len(xd) - e]
-        return xd if self.keep is None else xd[self.keep]
+        xd = xd if self.keep is None else xd[self.keep]
+        kept[key] = xd.copy()
+        while len(kept) * xd.nbytes > DECIMATED_BYTES and len(kept) > 1:
+            kept.popitem(last=False)
+        return xd
+
+
+# The memory dec's results may hold per log, least recently used dropped first: the trial
+# columns of a 60 s log at 350 Hz (about a thousand distinct ones, 20 kB each) fit whole.
+DECIMATED_BYTES = 64 * 2**20
 
 
 @functools.lru_cache(maxsize=8)
-def _antialias(q: int) -> tuple[np.ndarray, np.ndarray, int]:
+def _antialias(q: int) -> tuple[np.ndarray, np.ndarray, int, int]:
     """scipy.signal.decimate's zero-phase IIR filter for factor q (the same sos), its
-    steady-state initial conditions and sosfiltfilt's default odd padding."""
+    steady-state initial conditions, sosfiltfilt's default odd padding and the chunk over
+    which its fastest pole decays by no more than sqrt(tiny) (_sosfilt)."""
     sos = signal.cheby1(8, 0.05, 0.8 / q, output="sos")
     ntaps = 2 * len(sos) + 1 - min(int((sos[:, 2] == 0).sum()), int((sos[:, 5] == 0).sum()))
-    return sos, signal.sosfilt_zi(sos), 3 * ntaps
+    r = min(float(np.abs(np.roots([1.0, *a])).max()) for a in sos[:, 4:])
+    chunk = max(64, int(np.log(TINY / FLUSH) / np.log(r)))
+    return sos, signal.sosfilt_zi(sos), 3 * ntaps, chunk
+
+
+# A filter state below FLUSH is set to 0 between chunks (_sosfilt): the anti-alias filter's
+# fast sections, fed the exact zeros of a trial column (a dead band's torque inside its
+# band), decay into subnormal numbers, whose arithmetic costs tens of times a normal one.
+# A state under sqrt(tiny) changes only outputs that small themselves (under 1e-100 through
+# these sections' gains: tests/unit/test_decimation.py); no column of the regression comes
+# near.
+TINY = float(np.finfo(float).tiny)
+FLUSH = float(np.sqrt(TINY))
+
+
+def _sosfilt(sos: np.ndarray, x: np.ndarray, zi: np.ndarray, chunk: int) -> np.ndarray:
+    """scipy.signal.sosfilt(sos, x, zi=zi)'s output, run by chunks (the recursion carries over
+    exactly) with the states under FLUSH set to 0 between them: no state reaches the
+    subnormal range within a chunk from above FLUSH (the chunk's length: _antialias)."""
+    y = np.empty_like(x)
+    for i in range(0, len(x), chunk):
+        y[i:i + chunk], zi = signal.sosfilt(sos, x[i:i + chunk], zi=zi)
+        zi[np.abs(zi) < FLUSH] = 0.0
+    return y
 
 
 def _filtfilt(q: int, x: np.ndarray) -> np.ndarray:
-    """scipy.signal.sosfiltfilt(sos, x) of the factor-q filter, same arithmetic, with the
-    filter designed once (diagnose decimates thousands of trial columns)."""
-    sos, zi, edge = _antialias(q)
+    """scipy.signal.sosfiltfilt(sos, x) of the factor-q filter, same arithmetic but for the
+    states flushed under sqrt(tiny) (_sosfilt), with the filter designed once (diagnose
+    decimates thousands of trial columns)."""
+    sos, zi, edge, chunk = _antialias(q)
     if len(x) <= edge:
         return signal.sosfiltfilt(sos, x)
     ext = np.concatenate((2 * x[0:1] - x[edge:0:-1], x, 2 * x[-1:] - x[-2:-(edge + 2):-1]))
-    y, _ = signal.sosfilt(sos, ext, zi=zi * ext[0])
-    y, _ = signal.sosfilt(sos, y[::-1], zi=zi * y[-1])
+    y = _sosfilt(sos, ext, zi * ext[0], chunk)
+    y = _sosfilt(sos, y[::-1].copy(), zi * y[-1], chunk)
     return y[::-1][edge:-edge]
 
 
