@@ -26,10 +26,10 @@ def two_causes():
 def _rejecting(effect):
     real = run.gain_reason
 
-    def gain_reason(d):
+    def gain_reason(d, before=None):
         if any(c.effect == effect for c in d.causes):
             return f"{effect}'s extended model is worse in the forward view (test)"
-        return real(d)
+        return real(d, before)
     return gain_reason
 
 

@@ -291,13 +291,14 @@ def limit_mismatch(log: Log, replayed: np.ndarray) -> float:
     return 100.0 * float(np.abs(replay_at - logged).sum()) / len(log.tau_m)
 
 
-def forward_scope(d: Diagnosis) -> ForwardScope:
+def forward_scope(d: Diagnosis, against: ForwardView | None = None) -> ForwardScope:
     """The segments where the forward view can judge the named causes: those before the loop
     first reaches its torque limit (before_limit), and, when a cause is periodic in the motor
     angle, those where both replays keep its phase (phase_errors < PHASE_LIMIT); none when
-    they are fewer than MIN_JUDGED."""
-    scope = _phase_scope(d)
-    a, b = d.forward_nominal, d.forward_extended
+    they are fewer than MIN_JUDGED. `against`: the replay the extended one is judged against
+    (d.forward_nominal when None)."""
+    scope = _phase_scope(d, against)
+    a, b = d.forward_nominal if against is None else against, d.forward_extended
     if not scope.judged or a is None or b is None:
         return scope
     before = before_limit(d.log)
@@ -315,10 +316,10 @@ def forward_scope(d: Diagnosis) -> ForwardScope:
     return ForwardScope(keep, True, f"the forward view judges the named causes where {how}")
 
 
-def _phase_scope(d: Diagnosis) -> ForwardScope:
+def _phase_scope(d: Diagnosis, against: ForwardView | None = None) -> ForwardScope:
     """forward_scope without the torque limit: every segment unless a cause is periodic in
     the motor angle; then those where both replays keep its phase."""
-    a, b = d.forward_nominal, d.forward_extended
+    a, b = d.forward_nominal if against is None else against, d.forward_extended
     if a is not None and b is not None and not follows(d.log.tau_m, a.tau_m):
         # a nominal replay no closer to the logged torque than a zero torque follows nothing
         # of the experiment: the extended one's error beside it judges nothing either, and

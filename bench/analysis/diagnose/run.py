@@ -97,30 +97,49 @@ def diagnose(log: Log, out_dir: Path | None = None, forward: bool = True,
     d = Diagnosis(log=log, settings=settings, settings_note=how, inverse=inv,
                   nominal_parameters=nom_p, extended_parameters={},
                   warnings=tuple(unit_warnings(log) + clip_note), clipped=clipped)
-    judged = _judged(d, forward, say)
-    left_out: list[str] = []
+    replayed = _replayed(d, forward, say)
+    judged = _verdict(replayed)
+    notes: list[str] = []
     # Several causes whose extended model the forward view rejects: the later ones are left
     # out in turn, not the whole answer (each named cause keeps its own
     # gain; a worse replay of the last one says nothing of the ones named before it).
+    # The last cause is judged against the replay of the model holding the ones before it,
+    # when the forward view accepts that model: its inverse test was against that model,
+    # and the nominal's replay lacks the earlier causes too (verdict.gain_reason).
     # (Not the masked pair's two: each was tested on top of the other, and neither stands
     # alone, identification.discrepancy.masked.)
     while (_replay_rejects(judged) and len(judged.inverse.causes) > 1
            and not (judged.inverse.masked is not None and judged.inverse.masked.named)):
-        left_out.append(f"{judged.inverse.causes[-1].effect} left out: {judged.overruled}")
-        judged = _judged(replace(d, inverse=_without_last(judged.inverse, judged.overruled)),
-                         forward, say, judged.forward_nominal)
+        why = judged.overruled
+        earlier = _replayed(replace(d, inverse=_without_last(judged.inverse, why)), forward,
+                            say, judged.forward_nominal)
+        prior = _verdict(earlier)
+        if not prior.overruled and prior.forward_extended is not None:
+            why = gain_reason(replayed, prior.forward_extended)
+            if not why:   # the replay accepts the last cause on top of the ones before it
+                judged = _verdict(replayed, prior.forward_extended)
+                held = ", ".join(c.effect for c in prior.inverse.causes)
+                notes.append(
+                    f"{judged.inverse.causes[-1].effect} judged against the replay of the model "
+                    f"holding {held}: torque error {prior.forward_extended.tau_rel_pct:.3g} % "
+                    f"-> {replayed.forward_extended.tau_rel_pct:.3g} %")
+                break
+            inv = _without_last(replayed.inverse, why)
+            earlier, prior = (replace(x, inverse=inv) for x in (earlier, prior))
+        notes.append(f"{judged.inverse.causes[-1].effect} left out: {why}")
+        replayed, judged = earlier, prior
     while cycle_only(judged) and len(judged.inverse.causes) > 1 and \
             not (judged.inverse.masked is not None and judged.inverse.masked.named):
         why = ("the log sits in a limit cycle that the loop's stability with the lag "
                "explains; no replay reaches the cycle, and at it every state is periodic in "
                "time, so a later cause can take what the lag's model leaves there "
                "(verdict.cycle_only)")
-        left_out.append(f"{judged.inverse.causes[-1].effect} left out: {why}")
+        notes.append(f"{judged.inverse.causes[-1].effect} left out: {why}")
         judged = _judged(replace(d, inverse=_without_last(judged.inverse, why, "")),
                          forward, say, judged.forward_nominal)
     d = replace(judged, overruled=with_clipping(judged))
-    if left_out and not d.overruled:
-        d = replace(d, forward_note="; ".join(n for n in (d.forward_note, *left_out) if n))
+    if notes and not d.overruled:
+        d = replace(d, forward_note="; ".join(n for n in (d.forward_note, *notes) if n))
     if out_dir is not None:
         d = write(d, Path(out_dir), say)
     return d
@@ -130,6 +149,13 @@ def _judged(d: Diagnosis, forward: bool, say: Callable[[str], None],
             nominal_view: ForwardView | None = None) -> Diagnosis:
     """`d` with its extended parameters (every named cause, one fit), its forward view and
     the verdict: overruled when the nominal is unphysical or the extended model worse."""
+    return _verdict(_replayed(d, forward, say, nominal_view))
+
+
+def _replayed(d: Diagnosis, forward: bool, say: Callable[[str], None],
+              nominal_view: ForwardView | None = None) -> Diagnosis:
+    """`d` with its extended parameters (every named cause, one fit) and its forward view;
+    overruled only when the nominal is unphysical."""
     inv = d.inverse
     ext = extended_parameters(inv.causes[-1] if inv.causes else None, inv.nominal)
     for _, params in joint_parameters(inv.nominal, inv.causes):   # all causes, one fit
@@ -138,9 +164,17 @@ def _judged(d: Diagnosis, forward: bool, say: Callable[[str], None],
     d = replace(d, extended_parameters={} if d.overruled else ext)
     if forward:
         d = add_forward_view(d, say, nominal_view)
+    return d
+
+
+def _verdict(d: Diagnosis, before: ForwardView | None = None) -> Diagnosis:
+    """The verdict on `_replayed`'s `d`: overruled when the extended model is worse (the
+    last cause judged against `before`, the replay of the model holding the causes before
+    it, when given: verdict.gain_reason), when a clipped log's reading is not confirmed,
+    or when none cannot be said."""
     if not d.overruled:
-        d = replace(d, overruled=gain_reason(d) or every_row_reason(d) or clipped_reason(d)
-                                  or masked_reason(d))
+        d = replace(d, overruled=gain_reason(d, before) or every_row_reason(d)
+                    or clipped_reason(d) or masked_reason(d))
     cycle = loop_cycle(d) if not d.overruled else None
     if cycle is not None and cycle.confirms:   # what confirms a lag named on every row
         d = replace(d, forward_note="; ".join(n for n in (d.forward_note, cycle.text()) if n),

@@ -35,6 +35,11 @@ answer is then "inconclusive", with the reason.
   damping at a lightly damped mode (a torque lag) rings with the log's amplitude but a
   fraction of a cycle off, which a sample-by-sample error penalises against a more damped
   replay that rings less.
+  With several named causes, when the model holding them all is rejected against the
+  nominal's replay but the model holding all but the last is not, the last cause is judged
+  by the same rules against that model's replay (`gain_reason`'s `before`): the weaker of a
+  pair is tested against the model holding the stronger, in the forward view as in the
+  inverse one (bench.analysis.diagnose.run).
 - **"None" from a small part of the experiment.** Rows within reach of a clipped torque sample
   are left out (identification.saturation). When no effect passes and the rows left are under
   half of the experiment's, "none" would speak for the whole experiment from the minority of
@@ -59,7 +64,7 @@ from jointbench.bench.analysis.diagnose.clipped import USABLE_MIN, undecided  # 
 from jointbench.bench.analysis.diagnose.forward import forward_scope, limit_mismatch
 from jointbench.bench.analysis.diagnose.stability import LimitCycle, limit_cycle
 from jointbench.bench.sim.controller import Gains, controller_from_log
-from jointbench.bench.analysis.diagnose.types import Diagnosis
+from jointbench.bench.analysis.diagnose.types import Diagnosis, ForwardView
 from jointbench.identification.discrepancy.heldout import ALPHA, segment_sums, segment_t
 from jointbench.identification.checks.plausibility import mislabel_reason
 
@@ -87,20 +92,34 @@ def nominal_reason(d: Diagnosis, extended: dict[str, float] | None = None) -> st
     return f"the nominal model is not a physical model of this axis: {why}; no effect is named"
 
 
-def gain_reason(d: Diagnosis) -> str:
-    """Why the named effect's extended model is worse than the nominal ("" when it is not)."""
-    c = d.inverse.named
+def gain_reason(d: Diagnosis, before: ForwardView | None = None) -> str:
+    """Why the named effect's extended model is worse than the nominal ("" when it is not).
+    `before`: the replay of the model holding every named cause but the last (d.causes[:-1]);
+    the last cause is then judged against it, as its inverse test was against the model
+    holding the causes before it, not against the nominal's replay: beside a stronger cause
+    that the nominal lacks, the nominal's replay misses that cause's part of the torque
+    too, and the two models' difference there says nothing of the last one."""
+    c = d.inverse.named if before is None else d.causes[-1]
     if c is None:
         return ""
     if not c.after_pct < c.before_pct:
         return (f"{c.effect} does not improve the inverse view ({c.before_pct:.3g} % -> "
                 f"{c.after_pct:.3g} %)")
-    a, b = d.forward_nominal, d.forward_extended
+    a, b = (d.forward_nominal if before is None else before), d.forward_extended
+    effects = [x.effect for x in d.causes]
+    if before is not None:
+        model = (f"{c.effect}'s extended model, against the one holding "
+                 f"{', '.join(effects[:-1])},")
+    elif len(effects) > 1:
+        model = f"the extended model with {', '.join(effects)}"
+    else:
+        model = f"{c.effect}'s extended model"
     if a is not None and b is None:
-        return (f"{c.effect}'s extended model does not replay while the nominal does "
-                f"({d.forward_note})")
+        return (f"{model} does not replay while the "
+                f"{'nominal' if before is None else 'other'} does ({d.forward_note})")
     if a is not None and b is not None:
-        scope = forward_scope(d)   # a torque periodic in q_m: only where the replays keep its phase
+        # a torque periodic in q_m: only where the replays keep its phase
+        scope = forward_scope(d, a)
         if not scope.judged:
             return ""              # the forward view cannot judge it (d.forward_note says so)
         t, p = forward_worse(d.log.tau_m, a.tau_m, b.tau_m, scope.keep)
@@ -111,7 +130,7 @@ def gain_reason(d: Diagnosis) -> str:
         gain = f"gain {ea / eb:.2f}x"
         improves = f"though the inverse view improves ({c.before_pct:.3g} % -> {c.after_pct:.3g} %)"
         if p < ALPHA:
-            return (f"{c.effect}'s extended model is worse in the forward view{where}: torque "
+            return (f"{model} is worse in the forward view{where}: torque "
                     f"error {ea:.3g} % -> {eb:.3g} % ({gain}; worse over the "
                     f"experiment's segments with t = {t:.3g}, p = {p:.2g} < {ALPHA:g}), "
                     f"{improves}: the fit does not describe the experiment")
@@ -122,7 +141,7 @@ def gain_reason(d: Diagnosis) -> str:
             # replay's noise could explain the loss: the replay does not confirm it; unless
             # its replay is significantly better segment by segment, sample by sample or in
             # its envelope (module docstring)
-            return (f"{c.effect}'s extended model does not improve the forward view{where}: "
+            return (f"{model} does not improve the forward view{where}: "
                     f"torque error {ea:.3g} % -> {eb:.3g} % ({gain}, under 1; "
                     f"within the experiment's spread, t = {t:.3g}, p = {p:.2g}), {improves}: "
                     "the replay does not confirm it")
