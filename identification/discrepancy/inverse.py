@@ -717,8 +717,9 @@ def _redecided(nom: Nominal, causes: tuple[Candidate, ...], nested: list[Alterna
     viscous part, a torque in phase with the speed, cannot follow, and the two-way choice
     (_which) then sees only the constant they share. Where, with the others held, the richer
     is named (_which at the level of the round the cause entered), it takes the simpler's
-    place and every cause is fitted again in order (_chain); the swap stands only if all of
-    them pass there. Returns the causes, the simpler causes left with why, and the pairs
+    place and every cause is fitted again in order (_chain), or, where that order cannot
+    hold them, each on top of all the others (_held); the swap stands only if all of them
+    pass there. Returns the causes, the simpler causes left with why, and the pairs
     settled (no longer "one of A or B")."""
     out: list[NotNamed] = []
     settled: set[frozenset[str]] = set()
@@ -741,6 +742,9 @@ def _redecided(nom: Nominal, causes: tuple[Candidate, ...], nested: list[Alterna
             continue
         chain, lost = _chain(nom, causes[:i] + (first,) + causes[i + 1:], band)
         if lost or len(chain) != len(causes):
+            chain = _held(nom, others[:i] + ((richer.effect, richer.fixed),) + others[i:],
+                          causes[:i] + (first,) + causes[i + 1:], band)
+        if len(chain) != len(causes):
             continue
         t, p, _ = _on_top(nom, richer, simpler, m)
         t2, _, _ = _on_top(nom, simpler, richer, m)
@@ -753,6 +757,26 @@ def _redecided(nom: Nominal, causes: tuple[Candidate, ...], nested: list[Alterna
         settled.add(frozenset((alt.named, alt.other)))
         causes = chain
     return causes, out, settled
+
+
+def _held(nom: Nominal, model: tuple[tuple[str, dict], ...], causes: tuple[Candidate, ...],
+          band: LagBand) -> tuple[Candidate, ...]:
+    """`causes` where each, fitted again on top of all the others (`model`: their values as
+    the two-way choice held them), passes its own test at the level of the round it entered
+    (_against, _passes); () when one does not. The order of _chain asks the first cause to
+    pass against the nominal alone, and a pair can describe the log only together: an
+    asymmetric friction whose Coulomb part exceeds the Coulomb friction fitted without the
+    torque lag beside it (the lag's phase error in the motor equation takes the friction's
+    odd part down, the direction-dependent even part stays), and a lag that passes only once
+    the constant torque is held. Each passing on top of the others is the rule for more than
+    two causes (_leave_one_out)."""
+    out = []
+    for j, c in enumerate(causes):
+        again = _against(nom, c, model[:j] + model[j + 1:], band)
+        if not _passes(again):
+            return ()
+        out.append(again)
+    return tuple(out)
 
 
 def _level_m(c: Candidate) -> int:
