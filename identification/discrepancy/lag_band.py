@@ -154,8 +154,14 @@ only would ask a t for a handful of segments, heldout.dof). Its level is split w
 chooser's band's test, half each, as the hardening's. The guard is the lag's, with a share
 above MATERIAL: the wide view only confirms a backlash that the chooser's band fits physically
 and that removes more than MATERIAL of the chooser's band's held-out residual, over the whole
-log and in its typical segment (the segment test's t > 0, short of its bar): what a dead band
-removes in the wide band, its fundamental removes in part in the chooser's band. Beside a
+log, over the rows its test reads (Candidate.own_test: the link equation, for a second cause
+of the spring law) and in its typical segment (the segment test's t > 0, short of its bar):
+what a dead band removes in the wide band, its fundamental removes in part in the chooser's
+band. A dead band that makes the link equation's held-out residual worse in the chooser's
+band (its typical segment better, the few segments at the mode much worse) is not a kink of
+the spring law seen in both bands but a column that takes up the misfit of the cause of the
+law named before it (a hardening's), and the wide band, with that misfit's harmonics, can
+then credit it with a large share. Beside a
 spring damping whose value the wide band refits, a dead band of a fraction of a mrad took up
 a tenth to a half of the wide band's residual where the chooser's band's segments saw less
 than MATERIAL of theirs (t = -9.9 and -0.8). Its wide fit must be physical too, and the
@@ -315,11 +321,11 @@ def second_view(band: LagBand, c: Candidate,
         return c
     c = replace(c, views=c.views * 2 * split)   # its rows' views besides (Candidate.views)
     # a lag must show a positive share in the chooser's band, a backlash one above MATERIAL
-    # overall and in a typical segment (t > 0); a hardening's share there may be lost to a
-    # cause beside it (module docstring: the guard)
+    # overall, over the rows its test reads and in a typical segment (t > 0); a hardening's
+    # share there may be lost to a cause beside it (module docstring: the guard)
     shown = {"deflection": True,
-             "width": c.heldout_pct > 100 * MATERIAL and c.t_stat > 0}.get(
-        view, c.heldout_pct > 0)
+             "width": min(c.heldout_pct, c.own_test.own_share) > 100 * MATERIAL
+             and c.t_stat > 0}.get(view, c.heldout_pct > 0)
     if c.unphysical or c.significant or not shown:
         return c
     try:

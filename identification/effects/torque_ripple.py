@@ -22,6 +22,9 @@ COARSE, PEAKS = 160, 3
 # be this many times those where it does at the encoder-scale step, so that most of them are
 # samples where the motor turns (seen_from, check).
 SEEN = 2.0
+# Periods the span of the motor angle must hold for a ripple to show that it repeats (check):
+# every phase of the period then seen at two angles a period apart.
+REPEATS = 2
 # Bins of the motor angle a shortest period holds in the periodogram's FFT.
 BINS = 8
 
@@ -107,7 +110,16 @@ def seen_from(rows: Rows) -> float:
 
 
 def check(v: dict, rows: Rows) -> str:
-    """A period in the first step of its search grid is where the search ran to its bound,
+    """A ripple is a torque that repeats with the motor angle: the log shows that only where
+    it holds the same phase at two angles a period apart, and every phase of a period p is
+    seen so when the span of the motor angle it covers holds REPEATS periods (p <= span / 2).
+    A longer period is one arch of a sinusoid over the travel, which a constant and the slow
+    terms of the nominal (the spring's and gravity's torques, a function of the angle where
+    the motor spends its time) follow as well: an offset fits it, and the search's top, the
+    span itself, is where it runs to when the log carries a constant torque. Such a fit is
+    not a physical instance of the effect.
+
+    A period in the first step of its search grid is where the search ran to its bound,
     not a period the log identifies. The grid starts at encoder-scale steps, where the column
     sin(2 pi qm / p) is in the band (its frequency |qm'| / p under the band's decimated
     cutoff) only where the motor creeps or sticks, or where the samples that put it in the
@@ -121,8 +133,16 @@ def check(v: dict, rows: Rows) -> str:
     the angle where the motor creeps, not a ripple of the drive. (A sticking motor does not
     show a ripple either: its friction holds it.)"""
     p = v.get("ripple_period_rad", 0.0)
+    if not p:
+        return ""
+    span = float(np.ptp(rows.sig.qm[rows.sig.sl]))
+    if p * REPEATS > span:
+        return (f"period {p:.3g} rad: the motor angle the log covers ({span:.3g} rad) holds "
+                f"fewer than {REPEATS} periods, so no phase of it is seen at two angles a "
+                "period apart: a smooth function of the angle over the travel (a constant "
+                "and slow terms), not a periodic torque")
     g = _coarse(rows)
-    if not p or p >= g[1]:
+    if p >= g[1]:
         return ""
     return (f"period {p:.3g} rad in the first step of its search grid ({g[0]:.3g} to "
             f"{g[1]:.3g} rad, from encoder-scale steps or the shortest period seen while "

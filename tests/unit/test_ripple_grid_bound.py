@@ -1,5 +1,6 @@
-"""A torque ripple fitted in the first step of its period grid is unphysical
-(identification.effects.torque_ripple.check): the search ran to its bound (no MuJoCo)."""
+"""A torque ripple fitted in the first step of its period grid, or at a period the span of the
+motor angle does not hold twice, is unphysical (identification.effects.torque_ripple.check;
+no MuJoCo)."""
 
 from __future__ import annotations
 
@@ -73,3 +74,18 @@ def test_the_grid_starts_where_the_in_band_samples_are_mostly_moving_ones():
     # the periodogram's fine periods keep to the coarse grid's range
     rows.residual, rows.block = None, None
     assert torque_ripple.grid(rows)[0] == g[0]
+
+
+@pytest.mark.parametrize("span", [0.05, 0.118, 1.0])
+def test_a_period_the_span_does_not_hold_twice_is_unphysical(span):
+    """Every phase of a period p is seen at two angles a period apart only when the span of
+    the motor angle holds REPEATS periods: a longer period, the grid's top (the span itself)
+    included, is one arch over the travel, which a constant follows as well."""
+    rows = _rows(span)
+    assert torque_ripple.REPEATS == 2
+    for p in (span, 0.9 * span, 0.501 * span):
+        assert "fewer than 2 periods" in torque_ripple.check({"ripple_period_rad": p}, rows)
+    assert torque_ripple.check({"ripple_period_rad": 0.5 * span}, rows) == ""
+    # the grid's top is the span: a search that runs there names no ripple
+    rows.residual, rows.block = None, None
+    assert torque_ripple.check({"ripple_period_rad": torque_ripple.grid(rows)[-1]}, rows)
