@@ -155,6 +155,9 @@ class Candidate:
     # the reference's held-out errors it was weighed against (a coupled cause refitted)
     reference_errors: np.ndarray | None = field(default=None, repr=False, compare=False)
     fixed: dict = field(default_factory=dict)   # values the effect's columns are built with
+    # each held-out fold's training fit of the columns (names: X), from which an effect's
+    # check takes its fit's own standard errors (effects.base.FOLD_FITS, spread)
+    fold_fits: tuple[dict, ...] = field(default=(), repr=False, compare=False)
     base: tuple[tuple[str, dict], ...] = ()     # causes named before it, as its fit has them
     acts: tuple[int, ...] = ()   # the equation blocks its columns change (acts_in); () all
     # the searched value each fold's training rows prefer (a searched effect; its spread)
@@ -330,6 +333,7 @@ def _evaluate(nom: Nominal, ref: Reference, e: Effect, fixed: dict,
                      before_pct=_own_error_pct(nom, res_before, block, W0, ref.scores.X),
                      after_pct=_own_error_pct(nom, res_after, block, W, X), block=block,
                      X=tuple(float(x) for x in X), names=tuple(names), fixed=fixed,
+                     fold_fits=folds,
                      base=under.effects, acts=acts, views=views, rows=rows)
 
 

@@ -86,6 +86,7 @@ from jointbench.identification.discrepancy.lag_band import (LagBand, second_view
 from jointbench.identification.discrepancy.masked import MaskedPair, masked_pair
 from jointbench.identification.discrepancy.nominal import Nominal, nominal, with_link_law
 from jointbench.identification.effects import EFFECTS, NONE
+from jointbench.identification.effects.base import FOLD_FITS
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.log import Log
 
@@ -289,13 +290,29 @@ def _turned(nom: Nominal, first: Candidate, after: Round) -> str:
 
 def _check(nom: Nominal, first: Candidate, then: Candidate) -> str:
     """`first`'s effect's own check (Effect.check) with the values of `then`'s fit: its
-    searched value as `then`'s base has it, its columns as the joint fit has them; "" when
-    it passes or has none."""
-    check = EFFECTS[first.effect].check
+    searched value as `then`'s base has it, its columns as the joint fit has them, and each
+    held-out fold's training fit of them (FOLD_FITS), so that the check weighs an overshoot
+    of its bound against the joint fit's own standard errors, as it does on `first`'s own
+    fit (candidates._evaluate); "" when it passes or has none."""
+    check, values = EFFECTS[first.effect].check, _joint_values(first, then)
+    return "" if check is None or values is None else check(values, nom)
+
+
+def _joint_values(first: Candidate, then: Candidate) -> dict | None:
+    """`first`'s values in `then`'s joint fit, as its own check reads them on its own fit
+    (candidates._evaluate): the searched value as `then`'s base has it, the columns, and each
+    held-out fold's training fit of them; None when `then`'s base does not hold it."""
     fixed = dict(then.base).get(first.effect)
-    if check is None or fixed is None:
-        return ""
-    return check({**fixed, **dict(zip(then.names, then.X))}, nom)
+    if fixed is None:
+        return None
+    return {**fixed, **dict(zip(then.names, then.X)), FOLD_FITS: then.fold_fits}
+
+
+def _beyond_se(nom: Nominal, first: Candidate, then: Candidate) -> float:
+    """How many of its own standard errors `first`'s fit lies beyond its physical bound in
+    `then`'s joint fit (Effect.beyond, the values as _check's); inf where it gives none."""
+    far, values = EFFECTS[first.effect].beyond, _joint_values(first, then)
+    return float("inf") if far is None or values is None else float(far(values, nom))
 
 
 def _still_physical(nom: Nominal, first: Candidate, then: Candidate) -> bool:
@@ -386,6 +403,19 @@ def _ahead(nom: Nominal, round_: list[Candidate], note: str, alt: Alternative | 
             continue
         next_b = chains[b.effect][2]
         turned = _turned(nom, b, chains[b.effect][0])
+        if turned and _near_bound(nom, b, best, chains[b.effect][0]):
+            # the log does not exclude it as a description with the strength naming asks:
+            # one of the two, as in the parsimony choice (_simplest_first, _near)
+            nxt = chains[b.effect][0][0][0]
+            note = (f"one of {best.effect} or {b.effect}: with {nxt.effect} on top of it, "
+                    f"{b.effect}'s fit lies beyond its physical bound by "
+                    f"{_beyond_se(nom, b, nxt):.3g} of its standard errors, within the "
+                    f"round's bar t > {t_bar(b.alpha):.3g} ({turned}); {best.effect}"
+                    f"{f' and {next_best}' if next_best else ''} predict the held-out rows "
+                    f"better than {b.effect} alone (t = {t:.3g}, the converse t = {t2:.3g}); "
+                    f"{best.effect} is named for the two")
+            alt = _nested(best, b, float("nan"), float("nan"), note)
+            continue
         alone = (f"with {chains[b.effect][0][0][0].effect} on top of it, its fit is not a "
                  f"{b.effect} ({turned})" if turned else
                  f"alone the log cannot tell it from {best.effect}")
@@ -402,6 +432,16 @@ def _ahead(nom: Nominal, round_: list[Candidate], note: str, alt: Alternative | 
     keep_note = note if best.effect in one_of(note) else ""
     keep_alt = alt if alt is not None and alt.named == best.effect else None
     return ordered, keep_note, keep_alt, chains[best.effect][0], out
+
+
+def _near_bound(nom: Nominal, b: Candidate, best: Candidate, after: Round) -> bool:
+    """`b`, whose joint fit with the cause its next round names (`after`'s top) fails its
+    own check, reduces to the chosen `best` (an asymmetric friction and an offset) and lies
+    beyond its bound there by no more than the round's bar t_bar(alpha) of its own standard
+    errors: the tolerance under which an unphysical fit stays the alternative of the effect
+    it reduces to (_near), applied to the joint fit as to its own."""
+    return (EFFECTS[b.effect].reduces_to == best.effect
+            and _beyond_se(nom, b, after[0][0]) <= t_bar(b.alpha))
 
 
 def _better(worse: Candidate | np.ndarray, better: Candidate, n: int) -> tuple[float, float]:

@@ -49,3 +49,49 @@ def test_without_folds_any_excess_is_unphysical():
     assert af.beyond(v, _rows()) == np.inf
     assert "exceeds the fitted Coulomb friction" in af.check(v, _rows())
     assert af.check({**v, "a": 1.99}, _rows()) == ""
+
+
+@pytest.mark.parametrize("over, physical", [(1.0, True), (af.CHECK_Z - 0.1, True),
+                                            (af.CHECK_Z + 0.1, False)])
+def test_joint_fit_checks_with_its_own_folds(over, physical):
+    # The asymmetry's check in the joint fit with a cause named on top of it
+    # (inverse._check, _still_physical) weighs the overshoot of its bound against that fit's
+    # own fold fits, with the tolerance of the candidate's own check: a Coulomb part at its
+    # bound, over FSm = 2 by noise of `over` standard errors (sd 0.1), stays an asymmetry.
+    from jointbench.identification.discrepancy.candidates import Candidate
+    from jointbench.identification.discrepancy.inverse import _check, _still_physical
+
+    v = _values(2.0 + 0.1 * over, 2.0, 0.1)
+    fixed = {"FS_ref": 1.0, "FV_ref": 1.0, "viscous_share": 0.0}
+    first = Candidate("asymmetric_friction", True, fixed=fixed)
+    then = Candidate("spring_damping", True, names=("a", "FSm", "D"),
+                     X=(v["a"], v["FSm"], 0.5), base=(("asymmetric_friction", fixed),),
+                     fold_fits=tuple({**f, "D": 0.5} for f in v[FOLD_FITS]))
+    assert (_check(_rows(), first, then) == "") is physical
+    assert _still_physical(_rows(), first, then) is physical
+    assert (_check(_rows(), first, then) == af.check(v, _rows()))
+
+
+@pytest.mark.parametrize("below_bar", [-2.0, -0.2, 0.2])
+def test_joint_fit_near_its_bound_stays_the_offset_alternative(below_bar):
+    # An asymmetry whose joint fit with the next round's cause overshoots its bound by more
+    # than CHECK_Z but fewer than the round's bar t_bar(alpha) of its standard errors is not
+    # excluded as a description (inverse._near, applied to the joint fit): it stays the
+    # alternative of the offset it reduces to ("one of offset or asymmetric_friction"),
+    # never against another effect, and beyond the bar it is left out.
+    from jointbench.identification.discrepancy.candidates import Candidate
+    from jointbench.identification.discrepancy.heldout import ALPHA, t_bar
+    from jointbench.identification.discrepancy.inverse import _near_bound
+
+    alpha = ALPHA / 8   # a first round's Holm level
+    over = t_bar(alpha) + below_bar   # standard errors beyond the bound, all over CHECK_Z
+    assert over > af.CHECK_Z
+    v = _values(2.0 + 0.1 * over, 2.0, 0.1)
+    fixed = {"FS_ref": 1.0, "FV_ref": 1.0, "viscous_share": 0.0}
+    b = Candidate("asymmetric_friction", True, fixed=fixed, alpha=alpha)
+    then = Candidate("spring_damping", True, names=("a", "FSm", "D"),
+                     X=(v["a"], v["FSm"], 0.5), base=(("asymmetric_friction", fixed),),
+                     fold_fits=tuple({**f, "D": 0.5} for f in v[FOLD_FITS]))
+    after = ([then], "", None)
+    assert _near_bound(_rows(), b, Candidate("offset", True), after) is (below_bar < 0)
+    assert not _near_bound(_rows(), b, Candidate("gravity", True), after)
