@@ -120,6 +120,21 @@ hardening that the log does not carry under the hypothesis' level, and Holm's st
 keeps that of naming anything on a clean log under ALPHA (identification.discrepancy.
 inverse).
 
+**Where both bands engage the spring.** A hardening is one engagement in every band, but the
+wide band places it loosely: the loud engagements at the mode, which hold most of its
+residual, are fitted about as well by a lower engagement and a softer second spring, and its
+folds' values spread over tens of mrad where the chooser's band's agree within one. A fold
+whose wide fit engages the spring below where it engages makes a unit of every half-cycle
+whose deflection passes that lower value, and past the mode the sweep's decaying deflection
+makes many of them, a decimated row or two each, where the model puts a spring torque the
+joint does not make: counted one each they outnumber the loud engagements, and the view can
+explain two thirds of its rows' held-out residual with a negative t. So an instant counts as
+engaged when both bands' fits of its fold put it past their engagement (`engaged_in_both`:
+the larger of the two fold values, each chosen by the fold's training rows); below the wide
+band's own value the column is zero and the instants carry only the refit, as before. The
+units stay set by the positions and the training rows, never by the held-out residual, and
+the view's p-value stays valid under the null hypothesis.
+
 The guard differs from the lag's. The wide view confirms only a hardening that the chooser's
 band fits physically (its overall share there need not be positive: beside a backlash the
 chooser's band, without the harmonics, lets a wider dead band and a stiffer K take the
@@ -261,6 +276,16 @@ def engaged(nom: Nominal, engagement: tuple[float, ...]) -> np.ndarray | None:
     return d > np.asarray(engagement, float)[segment_of_rows(len(d)) % FOLDS]
 
 
+def engaged_in_both(chooser: tuple[float, ...], wide: tuple[float, ...]) -> tuple[float, ...]:
+    """Each fold's engagement for the hardening's view (module docstring: where both bands
+    engage the spring): the larger of the chooser's band's and the wide band's fold values,
+    both chosen by that fold's training rows; the wide band's alone when the chooser's are
+    not given fold by fold."""
+    if len(chooser) != len(wide):
+        return tuple(wide)
+    return tuple(max(float(a), float(b)) for a, b in zip(chooser, wide))
+
+
 def engagements(nom: Nominal, engagement: tuple[float, ...]) -> np.ndarray | None:
     """Each of `nom`'s instants' engagement of the spring (module docstring: the unit of the
     hardening's view): 0, 1, ... for the maximal runs of consecutive engaged instants
@@ -382,12 +407,12 @@ def _deflection_view(nom: Nominal, c: Candidate, w: Candidate, label: str) -> Se
     engagement against the chooser's band's `c`, and not a physical hardening at large
     deflections when that engagement is in the first step of its search grid (module
     docstring: the guard)."""
-    within = large_deflections(nom, w.fold_values)
+    at = engaged_in_both(c.fold_values, w.fold_values)
+    within = large_deflections(nom, at)
     n = len(nom.sig.index)
-    ev = evidence(w.reference_errors, w.heldout_errors, n, w.acts, within,
-                  engaged(nom, w.fold_values))
+    ev = evidence(w.reference_errors, w.heldout_errors, n, w.acts, within, engaged(nom, at))
     # the segment test over the engagements of the spring, not the segments they lie in
-    runs = engagements(nom, w.fold_values)
+    runs = engagements(nom, at)
     l = engagement_log_ratios(w.reference_errors, w.heldout_errors, n, w.acts, runs)
     t, p = segment_t(l + math.log(1 - MATERIAL))
     dc, dw = c.fixed["deflection_rad"], w.fixed["deflection_rad"]
