@@ -149,9 +149,10 @@ def excitation_capped(log: Log, base: FilterSettings) -> tuple[FilterSettings, s
     decimation whose cutoff stays at or under the top (as `wide_settings`), the Butterworth
     and chain kept; and how, or "" when `base` already stays under the top or none is found.
     For a band chosen without a resonance (a generic band): above the excitation's top the
-    log holds no motion the equations are fitted on, only the encoders' quantisation, which
-    the led columns amplify by w Ts per difference (the motor acceleration's by (w Ts)^2):
-    in a band reaching twice the top, that noise outweighs what an effect changes in it."""
+    log holds no motion the reference drives, only the encoders' quantisation (and what a
+    disturbance of the axis itself moves), which the led columns amplify by w Ts per
+    difference (the motor acceleration's by (w Ts)^2): in a band reaching twice the top,
+    that noise outweighs what an effect changes in it."""
     exc, what = excitation_top_hz(log)
     if not (math.isfinite(exc) and exc > 0):
         return base, ""

@@ -2,7 +2,8 @@
 rate, decimated cutoff 0.04 Fs = 20 Hz at 500 Hz) reaches twice the multisine's top (10 Hz),
 where the log holds only the encoders' quantisation. The band stops at the excitation's top
 measured on the log (identification.band_choice.excitation_capped), and a torque ripple
-strong enough to hide the mode from the frequency responses is named with its period.
+strong enough to hide the mode from the frequency responses is named with its period, and a
+long drive lag with its time constant.
 
 The seed was fixed before the first run of this file."""
 
@@ -18,12 +19,14 @@ from jointbench.testing.simulator import LAB_RIG, simulate_lab_rig
 from jointbench.bench.analysis.diagnose import diagnose
 from jointbench.bench.analysis.diagnose.run import diagnosis_settings
 from jointbench.identification.band_choice import WELCH_SEGMENT_S, excitation_capped
+from jointbench.identification.effects.torque_lag import STEP
 from jointbench.identification.filter_choice import generic_settings
 
 SEED = 10247
 DURATION = 20.0
 RIPPLE = 0.12                 # N m: its motion hides the mode from q/tau_m, q_m/tau_m, q/q_m
 MULTISINE_TOP_HZ = 10.0       # simulate_lab_rig's default multisine: 0.025-10 Hz
+LAG_S = 0.5                   # s: a voltage drive under the P loop, corner 0.32 Hz
 
 
 @pytest.fixture(scope="module")
@@ -56,3 +59,16 @@ def test_ripple_named_when_no_mode_is_found(ripple_log):
     # dp = p^2 / (4 span) (torque_ripple._periodogram_peaks)
     span = float(np.ptp(ripple_log.q_m))
     assert abs(period - truth) <= truth ** 2 / (4 * span), (period, truth)
+
+
+def test_long_lag_named_when_no_mode_is_found():
+    """A drive lag of half a second (corner 0.3 Hz) hides the mode from the responses; in
+    the generic band twice the multisine's top the led columns x + T x' carry the
+    quantisation amplified by w T and nothing is named; at the top the lag is, with its
+    time constant within half a step of its search grid (torque_lag.STEP)."""
+    log = simulate_lab_rig(LAB_RIG, SEED, DURATION, effects=f"torque_lag={LAG_S}")
+    _, how = diagnosis_settings(log)
+    assert how.startswith("no resonance found") and "excitation's top" in how
+    d = diagnose(log, forward=False)
+    assert d.named_cause == "torque_lag"
+    assert d.extended_parameters["lag_s"] == pytest.approx(LAG_S, rel=math.sqrt(STEP) - 1)
