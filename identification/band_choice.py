@@ -143,6 +143,27 @@ def wide_settings(log: Log, base: FilterSettings) -> tuple[FilterSettings | None
     return replace(wide, stencil=stencil_for(wide)[0]), exc, why
 
 
+def excitation_capped(log: Log, base: FilterSettings) -> tuple[FilterSettings, str]:
+    """`base` with its decimated cutoff brought down to the excitation's top
+    (`excitation_top_hz`) when it lies above it: Nd = ceil(0.8 Fs / (2 top)), the smallest
+    decimation whose cutoff stays at or under the top (as `wide_settings`), the Butterworth
+    and chain kept; and how, or "" when `base` already stays under the top or none is found.
+    For a band chosen without a resonance (a generic band): above the excitation's top the
+    log holds no motion the reference drives, only the encoders' quantisation (and what a
+    disturbance of the axis itself moves), which the led columns amplify by w Ts per
+    difference (the motor acceleration's by (w Ts)^2): in a band reaching twice the top,
+    that noise outweighs what an effect changes in it."""
+    exc, what = excitation_top_hz(log)
+    if not (math.isfinite(exc) and exc > 0):
+        return base, ""
+    nd = max(1, math.ceil(0.8 * log.sample_rate_hz / (2 * exc) - 1e-9))
+    if nd <= base.Nd:
+        return base, ""
+    capped = replace(base, Nd=nd)
+    return capped, (f"capped at the excitation's top {exc:.3g} Hz ({what}): Nd = {nd}, "
+                    f"decimated cutoff {capped.decimated_cutoff_hz:.3g} Hz")
+
+
 def band_for(log: Log, base: FilterSettings, band: BandChoice | None) -> FilterSettings:
     """The band a fit's `band` choice gives another log whose chooser's settings are `base`:
     its own wide candidate (`wide_settings`) when the fit took the wide band and the log has

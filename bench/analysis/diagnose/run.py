@@ -25,6 +25,7 @@ from jointbench.bench.analysis.diagnose.verdict import (clipped_reason, every_ro
                                                         cycle_only, loop_cycle, masked_reason,
                                                         gain_reason, nominal_reason,
                                                         with_clipping)
+from jointbench.identification.band_choice import excitation_capped
 from jointbench.identification.filter_choice import choose_filter
 from jointbench.identification.discrepancy import (NUMERICS, Candidate, InverseDiagnosis, Nominal,
                                                    diagnose_inverse)
@@ -39,7 +40,9 @@ from jointbench.identification.saturation import clipped_samples, clipping_warni
 def diagnosis_settings(log: Log) -> tuple[FilterSettings, str]:
     """The bandpass of section 3.2 for this log, and how it was chosen: the one chooser
     (identification.filter_choice.choose_filter: the first mode measured on the log, eqs. 28-29,
-    the paper's filter for the prototype, a stated generic band when no resonance is found)."""
+    the paper's filter for the prototype, a stated generic band when no resonance is found,
+    its decimated cutoff brought down to the excitation's top measured on the log:
+    identification.band_choice.excitation_capped)."""
     c = choose_filter(log)
     # the effects' columns (identification/effects) pair samples as eq. (22) does: the band
     # follows the mode, the differences stay the paper's 3-point ones
@@ -49,7 +52,10 @@ def diagnosis_settings(log: Log) -> tuple[FilterSettings, str]:
                f" wn = {s.wn:.4g} rad/s, Nd = {s.Nd} (decimated cutoff "
                f"{s.decimated_cutoff_hz:.3g} Hz), eq. (22)")
     else:
-        how = "; ".join(c.warnings) or "generic band"
+        # no mode: the generic band (a tenth of the rate) may reach far past what the log
+        # excites; it stops at the excitation's top (band_choice.excitation_capped)
+        s, capped = excitation_capped(log, s)
+        how = "; ".join(c.warnings + ((capped,) if capped else ())) or "generic band"
     return s, how
 
 
