@@ -5,8 +5,9 @@ samples sit at tau_max. On the rows out of the clip's reach, a few per cent of t
 experiment, the spring damping passes and nothing else does: there the motor swings slowly
 and the lag, whose evidence grows with frequency, has nothing to show. Those rows cannot say
 that the experiment holds no further cause (bench.analysis.diagnose.clipped.stopped_short),
-so the every-row view is run too; it names the damping and the lag, and the closed-loop
-replay confirms that reading. Without it only the spring damping was named."""
+so the every-row view is run too; it names the damping and the lag, and the forward view
+confirms that reading (a replay at the limit, or the loop's stability with the lag after the
+causes the first view names). The first view's answer alone is the spring damping."""
 
 from __future__ import annotations
 
