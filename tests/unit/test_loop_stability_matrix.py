@@ -46,3 +46,19 @@ def test_a_lag_past_the_onset_makes_the_loop_grow():
     G = np.linalg.solve(zz * np.eye(len(Bd)) - Ad, Bd)[0]
     L = (gains.kv + gains.ki * T * zz / (zz - 1)) * (gains.kp + (zz - 1) / (zz * T)) * G
     assert abs(L.imag) < 1e-3 * abs(L) and L.real < -1
+
+
+def test_a_spring_damping_damps_the_locked_mode_as_eq_5_6_say():
+    """D (q_m' - q') in parallel with K: without the frictions the locked mode of the plant
+    decays at sigma = D (1/Jm + 1/JL) / 2 per second, its frequency sqrt(K (1/Jm + 1/JL) -
+    sigma^2); the held plant's pole is exp((-sigma + i w) ts) exactly."""
+    D = 3.0
+    p = {"Jm": P["Jm"], "K": P["K"], "JL": P["JL"], "D": D}
+    Ad, _ = plant(p, T)
+    inv_j = 1 / P["Jm"] + 1 / P["JL"]
+    sigma = D * inv_j / 2
+    w = math.sqrt(P["K"] * inv_j - sigma ** 2)
+    ev = np.linalg.eigvals(Ad)
+    mode = ev[np.argmax(np.abs(ev.imag))]
+    assert abs(mode) == pytest.approx(math.exp(-sigma * T), rel=1e-9)
+    assert abs(np.angle(mode)) == pytest.approx(w * T, rel=1e-9)

@@ -17,7 +17,20 @@ verdict.USABLE_MIN of the experiment's) and the clip is at the metadata's `tau_m
 inverse view is run again on every row (`limit_applied`), each of its tests at half its
 level: the two views split the level as a lag's two bands do (identification.discrepancy.
 lag_band), and the chance that a clean clipped log names anything is at most ALPHA from the
-first view plus ALPHA / 2 from the second. A lag or a hardening tested in two bands
+first view plus ALPHA / 2 from the second.
+
+**A cause beside the clip's.** On those few rows the clip leaves the slow part of the
+experiment (the motor far from its limit), where a lag, whose evidence grows with frequency,
+has nothing to show; a cause that acts at low speed or at the mode (a spring damping) can
+pass there. So when causes pass on under USABLE_MIN of the experiment's rows and the clip is
+at `tau_max` (`stopped_short`), the rounds' stop there does not say that the experiment holds
+no further cause either, and the every-row view is run too, with the same split level. Its
+answer is taken when it names every cause the first view names and more (`names_more`), and
+its judged answer keeps them all (bench.analysis.diagnose.run); otherwise the first view's
+causes stand on their own rows, as they were named without it. The bound above holds: the
+second view's tests, and their level, are those it runs when the first view names nothing.
+
+A lag or a hardening tested in two bands
 (identification.discrepancy.lag_band) runs its wide band's view only where the chooser's band
 fails; one whose chooser's band passed at the whole level but fails at half of it gets that
 view now, at half the level too (split_level's `band`): the tests are those the every-row view
@@ -69,6 +82,7 @@ class ClippedViews:
     named_by: str = ""   # "every row" when the answer's causes come from the second view
     # the loop's stability that confirms a lag named on every row (diagnose.stability)
     loop: dict | None = None
+    first_named: tuple[str, ...] = ()   # the causes the first view names (stopped_short)
 
     def text(self) -> str:
         """The shares in words, for the inconclusive reason and the report."""
@@ -109,11 +123,27 @@ def heldout_shares(inv: InverseDiagnosis) -> dict[str, float]:
     return {c.effect: float(c.heldout_pct) for c in inv.candidates if c.testable}
 
 
+def _few_rows(inv: InverseDiagnosis) -> bool:
+    """The first view's rows are under USABLE_MIN of the experiment's."""
+    keep = inv.nominal.sig.keep
+    return keep is not None and len(keep) > 0 and keep.mean() < USABLE_MIN
+
+
 def undecided(inv: InverseDiagnosis) -> bool:
     """The first view names nothing from under USABLE_MIN of the experiment's rows."""
-    keep = inv.nominal.sig.keep
-    return (not inv.causes and keep is not None and len(keep) > 0
-            and keep.mean() < USABLE_MIN)
+    return not inv.causes and _few_rows(inv)
+
+
+def stopped_short(inv: InverseDiagnosis) -> bool:
+    """The first view names causes, and stops its rounds, from under USABLE_MIN of the
+    experiment's rows (module docstring: a cause beside the clip's)."""
+    return bool(inv.causes) and _few_rows(inv)
+
+
+def names_more(every: InverseDiagnosis, first: InverseDiagnosis) -> bool:
+    """The every-row view names every cause the first view names, and more."""
+    a, b = ({c.effect for c in x.causes} for x in (first, every))
+    return a < b
 
 
 def _split(c: Candidate) -> Candidate:
@@ -175,8 +205,9 @@ def clipped_inverse(log: Log, settings: FilterSettings,
                     inv: InverseDiagnosis) -> tuple[InverseDiagnosis, ClippedViews | None]:
     """The inverse view the answer rests on, and what the clipped log's views found (None
     for a log without clipped samples): the first view `inv` (rows out of reach of the
-    clip), or, when it cannot decide and the clip is at the metadata's tau_max, the second
-    (every row) if it names a cause at its split level (module docstring)."""
+    clip), or, when it cannot decide or stops short and the clip is at the metadata's
+    tau_max, the second (every row) if it names a cause at its split level and every cause
+    the first names, and more (module docstring)."""
     clip = clipped_samples(log)
     if not clip.count:
         return inv, None
@@ -184,16 +215,19 @@ def clipped_inverse(log: Log, settings: FilterSettings,
     rows = len(keep) if keep is not None else len(inv.nominal.sig.index)
     kept = int(np.count_nonzero(keep)) if keep is not None else rows
     views = ClippedViews(clipped_pct=100 * clip.share, how=clip.how, rows_kept=kept, rows=rows,
-                         first=heldout_shares(inv))
-    if not undecided(inv):
+                         first=heldout_shares(inv),
+                         first_named=tuple(c.effect for c in inv.causes))
+    if not (undecided(inv) or stopped_short(inv)):
         return inv, views
     if not at_limit(log).any():
+        if inv.causes:   # they stand on their own rows
+            return inv, views
         return inv, replace(views, why="the clip is not at the metadata's tau_max (a flat "
                             "top, not the controller's own clip): its torque is not known to "
                             "be the one applied, so its rows stay out")
     every = split_level(diagnose_inverse(log, settings, limit_applied=True),
                         LagBand(log, settings, limit_applied=True))
     views = replace(views, second=heldout_shares(every))
-    if every.causes:
+    if every.causes and (not inv.causes or names_more(every, inv)):
         return every, replace(views, named_by="every row")
     return inv, views

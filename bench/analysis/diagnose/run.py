@@ -17,7 +17,7 @@ import math
 from pathlib import Path
 from typing import Callable
 
-from jointbench.bench.analysis.diagnose.clipped import clipped_inverse
+from jointbench.bench.analysis.diagnose.clipped import ClippedViews, clipped_inverse
 from jointbench.bench.analysis.diagnose.forward import add_forward_view
 from jointbench.bench.analysis.diagnose.report import write
 from jointbench.bench.analysis.diagnose.types import Diagnosis, ForwardView
@@ -93,7 +93,26 @@ def diagnose(log: Log, out_dir: Path | None = None, forward: bool = True,
     say = progress or (lambda msg: None)
     settings, how = diagnosis_settings(log)
     say(f"nominal model and {len(EFFECTS)} effects, inverse view ({how})")
-    inv, clipped = clipped_inverse(log, settings, diagnose_inverse(log, settings))
+    first = diagnose_inverse(log, settings)
+    inv, clipped = clipped_inverse(log, settings, first)
+    d = _answer(log, settings, how, inv, clipped, forward, say)
+    kept = set() if d.overruled else {c.effect for c in d.inverse.causes}
+    if clipped is not None and clipped.named_by and not kept >= {c.effect for c in first.causes}:
+        # the every-row view named more than the first view's causes (clipped.stopped_short),
+        # but its answer, judged, keeps not all of them: the first view's causes stand on
+        # their own rows, judged as they would have been without that view
+        d = _answer(log, settings, how, first, replace(clipped, named_by=""), forward, say)
+    if out_dir is not None:
+        d = write(d, Path(out_dir), say)
+    return d
+
+
+def _answer(log: Log, settings: FilterSettings, how: str, inv: InverseDiagnosis,
+            clipped: ClippedViews | None, forward: bool,
+            say: Callable[[str], None]) -> Diagnosis:
+    """The answer on the inverse view `inv` (clipped: what a clipped log's views found): its
+    extended model, its forward view and the verdict, the causes the replay rejects left out
+    in turn."""
     nom_p = nominal_parameters(inv.nominal)
     clip_note = clipping_warnings(log, refuse=False)
     if clipped is not None and clipped.named_by:
@@ -134,7 +153,7 @@ def diagnose(log: Log, out_dir: Path | None = None, forward: bool = True,
             earlier, prior = (replace(x, inverse=inv) for x in (earlier, prior))
         notes.append(f"{judged.inverse.causes[-1].effect} left out: {why}")
         replayed, judged = earlier, prior
-    while cycle_only(judged) and len(judged.inverse.causes) > 1 and \
+    while cycle_only(judged) and judged.inverse.causes[-1].effect != "torque_lag" and \
             not (judged.inverse.masked is not None and judged.inverse.masked.named):
         why = ("the log sits in a limit cycle that the loop's stability with the lag "
                "explains; no replay reaches the cycle, and at it every state is periodic in "
@@ -146,8 +165,6 @@ def diagnose(log: Log, out_dir: Path | None = None, forward: bool = True,
     d = replace(judged, overruled=with_clipping(judged))
     if notes and not d.overruled:
         d = replace(d, forward_note="; ".join(n for n in (d.forward_note, *notes) if n))
-    if out_dir is not None:
-        d = write(d, Path(out_dir), say)
     return d
 
 

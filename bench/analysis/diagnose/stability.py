@@ -11,7 +11,8 @@ can stay stable beside a log that has clipped a quarter of its samples since its
 second; its clipping then says nothing either way (verdict.every_row_reason). What the lag
 does say, whatever the friction, is the linear loop's growth and its frequency.
 
-**The loop.** The linear part of eqs. (5)-(6) (Jm, FVm, K, JL, FV; the rigid J, FV), the
+**The loop.** The linear part of eqs. (5)-(6) (Jm, FVm, K, JL, FV, and a named spring
+damping's D in parallel with K; the rigid J, FV), the
 torque through the lag 1 / (1 + T s) (T = 0: none), held over the sample (zero-order hold,
 exact discretisation), and the PI cascade of docs/controller.md with q_ref = 0:
 e[k] = -kp q_m[k] - (q_m[k] - q_m[k-1]) / ts, I[k] = I[k-1] + ki ts e[k],
@@ -88,8 +89,9 @@ def plant(p: dict[str, float], ts: float, lag_s: float = 0.0) -> tuple[np.ndarra
     one (J); tau_a the lagged torque, left out when lag_s is 0."""
     if "K" in p:
         Jm, JL, K = p["Jm"], p["JL"], p["K"]
-        A = np.array([[0, 1, 0, 0], [-K / Jm, -p.get("FVm", 0.0) / Jm, K / Jm, 0],
-                      [0, 0, 0, 1], [K / JL, 0, -K / JL, -p.get("FV", 0.0) / JL]])
+        D = p.get("D", 0.0)   # a spring damping named beside the lag (effects.spring_damping)
+        A = np.array([[0, 1, 0, 0], [-K / Jm, -(p.get("FVm", 0.0) + D) / Jm, K / Jm, D / Jm],
+                      [0, 0, 0, 1], [K / JL, D / JL, -K / JL, -(p.get("FV", 0.0) + D) / JL]])
         b = np.array([0, 1 / Jm, 0, 0])
     else:
         A = np.array([[0, 1], [0, -p.get("FV", 0.0) / p["J"]]])

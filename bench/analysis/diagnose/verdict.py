@@ -234,16 +234,30 @@ def replay_at_limit(d: Diagnosis) -> bool:
 
 def cycle_only(d: Diagnosis) -> bool:
     """The every-row reading of a clipped log stands on the loop's stability alone: a lag
-    named first on every row, confirmed by loop_cycle and not by a replay at the limit. In a
+    named on every row first or after the first view's causes only (lag_at), confirmed by
+    loop_cycle and not by a replay at the limit. In a
     limit cycle every state is periodic in time, so the residual the lag's model leaves at
     the cycle is a function of the motor angle and of the deflection too, which a later
     cause's column can take (a torque ripple of a few periods per cycle); the replay that
     would tell them apart does not reach the cycle, and the loop's stability speaks of the
-    lag alone: the later causes are not named (bench.analysis.diagnose.run)."""
+    lag alone: the causes after it are not named (bench.analysis.diagnose.run)."""
     if d.overruled or replay_at_limit(d):
         return False
     cycle = loop_cycle(d)
     return cycle is not None and cycle.confirms
+
+
+def lag_at(d: Diagnosis) -> int | None:
+    """Where a torque lag stands among the causes named on every row, when every cause before
+    it is one the first view names on its own rows (clipped.stopped_short: those stand
+    without the every-row reading); None when there is no such lag. With nothing named on
+    the first view, only a lag named first."""
+    views = getattr(d, "clipped", None)
+    names = [c.effect for c in d.inverse.causes]
+    if views is None or "torque_lag" not in names:
+        return None
+    i = names.index("torque_lag")
+    return i if set(names[:i]) <= set(views.first_named) else None
 
 
 def loop_cycle(d: Diagnosis) -> LimitCycle | None:
@@ -254,8 +268,7 @@ def loop_cycle(d: Diagnosis) -> LimitCycle | None:
     unstable where the nominal's is stable, at the frequency of the log's clipped
     oscillation, confirms the every-row reading as a replay at the limit does."""
     views = getattr(d, "clipped", None)
-    if views is None or not views.named_by or not d.inverse.causes or \
-            d.inverse.causes[0].effect != "torque_lag":
+    if views is None or not views.named_by or lag_at(d) is None:
         return None
     try:
         gains = controller_from_log(d.log)
