@@ -11,8 +11,8 @@ discrepancy the log carries.
 
 So when the rounds name nothing and the best physical candidate of the first round explains
 more than MATERIAL of the held-out residual (the discrepancy silence would hide; on a log
-without one the look costs nothing), the two physical candidates that explain the most of
-it (a positive share each) are fitted together (`masked_pair`), and three tests are run:
+without one the look costs nothing), it and its partner are fitted together (`masked_pair`),
+and three tests are run:
 
 - the pair against the nominal (the segment test with its margin over the equations either
   acts in), at ALPHA / C(m, 2): Bonferroni over the m (m - 1) / 2 pairs of the m effects the
@@ -30,6 +30,16 @@ the last quarter of the log is such a case: at rest the residual is the offset p
 ripple frozen at the resting angle, so against the nominal (no ripple) the offset loses in
 those segments and wins in the others, and the ripple tested without the offset fails the
 same way; each on top of the other passes.
+
+**The partner.** The partner is the physical candidate that explains the most of what the
+best leaves: each other candidate fitted on top of the best, its nonlinear value searched
+there. Not the second best alone: masking hides the partner's value from its own search
+too. A backlash beside a spring damping is such a pair: the damper D (qm' - q') also carries
+torque inside the dead band, where a dead band alone carries none, so alone the width's
+search ends at b = 0, where the column is the nominal spring's and the share is 0 by
+construction; on top of the damping it finds the width. Whichever partner the data picks,
+the pair is one of the m (m - 1) / 2 and each order one of the m (m - 1) ordered pairs, so
+the levels above hold.
 
 **The stronger, then the weaker on top of it.** When the pair passes and one of the two
 passes on top of the other while the other does not (`lead`), the one that passes is named
@@ -55,8 +65,8 @@ little more than either alone, and a pair of them says nothing the better one do
 candidate that reduces to another candidate of the look is left out of it (`skipped`, with
 why): the simpler stands for the two, the richer's own part being the rounds' question (a
 richer effect is named over the one it reduces to only when what it adds is significant,
-identification.discrepancy.inverse._which), and the partner is the next candidate that is
-not the same description. The pair is still one of the m (m - 1) / 2, so the levels above
+identification.discrepancy.inverse._which), and neither the best nor its partner is a
+candidate left out. The pair is still one of the m (m - 1) / 2, so the levels above
 hold.
 """
 
@@ -179,20 +189,26 @@ def _same(c: Candidate, others: list[Candidate]) -> str:
 
 def masked_pair(nom: Nominal, ranked: list[Candidate] | tuple[Candidate, ...],
                 m: int) -> MaskedPair | None:
-    """The two physical first-round candidates with the largest positive held-out shares,
-    one that reduces to another of them left out (module docstring), fitted together and
-    tested; None when there are not two, the best explains no more than MATERIAL, or fewer
-    than two effects were tested (m)."""
-    fit = sorted((c for c in ranked if c.testable and not c.unphysical and c.heldout_pct > 0
+    """The physical first-round candidate with the largest positive held-out share and its
+    partner (module docstring: the partner), one that reduces to another of the look left
+    out (module docstring), fitted together and tested; None when there is no partner, the
+    best explains no more than MATERIAL, or fewer than two effects were tested (m)."""
+    fit = sorted((c for c in ranked if c.testable and not c.unphysical
                   and c.heldout_errors is not None), key=lambda c: -c.heldout_pct)
     skipped = tuple((c.effect, why) for c in fit if (why := _same(c, fit)))
-    two = [c for c in fit if c.effect not in dict(skipped)][:2]
-    if len(two) < 2 or m < 2 or not two[0].heldout_pct > 100 * MATERIAL:
+    pool = [c for c in fit if c.effect not in dict(skipped)]
+    if len(pool) < 2 or m < 2 or not pool[0].heldout_pct > 100 * MATERIAL:
         return None
-    a, b = two
+    a = pool[0]
     ordered = ALPHA / (m * (m - 1))
-    ba, t_ba = _on_top(nom, a, b, ordered)
-    ab, t_ab = _on_top(nom, b, a, ordered)
+    # each other candidate on top of the best (its value searched there): the partner is
+    # the one that explains the most of what the best leaves, a physical fit there
+    tops = [_on_top(nom, a, c, ordered) for c in pool[1:]]
+    tops = [(x, t) for x, t in tops if not x.unphysical and t.heldout_pct > 0]
+    if not tops:
+        return None
+    ba, t_ba = max(tops, key=lambda xt: xt[1].heldout_pct)
+    ab, t_ab = _on_top(nom, ba, a, ordered)   # the best on top of the partner at its value
     n = len(nom.sig.index)
     acts = tuple(sorted(set(a.acts) | set(ba.acts))) if a.acts and ba.acts else ()
     ev = evidence(reference(nom).scores.errors, ba.heldout_errors, n, acts)
@@ -201,4 +217,4 @@ def masked_pair(nom: Nominal, ranked: list[Candidate] | tuple[Candidate, ...],
     # skipped only where the pair it would have been in differs (the richer ranked in it)
     ranked_two = fit[:2]
     skipped = tuple((e, why) for e, why in skipped if any(c.effect == e for c in ranked_two))
-    return MaskedPair(a.effect, b.effect, pair, t_ba, t_ab, skipped, (ab, ba))
+    return MaskedPair(a.effect, ba.effect, pair, t_ba, t_ab, skipped, (ab, ba))
