@@ -41,8 +41,8 @@ def _periodogram_peaks(rows: Rows, span: float) -> np.ndarray:
     a bin at most pi / BINS), zero-padded to 4 spans, each bin holding the mean of its rows'
     r: a sum over the rows would weigh each angle by the time the motor dwells there, and a
     strong ripple modulates that time at its own period (the motor slows where the ripple
-    opposes it), so the sum carries the product of two sinusoids of the period, a peak at
-    half the period that can outgrow the period's own."""
+    opposes it and rests in its wells), so the sum carries the product of two sinusoids of
+    the period, a peak at half the period that can outgrow the period's own."""
     sig = rows.sig
     res, block = getattr(rows, "residual", None), getattr(rows, "block", None)
     if res is None or block is None:
