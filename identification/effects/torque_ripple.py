@@ -31,14 +31,18 @@ BINS = 8
 
 def _periodogram_peaks(rows: Rows, span: float) -> np.ndarray:
     """The wavenumbers k = 2 pi / p of the PEAKS highest local maxima of the periodogram
-    |sum r e^(-i k q_m)|^2 of the nominal's motor-equation residual r against the motor angle
-    q_m of its rows, on a uniform grid of step pi / (2 span): a period p off by dp drifts by
-    span dp / p^2 periods over the span, and a quarter period is where the column stops
-    following the torque, dk = 2 pi dp / p^2 < pi / (2 span). A coarse geometric grid (COARSE
-    points, a few % apart) misses a short period entirely when the span holds many of them
-    (a drive's ripple 2 pi / (6 N) with the gear ratio N: some 80 periods over a rad). The
-    sum is an FFT of r binned on q_m (BINS bins a shortest period, the phase within a bin
-    at most pi / BINS), zero-padded to 4 spans."""
+    |sum r(q_m) e^(-i k q_m)|^2 of the nominal's motor-equation residual r as a function of
+    the motor angle q_m of its rows, on a uniform grid of step pi / (2 span): a period p off
+    by dp drifts by span dp / p^2 periods over the span, and a quarter period is where the
+    column stops following the torque, dk = 2 pi dp / p^2 < pi / (2 span). A coarse geometric
+    grid (COARSE points, a few % apart) misses a short period entirely when the span holds
+    many of them (a drive's ripple 2 pi / (6 N) with the gear ratio N: some 80 periods over a
+    rad). The sum is an FFT of r binned on q_m (BINS bins a shortest period, the phase within
+    a bin at most pi / BINS), zero-padded to 4 spans, each bin holding the mean of its rows'
+    r: a sum over the rows would weigh each angle by the time the motor dwells there, and a
+    strong ripple modulates that time at its own period (the motor slows where the ripple
+    opposes it and rests in its wells), so the sum carries the product of two sinusoids of
+    the period, a peak at half the period that can outgrow the period's own."""
     sig = rows.sig
     res, block = getattr(rows, "residual", None), getattr(rows, "block", None)
     if res is None or block is None:
@@ -50,7 +54,8 @@ def _periodogram_peaks(rows: Rows, span: float) -> np.ndarray:
     n = BINS * SHORTEST
     dx = span / n
     at = np.minimum(((q - q.min()) / dx).astype(int), n - 1)
-    binned = np.bincount(at, weights=r - r.mean(), minlength=n)
+    count = np.bincount(at, minlength=n)
+    binned = np.bincount(at, weights=r - r.mean(), minlength=n) / np.maximum(count, 1)
     pw = np.abs(np.fft.rfft(binned, 4 * n)) ** 2   # wavenumber j 2 pi / (4 n dx)
     step = np.pi / (2 * span)
     j = np.arange(len(pw))

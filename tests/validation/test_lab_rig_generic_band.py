@@ -23,6 +23,7 @@ from jointbench.identification.effects.torque_lag import STEP
 from jointbench.identification.filter_choice import generic_settings
 
 SEED = 10247
+DWELL_SEED = 10246            # a run whose ripple slows the motor enough to double its peak
 DURATION = 20.0
 RIPPLE = 0.12                 # N m: its motion hides the mode from q/tau_m, q_m/tau_m, q/q_m
 MULTISINE_TOP_HZ = 10.0       # simulate_lab_rig's default multisine: 0.025-10 Hz
@@ -58,6 +59,24 @@ def test_ripple_named_when_no_mode_is_found(ripple_log):
     # the period search's resolution: a quarter period of drift over the motor's span,
     # dp = p^2 / (4 span) (torque_ripple._periodogram_peaks)
     span = float(np.ptp(ripple_log.q_m))
+    assert abs(period - truth) <= truth ** 2 / (4 * span), (period, truth)
+
+
+@pytest.mark.slow
+def test_ripple_period_not_its_half():
+    """A strong ripple slows the motor where it opposes it: the motor dwells longer at some
+    phases of the period, and a periodogram summing the residual over the rows weighs each
+    angle by that dwell time, the product of two sinusoids of the period, whose peak at half
+    the period can outgrow the period's own and leave the period out of the search grid.
+    Each angle bin's mean residual (torque_ripple._periodogram_peaks) is the residual as a
+    function of the angle, and the ripple is named at its own period, within the search's
+    resolution dp = p^2 / (4 span)."""
+    log = simulate_lab_rig(LAB_RIG, DWELL_SEED, DURATION, effects=f"torque_ripple={RIPPLE}")
+    d = diagnose(log, forward=False)
+    assert d.named_cause == "torque_ripple"
+    period = d.extended_parameters["ripple_period_rad"]
+    truth = 2 * math.pi / (6 * LAB_RIG.N)
+    span = float(np.ptp(log.q_m))
     assert abs(period - truth) <= truth ** 2 / (4 * span), (period, truth)
 
 
