@@ -374,7 +374,7 @@ def _reproduced_scope(d: Diagnosis, a: ForwardView, scope: ForwardScope) -> Forw
     spread = start_spread(d)
     if spread is None:
         return scope
-    off = spread >= _segment_rms(np.asarray(b.tau_m) - tau)
+    off = (spread > 0) & (spread >= _segment_rms(np.asarray(b.tau_m) - tau))
     if not off.any():
         return scope
     at = int(np.argmax(off))
