@@ -289,3 +289,32 @@ def test_the_weaker_cause_of_a_pair_is_judged_against_the_model_holding_the_stro
     assert gain_reason(diagnosis(wrong, "backlash", "torque_lag"), view(stronger)).startswith(
         "torque_lag's extended model, against the one holding backlash, is worse")
     assert gain_reason(diagnosis(wrong, "backlash", "torque_lag")) != ""
+
+
+def test_the_scope_ends_where_the_extended_replay_stops_reproducing_itself(monkeypatch):
+    """Judged only before the first segment where the extended replay from a start half an
+    encoder step away differs from itself as much as from the log (forward.start_spread,
+    replaced here by its per-segment value); asked only when the extended replay is not
+    better than the nominal's."""
+    import jointbench.bench.analysis.diagnose.forward as F
+
+    seg = np.arange(N) * SEGMENTS // N
+    tau = 10.0 + np.sin(np.arange(N))
+    d = _diagnosis(np.zeros(N), np.zeros(N), np.zeros(N), effect="backlash")
+    d.log.q_ref = np.zeros(N)
+    d.forward_nominal.tau_m = tau + 0.2                    # error 0.2 everywhere
+    d.forward_extended.tau_m = tau + np.where(seg < 15, 0.01, 0.5)
+    spread = np.where(np.arange(SEGMENTS) < 15, 0.001, 0.6)  # reproduces itself until 15
+    monkeypatch.setattr(F, "start_spread", lambda d: spread)
+    scope = forward_scope(d)
+    assert scope.judged and scope.keep.tolist() == [k < 15 for k in range(SEGMENTS)]
+    assert "from segment 16 of 40 on" in scope.note
+    # it stops reproducing itself before MIN_JUDGED segments: the view cannot judge
+    monkeypatch.setattr(F, "start_spread",
+                        lambda d: np.where(np.arange(SEGMENTS) < MIN_JUDGED - 1, 0.001, 0.6))
+    scope = forward_scope(d)
+    assert not scope.judged and scope.note.startswith("the forward view cannot judge")
+    # an extended replay better than the nominal's is not asked about its spread
+    d.forward_extended.tau_m = tau + 0.01
+    monkeypatch.setattr(F, "start_spread", lambda d: pytest.fail("asked"))
+    assert forward_scope(d).keep is None

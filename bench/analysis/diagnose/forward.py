@@ -35,6 +35,7 @@ from jointbench.identification.discrepancy.heldout import ALPHA, segment_sums, s
 from jointbench.identification.effects import EFFECTS
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.log import Log
+from jointbench.identification.log.read import position_quantum
 from jointbench.bench.sim.plant_keys import PLANT_INTEGRATOR_KEY, plant_steps
 from jointbench.identification.saturation import CLIP_RELATIVE
 
@@ -302,12 +303,85 @@ def forward_scope(d: Diagnosis, against: ForwardView | None = None) -> ForwardSc
     if not scope.judged or a is None or b is None:
         return scope
     before = before_limit(d.log)
-    if before is None:
+    if before is not None:
+        keep = before if scope.keep is None else before & scope.keep
+        how = (f"the loop reaches its torque limit tau_max = {_tau_max(d.log):g} in segment "
+               f"{int(np.argmin(before)) + 1} of {SEGMENTS}: the replays are judged before "
+               f"it, in {int(keep.sum())} segments")
+        how = f"{how}; {scope.note}" if scope.note else how
+        if keep.sum() < MIN_JUDGED:
+            return ForwardScope(None, False, f"the forward view cannot judge the named causes "
+                                f"on this log: {how}, under {MIN_JUDGED}; they are named on "
+                                "the inverse view alone")
+        scope = ForwardScope(keep, True, f"the forward view judges the named causes where {how}")
+    return _reproduced_scope(d, a, scope)
+
+
+def start_moved(log: Log) -> Log:
+    """`log` with its replay's start moved by half a step of the position encoder the replay
+    starts from (the link's when logged, else the motor's; identification.log.read.
+    position_quantum, measured on the log): a rounding encoder cannot tell the two starts
+    apart. Without a measurable step, by the text's precision (12 digits)."""
+    name = "q" if log.q is not None else "q_m"
+    x = np.asarray(getattr(log, name), float)
+    step = position_quantum(x) or 1e-9 * max(1.0, float(np.nanmax(np.abs(x))))
+    moved = x.copy()
+    moved[0] += 0.5 * step
+    return dataclasses.replace(log, **{name: moved})
+
+
+_SPREADS: dict[int, tuple[ForwardView, np.ndarray | None]] = {}
+
+
+def start_spread(d: Diagnosis) -> np.ndarray | None:
+    """Per segment, the RMS difference of the extended model's replayed torque from the same
+    model's replay from a start the log cannot tell apart (start_moved); None when that
+    replay does not run. Remembered for the replay it is of (forward_scope is asked for it
+    by the report's note and by the verdict)."""
+    b = d.forward_extended
+    held = _SPREADS.get(id(b))
+    if held is not None and held[0] is b:
+        return held[1]
+    try:
+        moved = dataclasses.replace(d, log=start_moved(d.log))
+        n = replay_substeps(moved, extended=True)
+        other = _view(moved, build_spec(moved, extended=True, substeps=n), substeps=n)
+        spread = _segment_rms(np.asarray(other.tau_m) - np.asarray(b.tau_m))
+    except (ReplayError, ValueError):
+        spread = None
+    if len(_SPREADS) > 16:
+        _SPREADS.clear()
+    _SPREADS[id(b)] = (b, spread)
+    return spread
+
+
+def _reproduced_scope(d: Diagnosis, a: ForwardView, scope: ForwardScope) -> ForwardScope:
+    """`scope` up to the first segment where the extended replay differs from its replay from
+    an indistinguishable start (start_spread) as much as from the log: from there on the log
+    is no closer to the replay than another start of the same model is (a link that floats
+    in a dead band between impacts, whose phase a closed loop does not restore), and the
+    replay's torque error says nothing of the model. Asked only when the extended replay is
+    not better than `a` over `scope` (the veto's case): an extended replay that is better
+    needs no more segments left out."""
+    b, log = d.forward_extended, d.log
+    if getattr(log, "q_ref", None) is None or not scope.judged:
         return scope
-    keep = before if scope.keep is None else before & scope.keep
-    how = (f"the loop reaches its torque limit tau_max = {_tau_max(d.log):g} in segment "
-           f"{int(np.argmin(before)) + 1} of {SEGMENTS}: the replays are judged before it, "
-           f"in {int(keep.sum())} segments")
+    keep = np.ones(SEGMENTS, bool) if scope.keep is None else scope.keep
+    tau = np.asarray(log.tau_m, float)
+    ea, eb = (segment_sums((np.asarray(x.tau_m) - tau) ** 2)[keep].sum() for x in (a, b))
+    if eb < ea:
+        return scope
+    spread = start_spread(d)
+    if spread is None:
+        return scope
+    off = (spread > 0) & (spread >= _segment_rms(np.asarray(b.tau_m) - tau))
+    if not off.any():
+        return scope
+    at = int(np.argmax(off))
+    keep = keep & (np.arange(SEGMENTS) < at)
+    how = (f"the extended replay from a start half an encoder step away differs from itself "
+           f"as much as from the log from segment {at + 1} of {SEGMENTS} on: the replays are "
+           f"judged before it, in {int(keep.sum())} segments")
     how = f"{how}; {scope.note}" if scope.note else how
     if keep.sum() < MIN_JUDGED:
         return ForwardScope(None, False, f"the forward view cannot judge the named causes on "
