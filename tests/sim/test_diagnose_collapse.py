@@ -35,8 +35,10 @@ def test_a_collapsed_link_equation_gets_equal_weights_and_both_causes_are_named(
     nom = nominal(log, s)
     assert np.all(nom.weights == 1.0)
     causes = diagnose_inverse(log, s).causes
-    assert [c.effect for c in causes] == ["torque_lag", "spring_damping"]
-    assert causes[1].parameters["D"] == pytest.approx(341.0, rel=0.2)
+    # the two tie in the first round; the look-ahead (inverse._ahead) names either first
+    assert sorted(c.effect for c in causes) == ["spring_damping", "torque_lag"]
+    D = next(c for c in causes if c.effect == "spring_damping").parameters["D"]
+    assert D == pytest.approx(341.0, rel=0.2)
 
 
 def test_without_the_rule_the_collapse_misses_the_damping(damped, monkeypatch):
