@@ -308,12 +308,9 @@ def forward_scope(d: Diagnosis, against: ForwardView | None = None) -> ForwardSc
         how = (f"the loop reaches its torque limit tau_max = {_tau_max(d.log):g} in segment "
                f"{int(np.argmin(before)) + 1} of {SEGMENTS}: the replays are judged before "
                f"it, in {int(keep.sum())} segments")
-        how = f"{how}; {scope.note}" if scope.note else how
-        if keep.sum() < MIN_JUDGED:
-            return ForwardScope(None, False, f"the forward view cannot judge the named causes "
-                                f"on this log: {how}, under {MIN_JUDGED}; they are named on "
-                                "the inverse view alone")
-        scope = ForwardScope(keep, True, f"the forward view judges the named causes where {how}")
+        scope = _narrowed(keep, how, scope)
+        if not scope.judged:
+            return scope
     return _reproduced_scope(d, a, scope)
 
 
@@ -382,6 +379,13 @@ def _reproduced_scope(d: Diagnosis, a: ForwardView, scope: ForwardScope) -> Forw
     how = (f"the extended replay from a start half an encoder step away differs from itself "
            f"as much as from the log from segment {at + 1} of {SEGMENTS} on: the replays are "
            f"judged before it, in {int(keep.sum())} segments")
+    return _narrowed(keep, how, scope)
+
+
+def _narrowed(keep: np.ndarray, how: str, scope: ForwardScope) -> ForwardScope:
+    """The scope judging the segments `keep` (`how` says why, after `scope`'s own note), or
+    none when they are fewer than MIN_JUDGED: the causes are then named on the inverse view
+    alone."""
     how = f"{how}; {scope.note}" if scope.note else how
     if keep.sum() < MIN_JUDGED:
         return ForwardScope(None, False, f"the forward view cannot judge the named causes on "
