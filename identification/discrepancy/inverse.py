@@ -48,7 +48,10 @@ cause's in either direction at DECIDE, explains the same thing; so does the othe
 parsimony choice that the log cannot make (_simplest_first: neither adds to the other, an
 offset and an asymmetric friction while the motor moves). The answer says "one of A or B",
 with the share each explains, in its text and as the named cause's alternative, rather than
-choosing silently.
+choosing silently. So does the effect a named cause reduces to, where it passed its own test
+in that round and the log holds no information on it beside the named cause's parts
+(_shared: an offset beside an asymmetric friction whose motor never rests, the asymmetry's
+Coulomb part then a constant on every row).
 
 **The weaker of a pair against the model holding the stronger.** A round whose top ties
 with another significant candidate (_tied: the test above cannot separate them) cannot choose
@@ -152,8 +155,9 @@ class Alternative:
     t: float        # the named's held-out errors smaller than the other's
     t_back: float   # the converse
     round: int = 1
-    how: str = "direct"   # "direct" (_alternatives) or "nested" (the parsimony choice)
-    text: str = ""        # the parsimony note, for "nested"
+    how: str = "direct"   # "direct" (_alternatives), "nested" (the parsimony choice) or
+    #                       "shared" (the part two effects share, _shared)
+    text: str = ""        # the note, for "nested" and "shared"
 
     def describe(self) -> str:
         if self.text:
@@ -681,6 +685,7 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
                           if not any({a.named, a.other} == {b.named, b.other}
                                      for b in alternatives)
                           and frozenset((a.named, a.other)) not in settled)
+    alternatives += _shared(nom, causes, rounds, alternatives)
     if masked is not None and masked.named:   # two that pass only together (masked)
         causes = masked.causes
         stopped += (f"; {masked.first} and {masked.second} pass together and each on top "
@@ -941,6 +946,76 @@ def _alternatives(rounds: list[list[Candidate]], causes: tuple[Candidate, ...],
             if p >= DECIDE and p2 >= DECIDE:
                 out.append(Alternative(a.effect, b.effect, a.heldout_pct, b.heldout_pct,
                                        t, t2, k))
+    return tuple(out)
+
+
+def _apart_t(nom: Nominal, richer: str, simpler: str) -> float:
+    """How many of its standard errors the one column of `simpler` lies from 0 beside the
+    nominal's columns and `richer`'s parts (registry Effect.parts): its estimate over its
+    standard error in the weighted least squares of the log's rows on all of them (the
+    Cramer-Rao bound of a linear model, sigma from that fit's residual over its degrees of
+    freedom). 0 where its column lies in the span of the others (numerical rank at
+    np.linalg.matrix_rank's own tolerance, the columns scaled to unit norm): the log then
+    holds no information on it beside `richer`'s parts; inf where the test does not apply
+    (`richer` has no parts, `simpler` not one column)."""
+    parts = EFFECTS[richer].parts
+    y, W, names = EFFECTS[simpler].design(nom, {})
+    own = [i for i, x in enumerate(names) if x not in nom.names]
+    if parts is None or len(own) != 1:
+        return float("inf")
+    _, Wp, _ = nom.extend(*parts(nom))
+    X = np.column_stack([Wp, W[:, own[0]]]) * nom.weights[:, None]
+    yw = y * nom.weights
+    scale = np.linalg.norm(X, axis=0)
+    live = scale > 0
+    live[-1] = True
+    Xs = X[:, live] / np.where(scale[live] > 0, scale[live], 1.0)
+    if scale[-1] == 0 or np.linalg.matrix_rank(Xs) < Xs.shape[1]:
+        return 0.0
+    b, *_ = np.linalg.lstsq(Xs, yw, rcond=None)
+    dof = Xs.shape[0] - Xs.shape[1]
+    r = yw - Xs @ b
+    cov = float(r @ r) / dof * np.linalg.inv(Xs.T @ Xs)
+    return float(abs(b[-1]) / np.sqrt(cov[-1, -1]))
+
+
+def _shared(nom: Nominal, causes: tuple[Candidate, ...], rounds: list[list[Candidate]],
+            alternatives: tuple[Alternative, ...]) -> tuple[Alternative, ...]:
+    """One of A or B for the part two effects share: a named cause A (an asymmetric
+    friction) that reduces to an effect B not named (an offset; registry `reduces_to`),
+    where B passed its own test in the round A was named (the log carries the part they
+    share) and the log holds no more on B beside A's parts than the two-way choice's level
+    asks (_apart_t at t_bar(DECIDE)): while the motor moves the asymmetry's Coulomb part is
+    a constant torque, and a log whose motor rests on no row cannot say whether the
+    constant it carries is that part or an offset, whatever A's viscous part adds. The
+    answer then says so, with the share each explains held out, rather than naming A alone
+    (Alternative, how "shared")."""
+    named = {c.effect for c in causes}
+    stated = {frozenset((a.named, a.other)) for a in alternatives}
+    out: list[Alternative] = []
+    for c in causes:
+        simpler = EFFECTS[c.effect].reduces_to if c.effect in EFFECTS else ""
+        k = max(c.round, 1)
+        if (not simpler or simpler in named or frozenset((c.effect, simpler)) in stated
+                or k > len(rounds)):
+            continue
+        s = next((x for x in rounds[k - 1] if x.effect == simpler), None)
+        if s is None or not s.significant:
+            continue
+        t = _apart_t(nom, c.effect, simpler)
+        if t > t_bar(DECIDE):
+            continue
+        held = (f"its column lies in the span of {c.effect}'s parts and the nominal's on "
+                "every row of this log" if t == 0 else
+                f"beside {c.effect}'s parts and the nominal's columns it has t = {t:.3g}, "
+                f"the bar t > {t_bar(DECIDE):.3g}")
+        text = (f"one of {c.effect} or {simpler}: the part they share, which {simpler} "
+                f"explains as well, cannot be told apart ({held}); held out {c.effect} "
+                f"explains {c.heldout_pct:.3g} %, {simpler} {s.heldout_pct:.3g} % of the "
+                f"residual (round {k}); {c.effect} is named, and the part they share may be "
+                f"{simpler}")
+        out.append(Alternative(c.effect, simpler, c.heldout_pct, s.heldout_pct, t,
+                               float("nan"), k, how="shared", text=text))
     return tuple(out)
 
 

@@ -18,7 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from jointbench.identification.effects.base import FOLD_FITS, Design, Effect, Rows, sign0, spread
+from jointbench.identification.effects.base import (FOLD_FITS, Column, Design, Effect, Rows, sign0,
+                                                    spread)
 from jointbench.identification.effects.offset import COLUMN as OFFSET
 
 ORDER = 90
@@ -135,12 +136,20 @@ def check(v: dict, rows: Rows) -> str:
             "an offset)")
 
 
+def parts(rows: Rows) -> tuple[Column, ...]:
+    """The direction-dependent torque's two parts, whatever theta (design): the viscous
+    |qm'| and the Coulomb |sign qm'|, a constant on every row where the motor moves."""
+    qmd = rows.sig.qmd
+    return (("a_viscous", np.abs(np.nan_to_num(qmd)), None),
+            ("a_coulomb", np.abs(sign0(qmd)), None))
+
+
 EFFECT = Effect(
     "asymmetric_friction", "asymmetry", "", "",
     "viscous and Coulomb friction that differ with the direction of motion",
     needs_link=False, rigid_axis=False, block=0, k=2, design=design,
     params=params, reference=reference, search="viscous_share", grid=grid, check=check,
-    beyond=beyond,
+    beyond=beyond, parts=parts,
     # While the motor moves, the Coulomb part of the asymmetry, a FSm, is a constant torque:
     # an offset. The viscous part a FVm |qm'| is what tells the two apart.
     reduces_to="offset")

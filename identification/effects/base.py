@@ -81,6 +81,11 @@ class Effect:
     # named over that one only when what it adds to it is significant held out
     # (identification.discrepancy.inverse). "" for none.
     reduces_to: str = ""
+    # Its parts, spanning its design at every value of its search (raw-rate columns, as
+    # Rows.extend takes them): the effect it reduces to can be told apart from the part
+    # they share only where its column leaves their span beside the nominal's columns
+    # (identification.discrepancy.inverse._shared). None: no such parts.
+    parts: Callable[[Rows], tuple[Column, ...]] | None = None
     # For a torque periodic in the motor angle, the parameter holding its period [rad]: the
     # forward view judges it only where a replay keeps its phase
     # (bench.analysis.diagnose.forward). "" for none.
