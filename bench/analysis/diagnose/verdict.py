@@ -66,7 +66,10 @@ from jointbench.bench.analysis.diagnose.stability import LimitCycle, limit_cycle
 from jointbench.bench.sim.controller import Gains, controller_from_log
 from jointbench.bench.analysis.diagnose.types import Diagnosis, ForwardView
 from jointbench.identification.discrepancy.heldout import ALPHA, segment_sums, segment_t
+from jointbench.identification.band_choice import CONSISTENCY_Z
 from jointbench.identification.checks.plausibility import mislabel_reason
+from jointbench.identification.discrepancy.lag_band import discretisation, jackknife
+from jointbench.identification.effects.base import spread
 
 
 def _unphysical(p: dict[str, float]) -> str:
@@ -266,7 +269,9 @@ def loop_cycle(d: Diagnosis) -> LimitCycle | None:
     controller is not the PI cascade. A replay from rest need not reach a limit cycle that
     the lag makes the loop grow into (stability's module docstring): the extended loop
     unstable where the nominal's is stable, at the frequency of the log's clipped
-    oscillation, confirms the every-row reading as a replay at the limit does."""
+    oscillation, confirms the every-row reading as a replay at the limit does. That
+    frequency is asked within the band the fitted lag and spring damping allow
+    (fitted_spread)."""
     views = getattr(d, "clipped", None)
     if views is None or not views.named_by or lag_at(d) is None:
         return None
@@ -277,7 +282,24 @@ def loop_cycle(d: Diagnosis) -> LimitCycle | None:
     if not isinstance(gains, Gains):
         return None
     return limit_cycle(d.log, d.nominal_parameters, d.extended_parameters,
-                       gains.kp, gains.kv, gains.ki)
+                       gains.kp, gains.kv, gains.ki, fitted_spread(d))
+
+
+def fitted_spread(d: Diagnosis) -> dict[str, float]:
+    """The half-width of the range the named lag's T and spring damping's D may take: the
+    fit's own standard error at CONSISTENCY_Z (band_choice: the level at which two estimates
+    of one value are said to agree), the delete-a-fold jackknife of the folds' preferred T
+    (lag_band.jackknife) plus what the led columns' discretisation allows T
+    (lag_band.discretisation), and of the folds' fits of D (effects.base.spread)."""
+    out: dict[str, float] = {}
+    for c in d.inverse.causes:
+        if c.effect == "torque_lag" and c.fold_values:
+            T = float(c.parameters.get("lag_s", 0.0))
+            out["lag_s"] = (CONSISTENCY_Z * jackknife(c.fold_values)
+                            + discretisation(d.settings, T))
+        elif c.effect == "spring_damping":
+            out["D"] = CONSISTENCY_Z * spread(c.fold_fits, lambda v: v["D"])
+    return {k: v for k, v in out.items() if np.isfinite(v)}
 
 
 def with_clipping(d: Diagnosis) -> str:
