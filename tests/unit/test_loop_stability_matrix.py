@@ -9,8 +9,8 @@ import math
 import numpy as np
 import pytest
 
-from jointbench.bench.analysis.diagnose.stability import (closed_loop, crossover_hz,
-                                                          dominant_mode, plant)
+from jointbench.bench.analysis.diagnose.stability import (LimitCycle, band_hz, closed_loop,
+                                                          crossover_hz, dominant_mode, plant)
 from jointbench.bench.sim.controller import Gains, PIController, gains_rule
 
 T = 1.0 / 350.87
@@ -62,3 +62,29 @@ def test_a_spring_damping_damps_the_locked_mode_as_eq_5_6_say():
     mode = ev[np.argmax(np.abs(ev.imag))]
     assert abs(mode) == pytest.approx(math.exp(-sigma * T), rel=1e-9)
     assert abs(np.angle(mode)) == pytest.approx(w * T, rel=1e-9)
+
+
+def test_the_band_over_the_fitted_values_spread_holds_the_true_loops_cycle():
+    """A lag fitted a tenth long (3.46 ms against 3.19 ms, the spring damping 1.0 against
+    1.2) moves the grown loop's mode and crossover down by over the 1 Hz resolution of a 40 s
+    log's spectrum (40 segments): a log cycling at the true loop's mode lies outside the
+    point estimate's mode and crossover. Over the fitted values' spread, when it covers the
+    truth, the band holds the true loop's two frequencies and the cycle is confirmed; with no
+    spread it is not (the point estimate taken as exact)."""
+    gains = gains_rule(P["Jm"], P["JL"], P["K"], 1e9, T)
+    true = {**P, "D": 1.2, "lag_s": 3.19e-3}
+    fitted = {**P, "D": 1.0, "lag_s": 3.46e-3}
+    spread = {"lag_s": 0.3e-3, "D": 0.3}
+    F = closed_loop(true, gains.kp, gains.kv, gains.ki, T, true["lag_s"])
+    r_true, f_true = dominant_mode(F, T)
+    c_true = crossover_hz(true, gains.kp, gains.kv, gains.ki, T, true["lag_s"])
+    lo, hi = band_hz(fitted, gains.kp, gains.kv, gains.ki, T, spread)
+    assert lo <= min(f_true, c_true) and max(f_true, c_true) <= hi
+    r_fit, f_fit = dominant_mode(closed_loop(fitted, gains.kp, gains.kv, gains.ki, T,
+                                             fitted["lag_s"]), T)
+    c_fit = crossover_hz(fitted, gains.kp, gains.kv, gains.ki, T, fitted["lag_s"])
+    cycle = dict(nominal_radius=0.99, extended_radius=r_fit, lag_s=fitted["lag_s"],
+                 mode_hz=f_fit, crossover_hz=c_fit, cycle_hz=f_true, resolution_hz=1.0)
+    assert r_true > 1 and f_true > max(f_fit, c_fit) + 1.0
+    assert not LimitCycle(**cycle).confirms
+    assert LimitCycle(**cycle, band_hz=(lo, hi)).confirms

@@ -26,6 +26,14 @@ frequency is where a small oscillation grows. The log's oscillation at the limit
 between the two; the log's dominant torque frequency after it first reaches tau_max
 (`cycle_hz`) is asked to lie there, widened by that spectrum's resolution.
 
+**The fitted values' spread.** T and D are estimates, and near the stability onset the mode
+and the crossover move fast with them (a lag a tenth off moves the pendulum's mode by over a
+hertz). So the band the log's frequency is asked to lie in is the one the fitted values allow:
+the span of the mode's and the crossover's frequencies over the corners of the box T +- dT,
+D +- dD (`spread`), each half-width the fit's own standard error at the agreement level of two
+estimates (verdict.loop_cycle), the point estimate's two frequencies included. The loop's
+growth is judged at the point estimate.
+
 Only a torque lag changes the loop's linear phase among docs/effects.md's effects (the
 others act through the deflection's nonlinearity, low speed or the link), so only a named lag
 is judged here. Pure numerics over numpy arrays.
@@ -33,6 +41,7 @@ is judged here. Pure numerics over numpy arrays.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
@@ -50,7 +59,9 @@ class LimitCycle:
     """What the loop's linearisation says of a clipped log: the spectral radius of the
     nominal's loop and of the extended model's (its lag `lag_s`), the growing mode's
     frequency and the phase crossover of the extended loop [Hz] (nan when none), the log's
-    dominant torque frequency after it first reaches tau_max and its resolution [Hz]."""
+    dominant torque frequency after it first reaches tau_max and its resolution [Hz], and the
+    band [Hz] the mode and the crossover span over the fitted values' spread (module
+    docstring; the two frequencies themselves without one)."""
 
     nominal_radius: float
     extended_radius: float
@@ -59,20 +70,26 @@ class LimitCycle:
     crossover_hz: float
     cycle_hz: float
     resolution_hz: float
+    band_hz: tuple[float, float] = (math.nan, math.nan)
 
     @property
     def confirms(self) -> bool:
         """The nominal's loop is stable, the extended one's unstable, and the log's torque
-        at the limit oscillates between the phase crossover and the growing mode (module
-        docstring), within the resolution."""
+        at the limit oscillates between the phase crossover and the growing mode over the
+        fitted values' spread (module docstring), within the resolution."""
         lo, hi = sorted((self.mode_hz, self.crossover_hz))
+        if all(math.isfinite(b) for b in self.band_hz):
+            lo, hi = min(lo, self.band_hz[0]), max(hi, self.band_hz[1])
         return (self.nominal_radius < 1.0 < self.extended_radius
                 and lo - self.resolution_hz <= self.cycle_hz <= hi + self.resolution_hz)
 
     def text(self) -> str:
         return (f"the loop linearised under the logged PI cascade grows by a factor "
                 f"{self.extended_radius:.4g} a sample with the lag of {1e3 * self.lag_s:.3g} ms "
-                f"(mode {self.mode_hz:.3g} Hz, phase crossover {self.crossover_hz:.3g} Hz), "
+                f"(mode {self.mode_hz:.3g} Hz, phase crossover {self.crossover_hz:.3g} Hz"
+                + (f"; {self.band_hz[0]:.3g}-{self.band_hz[1]:.3g} Hz over the fitted values' "
+                   f"spread" if all(math.isfinite(b) for b in self.band_hz) else "")
+                + "), "
                 f"{self.nominal_radius:.4g} without it; the log's torque at the limit "
                 f"oscillates at {self.cycle_hz:.3g} +- {self.resolution_hz:.2g} Hz")
 
@@ -80,7 +97,9 @@ class LimitCycle:
         return {"nominal_radius": self.nominal_radius, "extended_radius": self.extended_radius,
                 "lag_s": self.lag_s, "mode_hz": self.mode_hz,
                 "crossover_hz": self.crossover_hz, "cycle_hz": self.cycle_hz,
-                "resolution_hz": self.resolution_hz, "confirms": self.confirms}
+                "resolution_hz": self.resolution_hz,
+                "band_hz": [b if math.isfinite(b) else None for b in self.band_hz],
+                "confirms": self.confirms}
 
 
 def plant(p: dict[str, float], ts: float, lag_s: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
@@ -173,11 +192,32 @@ def cycle_hz(log: Log) -> tuple[float, float] | None:
     return float(f[int(np.argmax(S[1:])) + 1]), float(f[1] - f[0])
 
 
+def band_hz(p: dict[str, float], kp: float, kv: float, ki: float, ts: float,
+            spread: dict[str, float]) -> tuple[float, float]:
+    """The lowest and highest of the growing mode's and the phase crossover's frequencies
+    [Hz] of the loop with `p` (its lag p["lag_s"]) over the corners of the box p[k] +-
+    spread[k] (each value kept positive) and at p itself (module docstring: the fitted
+    values' spread); the crossover left out where there is none."""
+    keys = [k for k, w in spread.items() if k in p and w > 0]
+    found: list[float] = []
+    for signs in itertools.product((-1.0, 0.0, 1.0), repeat=len(keys)):
+        q = dict(p)
+        for k, s in zip(keys, signs):
+            q[k] = max(p[k] + s * spread[k], 0.0)
+        lag = float(q.get("lag_s", 0.0))
+        found.append(dominant_mode(closed_loop(q, kp, kv, ki, ts, lag), ts)[1])
+        found.append(crossover_hz(q, kp, kv, ki, ts, lag))
+    found = [f for f in found if math.isfinite(f)]
+    return min(found), max(found)
+
+
 def limit_cycle(log: Log, nominal: dict[str, float], extended: dict[str, float],
-                kp: float, kv: float, ki: float) -> LimitCycle | None:
+                kp: float, kv: float, ki: float,
+                spread: dict[str, float] | None = None) -> LimitCycle | None:
     """The loop's linearisation for a named lag on a clipped log under the PI cascade of
     gains kp, kv, ki (module docstring): None when the extended model has no lag or the log
-    never reaches tau_max."""
+    never reaches tau_max. `spread`: the half-width of each fitted value's range (lag_s, D),
+    over which the band of the mode and the crossover is taken (band_hz); None: none."""
     lag = float(extended.get("lag_s", 0.0))
     cycle = cycle_hz(log)
     if not lag > 0 or cycle is None:
@@ -188,4 +228,6 @@ def limit_cycle(log: Log, nominal: dict[str, float], extended: dict[str, float],
     re, fe = dominant_mode(closed_loop(ext, kp, kv, ki, ts, lag), ts)
     return LimitCycle(nominal_radius=rn, extended_radius=re, lag_s=lag, mode_hz=fe,
                       crossover_hz=crossover_hz(ext, kp, kv, ki, ts, lag),
-                      cycle_hz=cycle[0], resolution_hz=cycle[1])
+                      cycle_hz=cycle[0], resolution_hz=cycle[1],
+                      band_hz=band_hz(ext, kp, kv, ki, ts, spread) if spread
+                      else (math.nan, math.nan))

@@ -4,7 +4,8 @@ answer is then "inconclusive", with the reason.
 - **A nominal that cannot be this axis.** Jm, K, JL (or the rigid J) not positive: the fit
   describes no physical axis, so no effect measured against it means anything
   (identification.checks.plausibility.mislabel_reason names the likely mislabelling: q and q_m swapped, the
-  torque's sign). Positions that look like degrees (identification.log.unit_warnings) are a
+  torque's sign; a swap only when the fit with them swapped is a physical axis, swap_refuted).
+  Positions that look like degrees (identification.log.unit_warnings) are a
   warning, never a veto by themselves: a model in degrees is the model in radians rescaled
   (every parameter but the Coulomb frictions 180 / pi times off), and a low-gain position
   loop moves its axis over turns by design. The nominal's first
@@ -58,6 +59,9 @@ answer is then "inconclusive", with the reason.
 
 from __future__ import annotations
 
+import dataclasses
+import math
+
 import numpy as np
 
 from jointbench.bench.analysis.diagnose.clipped import USABLE_MIN, undecided  # noqa: F401
@@ -66,7 +70,11 @@ from jointbench.bench.analysis.diagnose.stability import LimitCycle, limit_cycle
 from jointbench.bench.sim.controller import Gains, controller_from_log
 from jointbench.bench.analysis.diagnose.types import Diagnosis, ForwardView
 from jointbench.identification.discrepancy.heldout import ALPHA, segment_sums, segment_t
+from jointbench.identification.band_choice import CONSISTENCY_Z
 from jointbench.identification.checks.plausibility import mislabel_reason
+from jointbench.identification.discrepancy.lag_band import discretisation, jackknife
+from jointbench.identification.discrepancy.nominal import nominal
+from jointbench.identification.effects.base import spread
 
 
 def _unphysical(p: dict[str, float]) -> str:
@@ -82,14 +90,47 @@ def nominal_reason(d: Diagnosis, extended: dict[str, float] | None = None) -> st
     that is unphysical only for lack of the named causes passes: `extended`, its parameters
     fitted jointly with them (the model diagnose proposes), is then physical (a spring damping
     as large as the spring's stiffness times the first mode leaves eq. 13 alone with K = 779
-    and JL = -0.16 on the prototype, true 2.03e4 and 47; with D, K = 1.69e4 and JL = 40)."""
+    and JL = -0.16 on the prototype, true 2.03e4 and 47; with D, K = 1.69e4 and JL = 40).
+    A spring that pushes the wrong way is said to be q and q_m swapped only when the fit with
+    them swapped is a physical axis (swap_refuted)."""
     p = d.nominal_parameters
     why = _unphysical(p)
     if why and extended and not _unphysical({**p, **extended}):
         why = ""
     if not why:
         return ""
+    why = swap_refuted(d) or why
     return f"the nominal model is not a physical model of this axis: {why}; no effect is named"
+
+
+def swap_refuted(d: Diagnosis) -> str:
+    """Why the wrong-way spring of d's nominal is not read as q and q_m swapped ("" when it
+    is, or when the nominal's fault is another). Swapped columns make eq. 13 fit the link
+    side as the motor's, and the fit with them swapped back is the axis, physical; when that
+    fit is no physical axis either, the log does not hold the spring as eq. 13 has it (a
+    deflection qm - q that a damping far beyond the spring's stiffness times the first mode
+    holds to a few encoder counts: its columns are quantisation, and K and JL come out of the
+    fit with either sign), and naming a mislabelling would be a confident wrong answer."""
+    p = d.nominal_parameters
+    if not ("K" in p and p.get("Jm", 0.0) > 0 and (p["K"] <= 0 or p.get("JL", 1.0) <= 0)):
+        return ""
+    log = d.log
+    if log.q is None:
+        return ""
+    try:
+        every_row = d.clipped is not None and bool(d.clipped.named_by)
+        other = nominal(dataclasses.replace(log, q=log.q_m, q_m=log.q), d.settings,
+                        limit_applied=every_row)
+    except (ValueError, ArithmeticError, np.linalg.LinAlgError):
+        return ""
+    s = {n: float(v) for n, v in zip(other.names, other.X) if n in ("Jm", "K", "JL")}
+    if all(s.get(k, 1.0) > 0 for k in ("Jm", "K", "JL")):
+        return ""
+    return (f"K = {p['K']:.4g}, JL = {p.get('JL', math.nan):.4g} with Jm = {p['Jm']:.4g}: a "
+            f"spring cannot push the wrong way, and with q and q_m swapped the fit is no "
+            f"physical axis either (Jm = {s.get('Jm', math.nan):.4g}, K = "
+            f"{s.get('K', math.nan):.4g}, JL = {s.get('JL', math.nan):.4g}): the log does not "
+            "hold the spring's deflection qm - q as eq. 13 has it")
 
 
 def gain_reason(d: Diagnosis, before: ForwardView | None = None) -> str:
@@ -266,7 +307,9 @@ def loop_cycle(d: Diagnosis) -> LimitCycle | None:
     controller is not the PI cascade. A replay from rest need not reach a limit cycle that
     the lag makes the loop grow into (stability's module docstring): the extended loop
     unstable where the nominal's is stable, at the frequency of the log's clipped
-    oscillation, confirms the every-row reading as a replay at the limit does."""
+    oscillation, confirms the every-row reading as a replay at the limit does. That
+    frequency is asked within the band the fitted lag and spring damping allow
+    (fitted_spread)."""
     views = getattr(d, "clipped", None)
     if views is None or not views.named_by or lag_at(d) is None:
         return None
@@ -277,7 +320,24 @@ def loop_cycle(d: Diagnosis) -> LimitCycle | None:
     if not isinstance(gains, Gains):
         return None
     return limit_cycle(d.log, d.nominal_parameters, d.extended_parameters,
-                       gains.kp, gains.kv, gains.ki)
+                       gains.kp, gains.kv, gains.ki, fitted_spread(d))
+
+
+def fitted_spread(d: Diagnosis) -> dict[str, float]:
+    """The half-width of the range the named lag's T and spring damping's D may take: the
+    fit's own standard error at CONSISTENCY_Z (band_choice: the level at which two estimates
+    of one value are said to agree), the delete-a-fold jackknife of the folds' preferred T
+    (lag_band.jackknife) plus what the led columns' discretisation allows T
+    (lag_band.discretisation), and of the folds' fits of D (effects.base.spread)."""
+    out: dict[str, float] = {}
+    for c in d.inverse.causes:
+        if c.effect == "torque_lag" and c.fold_values:
+            T = float(c.parameters.get("lag_s", 0.0))
+            out["lag_s"] = (CONSISTENCY_Z * jackknife(c.fold_values)
+                            + discretisation(d.settings, T))
+        elif c.effect == "spring_damping":
+            out["D"] = CONSISTENCY_Z * spread(c.fold_fits, lambda v: v["D"])
+    return {k: v for k, v in out.items() if np.isfinite(v)}
 
 
 def with_clipping(d: Diagnosis) -> str:
