@@ -25,8 +25,9 @@ import pytest
 import jointbench as jb
 from jointbench.bench.campaign.methods import BLIND_META, blind
 from jointbench.bench.campaign.settings import CampaignError
+from jointbench.bench.cli import main
 
-# Each test starts processes and waits on deadlines: left out of `make check`.
+# Most tests start processes and wait on deadlines: the file is left out of `make check`.
 pytestmark = pytest.mark.slow
 
 GRACE_S = 20.0   # how long a killed process group may take to be gone on a loaded machine
@@ -328,14 +329,18 @@ def test_method_timeout_out_of_range_in_the_api(tmp_path):
     ("readonly.xml", "is read-only"),
     ("no_folder/gates.xml", "folder no_folder does not exist"),
 ])
-def test_junit_target_refused_before_any_run(tmp_path, target, message):
+def test_junit_target_refused_before_any_run(tmp_path, target, message, monkeypatch, capsys):
+    # in this process (the command's own dispatcher, `main`): no run, so no process to
+    # contain, and no interpreter to start for each target
+    monkeypatch.chdir(tmp_path)
     os.mkfifo(tmp_path / "fifo")
     (tmp_path / "readonly.xml").write_text("")
     os.chmod(tmp_path / "readonly.xml", stat.S_IRUSR | stat.S_IRGRP | stat.S_IROTH)
-    done = _campaign([*TINY, "--workers", "1", "--require", "failed==0", "--junit", target,
-                      "--out", "c.csv"], tmp_path, timeout=60)
-    assert done.returncode == 2, done.stderr
-    assert f"--junit {target}: {message}" in done.stderr and "Traceback" not in done.stderr
+    code = main(["campaign", *TINY, "--workers", "1", "--require", "failed==0", "--junit",
+                 target, "--out", "c.csv"])
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert f"--junit {target}: {message}" in err and "Traceback" not in err
     assert not (tmp_path / "c.csv").exists()        # no run happened
     assert stat.S_ISFIFO(os.lstat(tmp_path / "fifo").st_mode)
     assert (tmp_path / "readonly.xml").read_text() == ""
@@ -345,24 +350,27 @@ def test_junit_target_refused_before_any_run(tmp_path, target, message):
 # Memory estimates count the workers
 
 
-def test_survey_multiplies_its_memory_estimate_by_the_workers(tmp_path):
-    env = {"JOINTBENCH_MAX_MEMORY_MB": "1000"}
-    done = subprocess.run([sys.executable, "-m", "jointbench.bench.cli", "survey", "--workers",
-                           "6", "--duration", "10", "--out", "sv"], cwd=tmp_path,
-                          capture_output=True, text=True, env={**os.environ, **env},
-                          timeout=120)
+# The estimates are checked before any worker starts: in this process, through `main`.
+
+
+def test_survey_multiplies_its_memory_estimate_by_the_workers(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("JOINTBENCH_MAX_MEMORY_MB", "1000")
+    code = main(["survey", "--workers", "6", "--duration", "10", "--out", "sv"])
     # 6 axes of 10 s at the paper's rate: 200 MB + 6 x 3.4 MB here, 6 x (200 + 3.4) MB in the
     # workers (bench.cli.resources' figures), 1441 MB in all.
-    assert done.returncode == 2
+    assert code == 2
     assert ("--duration 10 s on 6 axes with 6 workers: about 1,441 MB of memory "
-            "(221 MB here and 203 MB per worker), over the 1,000 MB limit") in done.stderr
+            "(221 MB here and 203 MB per worker), over the 1,000 MB limit"
+            ) in capsys.readouterr().err
     assert not (tmp_path / "sv").exists()
 
 
-def test_campaign_multiplies_its_memory_estimate_by_the_workers(tmp_path):
-    done = _campaign([*TINY, "--workers", "4", "--out", "c.csv"], tmp_path,
-                     env={"JOINTBENCH_MAX_MEMORY_MB": "500"}, timeout=60)
-    assert done.returncode == 2 and "(4 workers), over the 500 MB limit" in done.stderr
+def test_campaign_multiplies_its_memory_estimate_by_the_workers(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("JOINTBENCH_MAX_MEMORY_MB", "500")
+    code = main(["campaign", *TINY, "--workers", "4", "--out", "c.csv"])
+    assert code == 2 and "(4 workers), over the 500 MB limit" in capsys.readouterr().err
     assert not (tmp_path / "c.csv").exists()
 
 

@@ -103,15 +103,19 @@ def test_position_names_follow_the_axis():
 
 
 @pytest.fixture(scope="module")
-def emps_diagnosis():
+def emps_diagnosis(tmp_path_factory):
+    """The EMPS estimation file diagnosed once, without the forward view, its answer written
+    (figures, report, models) as `diagnose --out FOLDER --no-forward` writes it:
+    (log, diagnosis, folder)."""
     log = read_log(EMPS / "emps_estimation.csv")
-    return log, diagnose(log, forward=False)
+    out = tmp_path_factory.mktemp("emps") / "d"
+    return log, diagnose(log, out, forward=False), out
 
 
 def test_emps_extended_model_of_every_candidate_runs(emps_diagnosis, tmp_path):
     """Each testable candidate of the EMPS estimation file, and all of them at once, in the
     prismatic rigid nominal: simulate and replay run; the simulated log says prismatic."""
-    log, d = emps_diagnosis
+    log, d, _ = emps_diagnosis
     tested = [c for c in d.inverse.candidates if c.testable]
     assert {c.effect for c in tested} == set(RIGID_TESTS)
     p = d.nominal_parameters
@@ -136,7 +140,7 @@ def test_emps_extended_model_of_every_candidate_runs(emps_diagnosis, tmp_path):
 
 
 def test_emps_reports_metres(emps_diagnosis):
-    log, d = emps_diagnosis
+    log, d, _ = emps_diagnosis
     text = summary_text(d)
     assert "ripple_period_m" in text and "ripple_period_rad" not in text
     doc = json.loads(json.dumps(d.to_json()))
@@ -144,10 +148,9 @@ def test_emps_reports_metres(emps_diagnosis):
     assert "ripple_period_m" in ripple["parameters"]
 
 
-def test_emps_diagnose_out_models_run(tmp_path):
-    out = tmp_path / "d"
-    assert main(["diagnose", str(EMPS / "emps_estimation.csv"), "--out", str(out),
-                 "--quiet", "--no-forward"]) == 0
+def test_emps_diagnose_out_models_run(emps_diagnosis, tmp_path):
+    _, d, out = emps_diagnosis
+    assert {str(out / m) for m in ("nominal.xml", "extended.xml")} <= set(d.files)
     # the nominal at 20 s (the chirp of the 60 s default, test above), the extended at 60 s
     for name, duration in (("nominal.xml", ["--duration", "20"]), ("extended.xml", [])):
         assert _run("--model", str(out / name), *duration,
