@@ -17,7 +17,7 @@ from scipy import optimize, stats
 from jointbench.identification.discrepancy.heldout import (FOLDS, MATERIAL, SEGMENTS, Evidence,
                                                            Scores, bar, evidence, fitted_rss,
                                                            fold_of_rows, held_out, preferred,
-                                                           scores, t_bar)
+                                                           scores, segment_of_rows, t_bar)
 from jointbench.identification.discrepancy.nominal import (Nominal, transmitted_rms,
                                                            with_link_law)
 from jointbench.identification.discrepancy.signals import stack
@@ -519,13 +519,23 @@ def beyond_limit(nom: Nominal, e: Effect, ref: Reference, c: Candidate) -> Candi
     itself. The equations it acts in stay those it changes against `ref`. The reference
     holds its own link friction law (nominal.with_link_law), searched on its design with the
     limit, as the extended model holds its own (_own_law): the limit and the law near zero
-    speed share the rows where the link sticks."""
+    speed share the rows where the link sticks.
+
+    The column stands for the spring's torque at its reversals, so it is kept on the segments
+    where the deflection reverses (`reversing`) and is zero on the others. Where a static load
+    holds the deflection on one side for a whole segment (a pendulum resting on its spring
+    against gravity), the spring's sign is that load's sign on every row: the column is a
+    constant torque there, an offset, and it takes up K's misfit at the static deflection
+    K (qm - q), which a spring law stiffer at large deflections leaves (the nominal's K fitted
+    where the stiffer spring acts is too stiff at rest): the hardening's own image, not the
+    misfit near zero speed the column is for."""
     named = ref.base.effects
     if (e.limit is None or not c.testable or c.heldout_errors is None or not named
             or any(EFFECTS[name].in_spring for name, _ in named)):
         return c
     sig = nom.sig
-    cols = tuple((name, stack(sig, m, li)) for name, m, li in e.limit(nom))
+    on = reversing(nom)
+    cols = tuple((name, _kept(stack(sig, m, li), on)) for name, m, li in e.limit(nom))
     base = dataclasses.replace(ref.base, extra=ref.base.extra + cols)
     law = with_link_law(nom, base.design())
     if law is not nom:
@@ -541,6 +551,27 @@ def beyond_limit(nom: Nominal, e: Effect, ref: Reference, c: Candidate) -> Candi
                    explained_pct=100 * (rss0 - c.rss) / rss0 if rss0 > 0 else 0.0,
                    heldout_pct=ev.explained_pct, acts_pct=ev.acts_pct, t_stat=ev.t,
                    p_heldout=ev.p, views=views, rows=rows)
+
+
+def reversing(nom: Nominal) -> np.ndarray:
+    """The instants (a mask over `nom`'s rows of one block) of the segments (heldout.
+    segment_of_rows) where the deflection qm - q takes both signs: where the spring's torque
+    reverses (beyond_limit); every instant for a log without the link."""
+    sig = nom.sig
+    n = len(sig.index)
+    if sig.q is None:
+        return np.ones(n, bool)
+    s = np.sign((sig.qm - sig.q)[sig.index])
+    seg = segment_of_rows(n)
+    up = np.bincount(seg, s > 0, SEGMENTS) > 0
+    down = np.bincount(seg, s < 0, SEGMENTS) > 0
+    return (up & down)[seg]
+
+
+def _kept(column: np.ndarray, instants: np.ndarray) -> np.ndarray:
+    """A stacked column (signals.stack: one block of rows per equation) zero outside
+    `instants` (a mask over one block's rows)."""
+    return column * np.tile(instants, len(column) // len(instants))
 
 
 # The effects that act in parallel with the spring without a searched value of their own
