@@ -79,6 +79,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
+from scipy import stats
 
 from jointbench.identification.discrepancy.candidates import (Candidate, HeldOutTest, candidate,
                                                               reference)
@@ -414,7 +415,8 @@ def _ahead(nom: Nominal, round_: list[Candidate], note: str, alt: Alternative | 
             note = (f"one of {best.effect} or {b.effect}: with {nxt.effect} on top of it, "
                     f"{b.effect}'s fit lies beyond its physical bound by "
                     f"{_beyond_se(nom, b, nxt):.3g} of its standard errors, within the "
-                    f"round's bar t > {t_bar(b.alpha):.3g} ({turned}); {best.effect}"
+                    f"round's bar t > {_beyond_bar(b.alpha, len(nxt.fold_fits)):.3g} "
+                    f"({turned}); {best.effect}"
                     f"{f' and {next_best}' if next_best else ''} predict the held-out rows "
                     f"better than {b.effect} alone (t = {t:.3g}, the converse t = {t2:.3g}); "
                     f"{best.effect} is named for the two")
@@ -441,11 +443,12 @@ def _ahead(nom: Nominal, round_: list[Candidate], note: str, alt: Alternative | 
 def _near_bound(nom: Nominal, b: Candidate, best: Candidate, after: Round) -> bool:
     """`b`, whose joint fit with the cause its next round names (`after`'s top) fails its
     own check, reduces to the chosen `best` (an asymmetric friction and an offset) and lies
-    beyond its bound there by no more than the round's bar t_bar(alpha) of its own standard
+    beyond its bound there by no more than the round's bar (_beyond_bar) of its own standard
     errors: the tolerance under which an unphysical fit stays the alternative of the effect
     it reduces to (_near), applied to the joint fit as to its own."""
     return (EFFECTS[b.effect].reduces_to == best.effect
-            and _beyond_se(nom, b, after[0][0]) <= t_bar(b.alpha))
+            and _beyond_se(nom, b, after[0][0])
+            <= _beyond_bar(b.alpha, len(after[0][0].fold_fits)))
 
 
 def _better(worse: Candidate | np.ndarray, better: Candidate, n: int) -> tuple[float, float]:
@@ -540,11 +543,20 @@ def _simplest_first(ranked: list[Candidate], nom: Nominal,
 
 
 def _near(c: Candidate) -> bool:
-    """Physical, or unphysical by less than the round's bar t_bar(alpha) of its own standard
-    errors (Candidate.beyond_se): an asymmetric friction at its bound (one direction's Coulomb
-    friction near zero) overshoots the bound by noise, and a log that excludes it as a
-    description must do so with the strength that naming a cause asks."""
-    return not c.unphysical or c.beyond_se <= t_bar(c.alpha)
+    """Physical, or unphysical by less than the round's bar (_beyond_bar at its alpha) of its
+    own standard errors (Candidate.beyond_se): an asymmetric friction at its bound (one
+    direction's Coulomb friction near zero) overshoots the bound by noise, and a log that
+    excludes it as a description must do so with the strength that naming a cause asks."""
+    return not c.unphysical or c.beyond_se <= _beyond_bar(c.alpha, len(c.fold_fits))
+
+
+def _beyond_bar(alpha: float, folds: int) -> float:
+    """The bar at level `alpha` for a fit's distance beyond its physical bound in its own
+    standard errors (Effect.beyond): that standard error is the delete-a-group jackknife over
+    the `folds` training fits (effects.base.spread), whose variance has folds - 1 degrees of
+    freedom, so the distance is a Student t with folds - 1 of them, not with the segment
+    test's (t_bar); t_bar where there are no folds."""
+    return float(stats.t.isf(alpha, folds - 1)) if folds > 1 else t_bar(alpha)
 
 
 def _nested(simpler: Candidate, richer: Candidate, t: float, t_back: float,

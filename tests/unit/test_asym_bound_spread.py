@@ -75,16 +75,17 @@ def test_joint_fit_checks_with_its_own_folds(over, physical):
 @pytest.mark.parametrize("below_bar", [-2.0, -0.2, 0.2])
 def test_joint_fit_near_its_bound_stays_the_offset_alternative(below_bar):
     # An asymmetry whose joint fit with the next round's cause overshoots its bound by more
-    # than CHECK_Z but fewer than the round's bar t_bar(alpha) of its standard errors is not
-    # excluded as a description (inverse._near, applied to the joint fit): it stays the
+    # than CHECK_Z but fewer than the round's bar of its standard errors (a Student t with
+    # the ten folds' 9 degrees of freedom at alpha, inverse._beyond_bar) is not excluded as
+    # a description (inverse._near, applied to the joint fit): it stays the
     # alternative of the offset it reduces to ("one of offset or asymmetric_friction"),
     # never against another effect, and beyond the bar it is left out.
     from jointbench.identification.discrepancy.candidates import Candidate
-    from jointbench.identification.discrepancy.heldout import ALPHA, t_bar
-    from jointbench.identification.discrepancy.inverse import _near_bound
+    from jointbench.identification.discrepancy.heldout import ALPHA
+    from jointbench.identification.discrepancy.inverse import _beyond_bar, _near_bound
 
     alpha = ALPHA / 8   # a first round's Holm level
-    over = t_bar(alpha) + below_bar   # standard errors beyond the bound, all over CHECK_Z
+    over = _beyond_bar(alpha, 10) + below_bar   # standard errors beyond, all over CHECK_Z
     assert over > af.CHECK_Z
     v = _values(2.0 + 0.1 * over, 2.0, 0.1)
     fixed = {"FS_ref": 1.0, "FV_ref": 1.0, "viscous_share": 0.0}
@@ -95,3 +96,22 @@ def test_joint_fit_near_its_bound_stays_the_offset_alternative(below_bar):
     after = ([then], "", None)
     assert _near_bound(_rows(), b, Candidate("offset", True), after) is (below_bar < 0)
     assert not _near_bound(_rows(), b, Candidate("gravity", True), after)
+
+
+def test_beyond_bar_holds_its_level_for_a_jackknife_t():
+    # a fit exactly at its bound: its excess over ten folds' jackknife standard error is a
+    # Student t with 9 degrees of freedom; the tolerance _near and _near_bound allow must
+    # exceed it with a chance of at most alpha (binomial sigma of the rate over n draws),
+    # where the segment test's bar t_bar (more degrees of freedom) exceeds it far more often
+    from jointbench.identification.discrepancy.heldout import t_bar
+    from jointbench.identification.discrepancy.inverse import _beyond_bar
+
+    rng = np.random.default_rng(7)
+    k, n, alpha = 10, 200_000, 0.01
+    x = rng.standard_normal((n, k))
+    loo = (x.sum(axis=1, keepdims=True) - x) / (k - 1)
+    se = np.sqrt((k - 1) / k * np.sum((loo - loo.mean(axis=1, keepdims=True)) ** 2, axis=1))
+    z = x.mean(axis=1) / se
+    sigma = np.sqrt(alpha * (1 - alpha) / n)
+    assert np.mean(z > _beyond_bar(alpha, k)) == pytest.approx(alpha, abs=5 * sigma)
+    assert np.mean(z > t_bar(alpha)) > alpha + 5 * sigma
