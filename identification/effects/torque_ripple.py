@@ -166,9 +166,11 @@ def check(v: dict, rows: Rows) -> str:
 
 
 def rests_repeat(rest: np.ndarray, periods: np.ndarray) -> np.ndarray:
-    """Per period p, do the rest angles `rest` (rest_angles) repeat at it? Their phases
-    2 pi rest / p are not uniform (rayleigh_p under the held-out test's level ALPHA) and
-    repeat less at 2 p (mean resultant length R(2 p) < R(p)). A ripple stronger than the
+    """Per period p, do the rest angles `rest` (rest_angles) repeat at it? They span
+    REPEATS periods (the span check asks of the motor angle: rests within one period of
+    each other cluster at any period longer than their scatter, and tell no period), their
+    phases 2 pi rest / p are not uniform (rayleigh_p under the held-out test's level ALPHA)
+    and repeat less at 2 p (mean resultant length R(2 p) < R(p)). A ripple stronger than the
     motor's friction stops it in its wells, one a period apart: the rests repeat at the
     period, at its harmonics p / m less (R^(m^2) for phases spread normally) and at its
     multiples hardly (alternate wells fall half a period apart), so a harmonic of the wells'
@@ -178,8 +180,11 @@ def rests_repeat(rest: np.ndarray, periods: np.ndarray) -> np.ndarray:
 
     out = []
     for p in np.atleast_1d(periods):
-        r1 = abs(np.mean(np.exp(2j * np.pi * rest / p))) if len(rest) else 0.0
-        r2 = abs(np.mean(np.exp(1j * np.pi * rest / p))) if len(rest) else 0.0
+        if not len(rest) or np.ptp(rest) < REPEATS * p:
+            out.append(False)
+            continue
+        r1 = abs(np.mean(np.exp(2j * np.pi * rest / p)))
+        r2 = abs(np.mean(np.exp(1j * np.pi * rest / p)))
         out.append(rayleigh_p(rest, p) < ALPHA and r2 < r1)
     return np.array(out, bool)
 
@@ -206,9 +211,15 @@ def rests_in_wells(v: dict, rows: Rows) -> bool:
 
 
 def rest_angles(rows: Rows) -> np.ndarray:
-    """One motor angle per rest: the mean angle of each run of the regression's decimated
-    rows (the band's independent samples) where the motor is still, |qm'| under the band's
-    decimated cutoff times the encoder-scale step, as seen_from counts it."""
+    """One motor angle per rest, in time order: the mean angle of each rest's still rows.
+    A still row is one of the regression's decimated rows (the band's independent samples)
+    where |qm'| is under the band's decimated cutoff times the encoder-scale step, as
+    seen_from counts it. Successive runs of still rows between which the motor does not
+    leave the position's resolution (its angle within one encoder-scale step) are one rest:
+    a motor settling about one angle reverses there again and again, and those runs are not
+    independent samples of the wells, as Rayleigh's test (rayleigh_p) takes its samples. A
+    rest holds the motor still over two rows at least: one still row alone is as well the
+    motor reversing through zero speed."""
     sig = rows.sig
     qmd, settings = getattr(sig, "qmd", None), getattr(sig, "settings", None)
     idx = getattr(sig, "index", None)
@@ -216,12 +227,19 @@ def rest_angles(rows: Rows) -> np.ndarray:
         return np.empty(0)
     idx = np.asarray(idx)
     span = float(np.ptp(sig.qm[sig.sl]))
-    still = np.abs(np.nan_to_num(np.asarray(qmd)[idx])) < (
-        settings.decimated_cutoff_hz * _encoder_step(span))
+    step = _encoder_step(span)
+    still = np.abs(np.nan_to_num(np.asarray(qmd)[idx])) < settings.decimated_cutoff_hz * step
     edges = np.diff(np.concatenate([[0], still.astype(int), [0]]))
     starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
     qm = np.asarray(sig.qm)[idx]
-    return np.array([np.mean(qm[a:b]) for a, b in zip(starts, ends)])
+    rests: list[tuple[int, int]] = []
+    for a, b in zip(starts, ends):
+        if rests and np.ptp(qm[rests[-1][0]:b]) < step:
+            rests[-1] = (rests[-1][0], b)
+        else:
+            rests.append((a, b))
+    return np.array([np.mean(qm[a:b][still[a:b]]) for a, b in rests
+                     if np.count_nonzero(still[a:b]) >= 2])
 
 
 def rayleigh_p(angles: np.ndarray, period: float) -> float:

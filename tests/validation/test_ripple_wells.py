@@ -1,14 +1,18 @@
 """A strong torque ripple stops the motor in its wells: the still samples it makes raise the
 period grid's start (torque_ripple.seen_from) above the ripple's own period, and the rests'
 angles repeat at it (torque_ripple.rests_repeat: Rayleigh's test, and less at twice the
-period), which a presliding stiffness's do not. The ripple is then searched and named at its period (the independent
-simulator's lab rig; diagnose without the forward view)."""
+period, over rests that span two periods), which a presliding stiffness's do not, nor the
+turning points of a motor settling about one angle, one rest (torque_ripple.rest_angles).
+The ripple is then searched and named at its period (the independent simulator's lab rig;
+diagnose without the forward view)."""
 
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
+import pytest
 
 from jointbench.testing.simulator import LAB_RIG, simulate_lab_rig
 
@@ -33,6 +37,12 @@ def test_rest_angles_at_wells_repeat_and_uniform_ones_do_not():
     assert torque_ripple.rests_repeat(wells, np.array([period, period / 2, 2 * period])
                                       ).tolist() == [True, False, False]
     assert not torque_ripple.rests_repeat(spread, np.array([period])).any()
+    # rests in two wells a period apart span less than REPEATS periods: their phases agree at
+    # the period, but as well at each of its divisors, and a settling motor's rests within
+    # one period of each other cluster at any period longer than their scatter
+    two = period * (rng.integers(0, 2, n) + 0.5) + rng.normal(0.0, 0.1 * period, n)
+    assert torque_ripple.rayleigh_p(two, period) < ALPHA
+    assert not torque_ripple.rests_repeat(two, np.array([period])).any()
 
 
 def test_strong_lab_rig_ripple_named_at_its_period():
@@ -47,3 +57,21 @@ def test_strong_lab_rig_ripple_named_at_its_period():
     # dp = p^2 / (4 span) (torque_ripple._periodogram_peaks)
     span = float(np.ptp(log.q_m))
     assert abs(period - truth) <= truth ** 2 / (4 * span), (period, truth)
+
+
+def test_a_settling_motor_rests_once_and_a_reversal_is_no_rest():
+    # decimated rows over a 1 rad travel: the encoder-scale step is span / SHORTEST, and a
+    # row is still where |qm'| is under the decimated cutoff times that step
+    step = 1.0 / torque_ripple.SHORTEST
+    moving, settle = 1.0, 1e-3 * step
+    qm, qmd = [0.0], [moving]
+    for k in range(10):         # settling about 0.2 rad: turning points within the step
+        qm += [0.2 + settle * (-1) ** k, 0.2]
+        qmd += [moving, 0.0]
+    qm += [0.35, 0.5, 0.5, 0.5, 0.65, 0.8, 0.9, 1.0]     # a rest at 0.5, a reversal at 0.8
+    qmd += [moving, 0.0, 0.0, 0.0, moving, 0.0, moving, moving]
+    qm, qmd = np.array(qm), np.array(qmd)
+    sig = SimpleNamespace(qm=qm, qmd=qmd, index=np.arange(len(qm)), sl=slice(None),
+                          settings=SimpleNamespace(decimated_cutoff_hz=10.0))
+    rest = torque_ripple.rest_angles(SimpleNamespace(sig=sig))
+    assert rest == pytest.approx([0.2, 0.5], abs=settle)
