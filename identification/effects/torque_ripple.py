@@ -219,7 +219,9 @@ def rest_angles(rows: Rows) -> np.ndarray:
     a motor settling about one angle reverses there again and again, and those runs are not
     independent samples of the wells, as Rayleigh's test (rayleigh_p) takes its samples. A
     rest holds the motor still over two rows at least: one still row alone is as well the
-    motor reversing through zero speed."""
+    motor reversing through zero speed. A rest at the angle of an earlier one (within one
+    encoder-scale step) counts once: a motor the command returns to one angle has the same
+    phase there at every period, which tells none."""
     sig = rows.sig
     qmd, settings = getattr(sig, "qmd", None), getattr(sig, "settings", None)
     idx = getattr(sig, "index", None)
@@ -238,8 +240,12 @@ def rest_angles(rows: Rows) -> np.ndarray:
             rests[-1] = (rests[-1][0], b)
         else:
             rests.append((a, b))
-    return np.array([np.mean(qm[a:b][still[a:b]]) for a, b in rests
-                     if np.count_nonzero(still[a:b]) >= 2])
+    out: list[float] = []
+    for a, b in rests:
+        angle = float(np.mean(qm[a:b][still[a:b]]))
+        if np.count_nonzero(still[a:b]) >= 2 and all(abs(angle - o) >= step for o in out):
+            out.append(angle)
+    return np.array(out)
 
 
 def rayleigh_p(angles: np.ndarray, period: float) -> float:

@@ -59,7 +59,7 @@ def test_strong_lab_rig_ripple_named_at_its_period():
     assert abs(period - truth) <= truth ** 2 / (4 * span), (period, truth)
 
 
-def test_a_settling_motor_rests_once_and_a_reversal_is_no_rest():
+def test_a_settling_motor_rests_once_a_reversal_is_no_rest_and_a_return_no_new_one():
     # decimated rows over a 1 rad travel: the encoder-scale step is span / SHORTEST, and a
     # row is still where |qm'| is under the decimated cutoff times that step
     step = 1.0 / torque_ripple.SHORTEST
@@ -70,6 +70,8 @@ def test_a_settling_motor_rests_once_and_a_reversal_is_no_rest():
         qmd += [moving, 0.0]
     qm += [0.35, 0.5, 0.5, 0.5, 0.65, 0.8, 0.9, 1.0]     # a rest at 0.5, a reversal at 0.8
     qmd += [moving, 0.0, 0.0, 0.0, moving, 0.0, moving, moving]
+    qm += [0.75, 0.5, 0.5]      # back to rest at 0.5: the same phase at every period
+    qmd += [moving, 0.0, 0.0]
     qm, qmd = np.array(qm), np.array(qmd)
     sig = SimpleNamespace(qm=qm, qmd=qmd, index=np.arange(len(qm)), sl=slice(None),
                           settings=SimpleNamespace(decimated_cutoff_hz=10.0))
