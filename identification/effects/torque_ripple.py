@@ -69,7 +69,9 @@ def grid(rows: Rows) -> np.ndarray:
     """Periods from encoder-scale steps to the motion span (the column must vary): a coarse
     geometric grid and, around each of the periodogram's peaks (_periodogram_peaks), the
     peak and its neighbours one wavenumber step either side, sorted so that the search's
-    refinement (candidates._search) brackets the best between its grid neighbours."""
+    refinement (candidates._search) brackets the best between its grid neighbours. A peak
+    below the coarse grid's start is kept where the motor's rests repeat at it
+    (rests_repeat): the rests in a strong ripple's wells raise that start (seen_from)."""
     sig = rows.sig
     span = float(np.ptp(sig.qm[sig.sl]))
     coarse = _coarse(rows)
@@ -78,8 +80,13 @@ def grid(rows: Rows) -> np.ndarray:
     step = np.pi / (2 * span)
     k = _periodogram_peaks(rows, span)
     fine = 2 * np.pi / np.concatenate([k - step, k, k + step]) if len(k) else np.empty(0)
-    fine = fine[(fine > 0) & (fine >= coarse[0]) & (fine <= coarse[-1])]
-    return np.unique(np.concatenate([coarse, fine]))
+    fine = fine[(fine > 0) & (fine <= coarse[-1])]
+    below = fine < coarse[0]
+    if below.any():
+        # a strong ripple's rests, counted as still samples, raise the grid's start
+        # (seen_from) above its period: a peak below it is searched where the rests repeat
+        below[below] = ~rests_repeat(rest_angles(rows), fine[below])
+    return np.unique(np.concatenate([coarse, fine[~below]]))
 
 
 def _coarse(rows: Rows) -> np.ndarray:
@@ -136,7 +143,10 @@ def check(v: dict, rows: Rows) -> str:
     friction holds a torque that grows with its small displacement, a presliding stiffness,
     which a short sinusoid of the angle follows) and the position's resolution: a function of
     the angle where the motor creeps, not a ripple of the drive. (A sticking motor does not
-    show a ripple either: its friction holds it.)"""
+    show a ripple either: its friction holds it.) Unless the motor rests in the fitted
+    ripple's wells (rests_in_wells): a strong ripple stops the motor there, its still samples
+    then raise the grid's start above the period that holds them, and a period in the first
+    step, or below it (grid), is the ripple's own."""
     p = v.get("ripple_period_rad", 0.0)
     if not p:
         return ""
@@ -147,12 +157,106 @@ def check(v: dict, rows: Rows) -> str:
                 "period apart: a smooth function of the angle over the travel (a constant "
                 "and slow terms), not a periodic torque")
     g = _coarse(rows)
-    if p >= g[1]:
+    if p >= g[1] or rests_in_wells(v, rows):
         return ""
     return (f"period {p:.3g} rad in the first step of its search grid ({g[0]:.3g} to "
             f"{g[1]:.3g} rad, from encoder-scale steps or the shortest period seen while "
             "the motor turns): the search ran to its bound, a function of the angle where "
             "the motor creeps, not a ripple")
+
+
+def rests_repeat(rest: np.ndarray, periods: np.ndarray) -> np.ndarray:
+    """Per period p, do the rest angles `rest` (rest_angles) repeat at it? They span
+    REPEATS periods (the span check asks of the motor angle: rests within one period of
+    each other cluster at any period longer than their scatter, and tell no period), their
+    phases 2 pi rest / p are not uniform (rayleigh_p under the held-out test's level ALPHA)
+    and repeat less at 2 p (mean resultant length R(2 p) < R(p)). A ripple stronger than the
+    motor's friction stops it in its wells, one a period apart: the rests repeat at the
+    period, at its harmonics p / m less (R^(m^2) for phases spread normally) and at its
+    multiples hardly (alternate wells fall half a period apart), so a harmonic of the wells'
+    period repeats more at twice its own. A presliding stiffness or the position's
+    resolution leave the phases uniform at a period much shorter than the rests' spread."""
+    from jointbench.identification.discrepancy.heldout import ALPHA
+
+    out = []
+    for p in np.atleast_1d(periods):
+        if not len(rest) or np.ptp(rest) < REPEATS * p:
+            out.append(False)
+            continue
+        r1 = abs(np.mean(np.exp(2j * np.pi * rest / p)))
+        r2 = abs(np.mean(np.exp(1j * np.pi * rest / p)))
+        out.append(rayleigh_p(rest, p) < ALPHA and r2 < r1)
+    return np.array(out, bool)
+
+
+def rests_in_wells(v: dict, rows: Rows) -> bool:
+    """Does the motor rest in the wells of the fitted ripple A sin(2 pi qm / p + phase)
+    (params' convention, the torque added to the rotor)? A ripple stronger than the motor's
+    Coulomb friction stops the motor where its torque pushes it back, 2 pi qm / p + phase
+    near pi (mod 2 pi): the rest angles' phases at p cluster there. A presliding stiffness or
+    the position's resolution, which a short sinusoid of the angle also follows where the
+    motor creeps, leaves them uniform at any period much shorter than the angles the motor
+    rests at. The rests repeat at the fitted period (rests_repeat) and their mean phase is
+    on the wells' side (within pi / 2 of pi - phase)."""
+    p = v.get("ripple_period_rad", 0.0)
+    if not p or not {"As", "Ac"} <= v.keys():
+        return False
+    rest = rest_angles(rows)
+    if not rests_repeat(rest, np.array([p]))[0]:
+        return False
+    m = np.mean(np.exp(2j * np.pi * rest / p))
+    phase = float(np.arctan2(-v["Ac"], -v["As"]))
+    off = np.angle(m * np.exp(1j * (phase - np.pi)))
+    return bool(abs(off) < np.pi / 2)
+
+
+def rest_angles(rows: Rows) -> np.ndarray:
+    """One motor angle per rest, in time order: the mean angle of each rest's still rows.
+    A still row is one of the regression's decimated rows (the band's independent samples)
+    where |qm'| is under the band's decimated cutoff times the encoder-scale step, as
+    seen_from counts it. Successive runs of still rows between which the motor does not
+    leave the position's resolution (its angle within one encoder-scale step) are one rest:
+    a motor settling about one angle reverses there again and again, and those runs are not
+    independent samples of the wells, as Rayleigh's test (rayleigh_p) takes its samples. A
+    rest holds the motor still over two rows at least: one still row alone is as well the
+    motor reversing through zero speed. A rest at the angle of an earlier one (within one
+    encoder-scale step) counts once: a motor the command returns to one angle has the same
+    phase there at every period, which tells none."""
+    sig = rows.sig
+    qmd, settings = getattr(sig, "qmd", None), getattr(sig, "settings", None)
+    idx = getattr(sig, "index", None)
+    if qmd is None or settings is None or idx is None:
+        return np.empty(0)
+    idx = np.asarray(idx)
+    span = float(np.ptp(sig.qm[sig.sl]))
+    step = _encoder_step(span)
+    still = np.abs(np.nan_to_num(np.asarray(qmd)[idx])) < settings.decimated_cutoff_hz * step
+    edges = np.diff(np.concatenate([[0], still.astype(int), [0]]))
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    qm = np.asarray(sig.qm)[idx]
+    rests: list[tuple[int, int]] = []
+    for a, b in zip(starts, ends):
+        if rests and np.ptp(qm[rests[-1][0]:b]) < step:
+            rests[-1] = (rests[-1][0], b)
+        else:
+            rests.append((a, b))
+    out: list[float] = []
+    for a, b in rests:
+        angle = float(np.mean(qm[a:b][still[a:b]]))
+        if np.count_nonzero(still[a:b]) >= 2 and all(abs(angle - o) >= step for o in out):
+            out.append(angle)
+    return np.array(out)
+
+
+def rayleigh_p(angles: np.ndarray, period: float) -> float:
+    """Rayleigh's test that the phases 2 pi angles / period are uniform: the p-value of
+    their mean resultant length R (Zar, Biostatistical Analysis, eq. 27.4:
+    p = exp(sqrt(1 + 4 n + 4 (n^2 - (n R)^2)) - (1 + 2 n)))."""
+    n = len(angles)
+    if n < 2 or not period > 0:
+        return 1.0
+    r = n * abs(np.mean(np.exp(2j * np.pi * np.asarray(angles) / period)))
+    return float(np.exp(np.sqrt(1 + 4 * n + 4 * (n ** 2 - r ** 2)) - (1 + 2 * n)))
 
 
 def params(v: dict, fixed: dict, rows: Rows) -> dict[str, float]:
