@@ -15,9 +15,10 @@ import numpy as np
 from scipy import optimize, stats
 
 from jointbench.identification.discrepancy.heldout import (FOLDS, MATERIAL, SEGMENTS, Evidence,
-                                                           Scores, bar, evidence, fitted_rss,
-                                                           fold_of_rows, held_out, preferred,
-                                                           scores, segment_of_rows, t_bar)
+                                                           Scores, bar, engagement_units, evidence,
+                                                           fitted_rss, fold_of_rows, held_out,
+                                                           over_engagements, preferred, scores,
+                                                           segment_of_rows, t_bar)
 from jointbench.identification.discrepancy.nominal import (Nominal, transmitted_rms,
                                                            with_link_law)
 from jointbench.identification.discrepancy.signals import stack
@@ -114,8 +115,8 @@ class HeldOutTest:
     def to_json(self) -> dict:
         return {"view": self.view, "heldout_pct": self.heldout_pct, "t": self.t,
                 "p_heldout": self.p, "alpha": self.level, "t_bar": self.bar,
-                "explained_pct": self.explained_pct, "acts_pct": self.acts_pct,
-                "passes": self.passes}
+                "segments": self.segments, "explained_pct": self.explained_pct,
+                "acts_pct": self.acts_pct, "passes": self.passes}
 
 
 CHOOSER = "chooser's band"
@@ -169,6 +170,9 @@ class Candidate:
     rows: str = ""
     round: int = 0   # the round of the inverse view it was tested in (1 against the nominal)
     view: str = CHOOSER   # what its own test is (the masked pair's: on top of the other)
+    # the units its chooser's band test is over: SEGMENTS, or for an effect that engages
+    # (Effect.engages) the segments with each engagement apart (heldout.engagement_units)
+    segments: int = SEGMENTS
 
     @property
     def level(self) -> float:
@@ -189,11 +193,20 @@ class Candidate:
                 and (self.heldout_pct > 0 and self.p_heldout < self.level or self.confirmed))
 
     @property
+    def units(self) -> str:
+        """", the segments with each engagement apart (k units)" when its chooser's band
+        test counts the spring's engagements (Effect.engages), "" for the segments."""
+        e = EFFECTS.get(self.effect)
+        return (f", the segments with each engagement apart ({self.segments} units)"
+                if e is not None and e.engages else "")
+
+    @property
     def own_test(self) -> HeldOutTest:
         """Its test in the chooser's band (or its `view`), over its `rows`, at its level."""
-        view = f"{self.view}, {self.rows}" if self.rows else self.view
+        view = self.view + self.units
+        view = f"{view}, {self.rows}" if self.rows else view
         return HeldOutTest(view, self.heldout_pct, self.t_stat, self.p_heldout, self.level,
-                           self.explained_pct, self.acts_pct)
+                           self.explained_pct, self.acts_pct, self.segments)
 
     @property
     def test(self) -> HeldOutTest:
@@ -217,7 +230,8 @@ class Candidate:
             return (f"held out ({FOLDS} folds), it explains {self.heldout_pct:.3g} % of the "
                     f"residual; that it explains more than {100 * MATERIAL:g} % has t = "
                     f"{self.t_stat:.3g} (p = {self.p_heldout:.3g}); the bar is p < "
-                    f"{self.level:.2g} (t > {t_bar(self.level):.3g})"
+                    f"{self.level:.2g} (t > {t_bar(self.level, self.segments):.3g}"
+                    f"{self.units})"
                     + (f"; {self.second_note}" if self.second else ""))
         return ""
 
@@ -289,9 +303,11 @@ def _search(cost: Callable[[float], float], grid: np.ndarray) -> None:
 
 
 def _evaluate(nom: Nominal, ref: Reference, e: Effect, fixed: dict,
-              records: list[Scores], under: Stacked) -> Candidate:
+              records: list[Scores], under: Stacked,
+              fold_values: tuple[float, ...] = ()) -> Candidate:
     """Fit the extended design at `fixed` on `under` (the reference's causes, maybe refitted:
-    _coupled) and weigh the evidence against the reference."""
+    _coupled) and weigh the evidence against the reference; `fold_values`, the searched
+    value each fold's training rows prefer, set an engaging effect's units (_units)."""
     _, (y, W, names) = apply(under, e.name, fixed)
     k, block = e.k, e.block
     X = min(records, key=lambda r: r.full).X   # the fit at `fixed` (candidate's choice)
@@ -313,7 +329,8 @@ def _evaluate(nom: Nominal, ref: Reference, e: Effect, fixed: dict,
             else float("nan"))
     errors = held_out(records, ref.folds)
     acts = acts_in(nom, (y0, W0, names0), (y, W, names))
-    ev, views, rows = _test(e, ref, errors, len(nom.sig.index), acts)
+    ev, views, rows = _test(e, ref, errors, len(nom.sig.index), acts,
+                            _units(nom, e, fold_values))
     values = dict(zip(names, X))
     best = min(records, key=lambda r: r.full)
     folds = (() if best.fold_X is None
@@ -333,8 +350,9 @@ def _evaluate(nom: Nominal, ref: Reference, e: Effect, fixed: dict,
                      before_pct=_own_error_pct(nom, res_before, block, W0, ref.scores.X),
                      after_pct=_own_error_pct(nom, res_after, block, W, X), block=block,
                      X=tuple(float(x) for x in X), names=tuple(names), fixed=fixed,
-                     fold_fits=folds,
-                     base=under.effects, acts=acts, views=views, rows=rows)
+                     fold_fits=folds, fold_values=fold_values,
+                     base=under.effects, acts=acts, views=views, rows=rows,
+                     segments=ev.segments)
 
 
 def acts_in(nom: Nominal, reference: Design, extended: Design) -> tuple[int, ...]:
@@ -370,8 +388,30 @@ ROW_VIEWS = 2
 OWN_ROWS = "over the link equation"
 
 
+def _units(nom: Nominal, e: Effect, fold_values: tuple[float, ...]) -> np.ndarray | None:
+    """The units of an engaging effect's test (Effect.engages; heldout.engagement_units:
+    each engagement of the spring, at the engagement its fold's training rows chose, and
+    the other instants of each segment); None for the others, tested over the segments.
+
+    A hardening's column Kh dz(qm - q, d) is zero until the deflection passes d, and a sweep
+    passes it in a few segments only: on an axis whose sweep crosses the mode in its first
+    seconds, 9 of the 40 segments of the chooser's band reach it, with 1 to 13 engaged
+    decimated rows each. Counted by segments, the jumps of those few from one to the next
+    count as noise in the successive differences and the others dilute the mean: the t is
+    set by how many segments the spring engages in, not by what it explains (a hardening that
+    removes half of the held-out residual has t = 3.5 there). Each engagement is one
+    observation of the second spring, in the chooser's band as in the wide one (lag_band:
+    the unit of the hardening's view). The units are set by the positions and the training
+    rows' engagements, never by the held-out residual, so under the null hypothesis their
+    log-ratios have a negative mean and the test's level holds."""
+    if not (e.engages and fold_values):
+        return None
+    return engagement_units(nom, fold_values)
+
+
 def _test(e: Effect, ref: Reference, errors: np.ndarray, n: int,
-          acts: tuple[int, ...]) -> tuple[Evidence, int, str]:
+          acts: tuple[int, ...],
+          units: np.ndarray | None = None) -> tuple[Evidence, int, str]:
     """The held-out evidence of `e` (its `errors` against `ref`'s, over the `acts` blocks of
     n instants each), the views its level is split over and the rows it is over ("" for every
     row it acts in). A second cause of the spring law (_coupled: a named cause in `ref`
@@ -400,11 +440,17 @@ def _test(e: Effect, ref: Reference, errors: np.ndarray, n: int,
     equation's, not chosen by the residual: under the null hypothesis the link equation's
     segment log-ratios have a negative mean as every row's do (heldout). The first cause of
     the law, tested against the nominal, is tested over every row: the nominal's link
-    equation spread is then its own misfit."""
-    ev = evidence(ref.scores.errors, errors, n, acts)
+    equation spread is then its own misfit. `units`: the units an engaging effect's t is
+    over (_units), None for the segments."""
+    def test(blocks: tuple[int, ...]) -> Evidence:
+        ev = evidence(ref.scores.errors, errors, n, blocks)
+        return (ev if units is None
+                else over_engagements(ev, ref.scores.errors, errors, n, blocks, units))
+
+    ev = test(acts)
     if not (_coupled(e, ref.base.effects) and e.block in acts and len(acts) > 1):
         return ev, 1, ""
-    own = evidence(ref.scores.errors, errors, n, (e.block,))
+    own = test((e.block,))
     return (own, ROW_VIEWS, OWN_ROWS) if own.p < ev.p else (ev, ROW_VIEWS, "")
 
 
@@ -543,14 +589,15 @@ def beyond_limit(nom: Nominal, e: Effect, ref: Reference, c: Candidate) -> Candi
         base = dataclasses.replace(under, extra=under.extra + cols)
     y, W, _ = base.design()
     lim = replace(ref, base=base, scores=scores(law, ref.folds, y, W))
-    ev, views, rows = _test(e, lim, c.heldout_errors, len(sig.index), c.acts)
+    ev, views, rows = _test(e, lim, c.heldout_errors, len(sig.index), c.acts,
+                            _units(nom, e, c.fold_values))
     if not ev.p > c.p_heldout:
         return c
     rss0 = lim.scores.full
     return replace(c, reference_errors=lim.scores.errors,
                    explained_pct=100 * (rss0 - c.rss) / rss0 if rss0 > 0 else 0.0,
                    heldout_pct=ev.explained_pct, acts_pct=ev.acts_pct, t_stat=ev.t,
-                   p_heldout=ev.p, views=views, rows=rows)
+                   p_heldout=ev.p, views=views, rows=rows, segments=ev.segments)
 
 
 def reversing(nom: Nominal) -> np.ndarray:
@@ -689,10 +736,8 @@ def _searched(nom: Nominal, e: Effect, ref: Reference, coupled: list[int],
             fixed = e.reference(_Fitted(nom, names, records[-1].X))
             records.clear()
             cost(None)
-    c = _evaluate(nom, ref, e, fixed, records, under)
-    if not e.search:
-        return c
-    return replace(c, fold_values=tuple(float(trials[j][0]) for j in preferred(records)))
+    values = (tuple(float(trials[j][0]) for j in preferred(records)) if e.search else ())
+    return _evaluate(nom, ref, e, fixed, records, under, values)
 
 
 class _Fitted:

@@ -47,6 +47,25 @@ significantly more than MATERIAL = 5 % of what the reference misses in a typical
 prediction then moves by more than a fifth of the residual's RMS, sqrt(0.05) = 0.22). It is a
 share of this log's own residual, whatever its noise or scale, not a share of the torque.
 
+**An engaging spring's units.** A hardening's column Kh dz(qm - q, d) is zero until the
+deflection passes its engagement d (identification.effects.base.Effect.engages), and a sweep
+passes d in a few segments only (near the mode), with a few decimated rows each there. Over
+the segments the engaged ones' log-ratios jump from one to the next, which the successive
+differences count as noise, and the others' dilute the mean: the t is capped by how many
+segments the spring engages in, whatever it explains (half of the held-out residual with
+t = 3.5 on a soft axis whose sweep passes the mode in its first seconds). Each engagement is
+one observation of the second spring, so its test counts them apart (`engagement_units`): each
+run of consecutive instants whose |qm - q| passes the engagement its fold's training rows chose,
+within one segment that reaches it (`engagements`), is a unit, and the other instants of each
+segment are one more, so that every row is counted once (what the spring's refit K changes
+where it does not engage stays in the test). The segment test runs over the units' log-ratios
+in time order, their number in its degrees of freedom (`over_engagements`). The units are set
+by the positions and the training rows, never by the held-out residual, and two runs are a
+decimated row or more apart, about the band's impulse response (the decimated cutoff is
+about 0.8 of the decimated Nyquist frequency): their errors are close to independent, as the
+segments' are, and under the null hypothesis each unit's log-ratio has a negative mean as a
+segment's has. The shares stay those over every row.
+
 **Rule.** An effect is significant when its one-sided p-value P(T_nu >= t) is under ALPHA / m,
 m the number of effects its round tests (identification.discrepancy.inverse: Holm's step-down
 Bonferroni): on a log without any unmodelled effect the chance that any effect is named is at
@@ -64,7 +83,7 @@ Among the significant effects the named one explains the most of the held-out re
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy import stats
@@ -291,6 +310,89 @@ def segment_log_ratios(e0: np.ndarray, e1: np.ndarray, n_times: int,
 def segment_sums(x: np.ndarray) -> np.ndarray:
     """Sums of x over SEGMENTS contiguous segments of equal length (segment_of_rows)."""
     return np.bincount(segment_of_rows(len(x)), x, SEGMENTS)
+
+
+def large_deflections(nom: Nominal, engagement: tuple[float, ...]) -> np.ndarray:
+    """The segments (a mask over heldout.SEGMENTS) whose largest |qm - q| on `nom`'s rows
+    exceeds the engagement `engagement[f]` of their fold f = s mod FOLDS (lag_band: the
+    hardening's view); none when the folds' values are not given."""
+    sig = nom.sig
+    if len(engagement) != FOLDS or sig.q is None:
+        return np.zeros(SEGMENTS, bool)
+    d = np.abs((sig.qm - sig.q)[sig.index])
+    top = np.zeros(SEGMENTS)
+    np.maximum.at(top, segment_of_rows(len(d)), d)
+    return top > np.asarray(engagement, float)[np.arange(SEGMENTS) % FOLDS]
+
+
+def engaged(nom: Nominal, engagement: tuple[float, ...]) -> np.ndarray | None:
+    """The instants (a mask over `nom`'s rows of one block) whose |qm - q| exceeds the
+    engagement `engagement[f]` of their fold f (large_deflections): where the hardening's
+    column Kh dz(qm - q, d) is not zero; None when the folds' values are not given."""
+    sig = nom.sig
+    if len(engagement) != FOLDS or sig.q is None:
+        return None
+    d = np.abs((sig.qm - sig.q)[sig.index])
+    return d > np.asarray(engagement, float)[segment_of_rows(len(d)) % FOLDS]
+
+
+def engagements(nom: Nominal, engagement: tuple[float, ...]) -> np.ndarray | None:
+    """Each of `nom`'s instants' engagement of the spring (module docstring: an
+    engaging spring's units): 0, 1, ... for the maximal runs of consecutive engaged instants
+    (`engaged`) within one segment that reaches the engagement (`large_deflections`), in
+    time order, -1 elsewhere; None when the folds' values are not given."""
+    on = engaged(nom, engagement)
+    if on is None:
+        return None
+    seg = segment_of_rows(len(on))
+    on &= large_deflections(nom, engagement)[seg]
+    rows = np.flatnonzero(on)
+    out = np.full(len(on), -1)
+    starts = np.r_[True, (np.diff(rows) > 1) | (np.diff(seg[rows]) != 0)]
+    out[rows] = np.cumsum(starts) - 1
+    return out
+
+
+def engagement_log_ratios(e0: np.ndarray, e1: np.ndarray, n: int, blocks: tuple[int, ...],
+                          runs: np.ndarray | None) -> np.ndarray:
+    """log(sum e0^2 / sum e1^2) over each engagement `runs` labels (engagements), over the
+    rows of `blocks` (every block for ()), in time order; where both sums are positive (none
+    when `runs` is None)."""
+    if runs is None:
+        return np.zeros(0)
+    sq0, sq1 = ((e ** 2).reshape(-1, n) for e in (e0, e1))
+    rows = list(blocks) if blocks else slice(None)
+    on = runs >= 0
+    k = int(runs.max()) + 1 if on.any() else 0
+    h0 = np.bincount(runs[on], sq0[rows].sum(axis=0)[on], k)
+    h1 = np.bincount(runs[on], sq1[rows].sum(axis=0)[on], k)
+    ok = (h0 > 0) & (h1 > 0)
+    return np.log(h0[ok] / h1[ok])
+
+
+def engagement_units(nom: Nominal, engagement: tuple[float, ...]) -> np.ndarray | None:
+    """A partition of `nom`'s instants into the units of an engaging spring's test (module
+    docstring: an engaging spring's units): each engagement (`engagements`) one unit, the
+    other instants of each segment one unit, labelled 0, 1, ... in the time order of their
+    first instants; None when the folds' values are not given."""
+    runs = engagements(nom, engagement)
+    if runs is None:
+        return None
+    key = np.where(runs >= 0, SEGMENTS + runs, segment_of_rows(len(runs)))
+    _, first, which = np.unique(key, return_index=True, return_inverse=True)
+    rank = np.empty(len(first), int)
+    rank[np.argsort(first, kind="stable")] = np.arange(len(first))
+    return rank[which]
+
+
+def over_engagements(ev: Evidence, e0: np.ndarray, e1: np.ndarray, n: int,
+                     blocks: tuple[int, ...], units: np.ndarray | None) -> Evidence:
+    """`ev` (the evidence of e1 against e0 over `blocks`, n instants each) with its t and p
+    over the `units` (engagement_units) instead of the segments: the segment test on their
+    log-ratios in time order, their number its degrees of freedom; the shares stay `ev`'s."""
+    l = engagement_log_ratios(e0, e1, n, blocks, units)
+    t, p = segment_t(l + np.log(1 - MATERIAL))
+    return replace(ev, t=t, p=p, segments=len(l))
 
 
 def segment_t(l: np.ndarray) -> tuple[float, float]:

@@ -74,12 +74,13 @@ only decides whether the lag is significant.
 **The hardening at large deflections.** A hardening, Kh dz(qm - q, d) beside K (effects.
 hardening), acts only where the deflection passes its engagement d: near the mode, in the
 few segments of the sweep whose deflection is largest, and there its evidence is in the
-harmonics the kink makes, 3 f1 and above, which the chooser's band (about 1.4 f1) cuts. Tested
-over every segment of the chooser's band its evidence is diluted twice: by the segments where
-the spring never engages (their log-ratios carry the MATERIAL margin and nothing else), and by
-the few decimated rows each engaged segment has (13 a segment on a 40 s log of a 2 Hz axis),
-whose log-ratios then jump from one segment to the next, which the successive differences
-count as noise. Its second view is therefore in the wide band (more rows, the harmonics), over
+harmonics the kink makes, 3 f1 and above, which the chooser's band (about 1.4 f1) cuts. Over
+every segment its evidence would be diluted twice: by the segments where the spring never
+engages (their log-ratios carry the MATERIAL margin and nothing else), and by the few decimated
+rows each engaged segment has (13 a segment on a 40 s log of a 2 Hz axis), whose log-ratios
+then jump from one segment to the next, which the successive differences count as noise; so
+the chooser's band's test counts each engagement apart (heldout: an engaging spring's units).
+Its second view is in the wide band (more rows, the harmonics), over
 the segments where the deflection reaches the engagement only (`large_deflections`): segment
 s is kept when the largest |qm - q| on its rows exceeds the engagement that its fold's
 training rows chose (Candidate.fold_values[s mod FOLDS]), a choice made from the positions and
@@ -197,7 +198,9 @@ from jointbench.identification.band_choice import CONSISTENCY_Z, wide_settings
 from jointbench.identification.discrepancy.candidates import (CHOOSER, OWN_ROWS, Candidate,
                                                               SecondView, candidate,
                                                               reference)
-from jointbench.identification.discrepancy.heldout import (FOLDS, MATERIAL, SEGMENTS, evidence,
+from jointbench.identification.discrepancy.heldout import (MATERIAL, SEGMENTS, engaged,
+                                                           engagement_log_ratios, engagements,
+                                                           evidence, large_deflections,
                                                            segment_of_rows, segment_t)
 from jointbench.identification.discrepancy.nominal import Nominal, nominal
 from jointbench.identification.effects import EFFECTS, backlash
@@ -252,30 +255,6 @@ def discretisation(settings: FilterSettings, lag_s: float) -> float:
     return abs(lag_s) * (1.0 - float(stencil_gain(x, 3)))
 
 
-def large_deflections(nom: Nominal, engagement: tuple[float, ...]) -> np.ndarray:
-    """The segments (a mask over heldout.SEGMENTS) whose largest |qm - q| on `nom`'s rows
-    exceeds the engagement `engagement[f]` of their fold f = s mod FOLDS (module docstring:
-    the hardening's view); none when the folds' values are not given."""
-    sig = nom.sig
-    if len(engagement) != FOLDS or sig.q is None:
-        return np.zeros(SEGMENTS, bool)
-    d = np.abs((sig.qm - sig.q)[sig.index])
-    top = np.zeros(SEGMENTS)
-    np.maximum.at(top, segment_of_rows(len(d)), d)
-    return top > np.asarray(engagement, float)[np.arange(SEGMENTS) % FOLDS]
-
-
-def engaged(nom: Nominal, engagement: tuple[float, ...]) -> np.ndarray | None:
-    """The instants (a mask over `nom`'s rows of one block) whose |qm - q| exceeds the
-    engagement `engagement[f]` of their fold f (large_deflections): where the hardening's
-    column Kh dz(qm - q, d) is not zero; None when the folds' values are not given."""
-    sig = nom.sig
-    if len(engagement) != FOLDS or sig.q is None:
-        return None
-    d = np.abs((sig.qm - sig.q)[sig.index])
-    return d > np.asarray(engagement, float)[segment_of_rows(len(d)) % FOLDS]
-
-
 def engaged_in_both(chooser: tuple[float, ...], wide: tuple[float, ...]) -> tuple[float, ...]:
     """Each fold's engagement for the hardening's view (module docstring: where both bands
     engage the spring): the larger of the chooser's band's and the wide band's fold values,
@@ -284,40 +263,6 @@ def engaged_in_both(chooser: tuple[float, ...], wide: tuple[float, ...]) -> tupl
     if len(chooser) != len(wide):
         return tuple(wide)
     return tuple(max(float(a), float(b)) for a, b in zip(chooser, wide))
-
-
-def engagements(nom: Nominal, engagement: tuple[float, ...]) -> np.ndarray | None:
-    """Each of `nom`'s instants' engagement of the spring (module docstring: the unit of the
-    hardening's view): 0, 1, ... for the maximal runs of consecutive engaged instants
-    (`engaged`) within one segment that reaches the engagement (`large_deflections`), in
-    time order, -1 elsewhere; None when the folds' values are not given."""
-    on = engaged(nom, engagement)
-    if on is None:
-        return None
-    seg = segment_of_rows(len(on))
-    on &= large_deflections(nom, engagement)[seg]
-    rows = np.flatnonzero(on)
-    out = np.full(len(on), -1)
-    starts = np.r_[True, (np.diff(rows) > 1) | (np.diff(seg[rows]) != 0)]
-    out[rows] = np.cumsum(starts) - 1
-    return out
-
-
-def engagement_log_ratios(e0: np.ndarray, e1: np.ndarray, n: int, blocks: tuple[int, ...],
-                          runs: np.ndarray | None) -> np.ndarray:
-    """log(sum e0^2 / sum e1^2) over each engagement `runs` labels (engagements), over the
-    rows of `blocks` (every block for ()), in time order; where both sums are positive (none
-    when `runs` is None)."""
-    if runs is None:
-        return np.zeros(0)
-    sq0, sq1 = ((e ** 2).reshape(-1, n) for e in (e0, e1))
-    rows = list(blocks) if blocks else slice(None)
-    on = runs >= 0
-    k = int(runs.max()) + 1 if on.any() else 0
-    h0 = np.bincount(runs[on], sq0[rows].sum(axis=0)[on], k)
-    h1 = np.bincount(runs[on], sq1[rows].sum(axis=0)[on], k)
-    ok = (h0 > 0) & (h1 > 0)
-    return np.log(h0[ok] / h1[ok])
 
 
 def grid_step(nom: Nominal, value: float) -> float:

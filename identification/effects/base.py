@@ -106,6 +106,10 @@ class Effect:
     # effect of the spring it gets a view where it is visible (lag_band.where_visible).
     in_spring: bool = False
     at_the_mode: bool = False
+    # Its column is zero until |qm - q| passes its searched value (a hardening's engagement):
+    # its held-out test counts each engagement of the spring apart, in every band
+    # (identification.discrepancy.heldout.engagement_units).
+    engages: bool = False
     # The columns its design tends to, beyond the nominal's, as its searched value goes to 0
     # (a dead band's first order in its width: a torque of the spring's sign): it is tested
     # against the reference extended by them (identification.discrepancy.candidates.

@@ -47,4 +47,4 @@ EFFECT = Effect(
     "stiffness that rises with deflection (piecewise linear)",
     needs_link=True, rigid_axis=False, block=1, k=2, design=design, params=params,
     check=check, search="deflection_rad", grid=grid, wide_view="deflection",
-    in_spring=True, limit=spring_sign)
+    in_spring=True, engages=True, limit=spring_sign)

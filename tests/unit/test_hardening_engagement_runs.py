@@ -1,7 +1,8 @@
 """The hardening's view at large deflections counts engagements, not segments
 (identification/discrepancy/lag_band.py, `engagements`, `engagement_log_ratios`): the runs of
 engaged instants against their definition, and the view's p-value valid under the null
-hypothesis on white errors (no MuJoCo)."""
+hypothesis on white errors (no MuJoCo); likewise the chooser's band's units, the segments
+with each engagement apart (heldout.engagement_units)."""
 
 from __future__ import annotations
 
@@ -99,3 +100,39 @@ def test_a_view_over_the_engaged_rows_must_explain_a_material_share():
     small = SecondView(**{**seen.__dict__, "heldout_pct": share / 2})
     assert not small.confirms(1e-4)
     assert SecondView(**{**small.__dict__, "diluted": False}).confirms(1e-4)
+
+
+def test_the_chooser_band_units_are_the_segments_with_each_engagement_apart():
+    """heldout.engagement_units: every instant in one unit, each engagement a unit of its
+    own, the other instants of each segment one more, labelled in time order; and the
+    segment test over them, without the MATERIAL margin, rejecting at a nominal 5 % at most
+    about 5 % of the time under the null hypothesis on white errors (the rest of a segment
+    then carries no refit: its log-ratio is 0)."""
+    d = _sweep()
+    nom = _nominal(d)
+    runs = lag_band.engagements(nom, (D,) * heldout.FOLDS)
+    units = heldout.engagement_units(nom, (D,) * heldout.FOLDS)
+    seg = heldout.segment_of_rows(T)
+    k = int(units.max()) + 1
+    assert units.min() == 0 and k == int(runs.max()) + 1 + heldout.SEGMENTS
+    for r in range(int(runs.max()) + 1):           # each engagement is a unit as it was
+        u = units[runs == r]
+        assert len(set(u)) == 1 and np.all(runs[units == u[0]] == r)
+    for s in range(heldout.SEGMENTS):              # the rest of each segment one unit
+        rest = (seg == s) & (runs < 0)
+        assert len(set(units[rest])) == 1
+    first = [int(np.flatnonzero(units == u)[0]) for u in range(k)]
+    assert first == sorted(first)                   # in time order
+    assert heldout.engagement_units(nom, ()) is None
+    column = np.where(np.abs(d) > D, np.abs(d) - D, 0.0) / 0.02
+    fold = seg % heldout.FOLDS
+    rng = np.random.default_rng(5)
+    draws, plain = 400, 0
+    for _ in range(draws):
+        e0 = rng.normal(size=2 * T)
+        c = rng.normal(scale=0.03, size=heldout.FOLDS)[fold]
+        e1 = e0 + np.r_[-c * column, c * column]
+        plain += heldout.segment_t(lag_band.engagement_log_ratios(e0, e1, T, (0, 1),
+                                                                  units))[1] < 0.05
+    sd = np.sqrt(0.05 * 0.95 / draws)   # a 5 % rate's binomial spread over the draws
+    assert plain / draws < 0.05 + 3 * sd

@@ -16,7 +16,8 @@ several runs, or --model), that no named cause has a failing test.
   passing test; `link_coulomb` named from the log's FS has a significant parameter error FS.
 
 The check recomputes the claim from the numbers (p < alpha, share > 0, t above the bar of
-alpha, identification.discrepancy.heldout.t_bar) rather than trusting `passes`.
+alpha for the units the test is over, its `segments`: identification.discrepancy.heldout.
+t_bar) rather than trusting `passes`.
 """
 
 from __future__ import annotations
@@ -56,7 +57,8 @@ def claim_fails(test: dict | None, floor_pct: float = 0.0) -> str:
         return f"held out it explains {share:.3g} % of the residual"
     if not p < alpha:
         return f"p = {p:.3g} is not under its level {alpha:.3g} (t = {t:.3g})"
-    bar = t_bar(alpha)
+    units = test.get("segments")
+    bar = t_bar(alpha, units) if isinstance(units, int) and units >= 3 else t_bar(alpha)
     if not t > bar - _T_ROUNDING * max(1.0, abs(bar)):
         return f"t = {t:.3g} is under its bar t > {bar:.3g}"
     if test.get("passes") is False:
