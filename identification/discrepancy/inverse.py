@@ -646,8 +646,10 @@ def _apart(simpler: Candidate, richer: Candidate, t: float, alpha: float,
     back = ("" if converse is None else
             f", what {simpler.effect} adds to {richer.effect} t = {converse:.3g}")
     fit = " (an unphysical fit)" if unphysical else ""
+    link = (" over the link equation" if n and _of_spring(richer) and _of_spring(simpler)
+            else "")
     named = (f"{richer.effect}, which removes {100 * beyond(richer, simpler, n):.3g} % of what "
-             f"{simpler.effect} leaves, is named" if more else
+             f"{simpler.effect} leaves{link}, is named" if more else
              f"the simpler, {simpler.effect}, is named" + (" first" if both else
                                                             " for the two"))
     what = ("this log carries a part of each that the other cannot follow" if both else
