@@ -82,8 +82,9 @@ import numpy as np
 from scipy import stats
 
 from jointbench.identification.discrepancy.candidates import (Candidate, HeldOutTest, candidate,
-                                                              reference)
-from jointbench.identification.discrepancy.heldout import (ALPHA, MATERIAL, segment_log_ratios,
+                                                              reference, second_of_spring)
+from jointbench.identification.discrepancy.heldout import (ALPHA, MATERIAL, evidence,
+                                                           segment_log_ratios,
                                                            segment_t, t_bar)
 from jointbench.identification.discrepancy.lag_band import (LagBand, second_view,
                                                            where_visible)
@@ -453,10 +454,15 @@ def _near_bound(nom: Nominal, b: Candidate, best: Candidate, after: Round) -> bo
 
 def _better(worse: Candidate | np.ndarray, better: Candidate, n: int) -> tuple[float, float]:
     """The segment test without margin (identification.discrepancy.heldout) that `better`'s
-    held-out errors are smaller than `worse`'s, on the equations `better` acts in: t and its
-    one-sided p-value."""
+    held-out errors are smaller than `worse`'s, on the equations `better` acts in, or on the
+    link equation where both are second causes of the spring's law beside a first cause of
+    the spring (_of_spring: each tested over the link equation too, where the motor torque's
+    noise does not dilute them): t and its one-sided p-value."""
     e0 = worse.heldout_errors if isinstance(worse, Candidate) else worse
-    return segment_t(segment_log_ratios(e0, better.heldout_errors, n, better.acts))
+    rows = better.acts
+    if isinstance(worse, Candidate) and _of_spring(worse) and _of_spring(better):
+        rows = (EFFECTS[better.effect].block,)
+    return segment_t(segment_log_ratios(e0, better.heldout_errors, n, rows))
 
 
 def _on_top(nom: Nominal, richer: Candidate, simpler: Candidate,
@@ -470,22 +476,37 @@ def _on_top(nom: Nominal, richer: Candidate, simpler: Candidate,
     return t, (1.0 if c.unphysical else p), not c.unphysical
 
 
-def beyond(richer: Candidate, simpler: Candidate) -> float:
+def beyond(richer: Candidate, simpler: Candidate, n: int = 0) -> float:
     """The share of `simpler`'s held-out residual that `richer` removes beyond it (both
     against the same reference): 1 - (1 - h_richer) / (1 - h_simpler), h the held-out shares
-    (heldout_pct / 100); <= 0 when `richer` explains no more."""
-    left = 1.0 - simpler.heldout_pct / 100.0
-    return 1.0 - (1.0 - richer.heldout_pct / 100.0) / left if left > 0 else 0.0
+    (heldout_pct / 100); <= 0 when `richer` explains no more. Where both are second causes
+    of the spring's law beside a first cause of the spring (candidates.second_of_spring:
+    each tested over the link equation too), h the shares over the link equation, where the
+    motor torque's noise does not dilute them (`n` the instants of a block, 0 when not
+    given: every row)."""
+    hs, hr = simpler.heldout_pct, richer.heldout_pct
+    if n and all(_of_spring(c) for c in (richer, simpler)):
+        hs, hr = (evidence(c.reference_errors, c.heldout_errors, n,
+                           (EFFECTS[c.effect].block,)).acts_pct for c in (simpler, richer))
+    left = 1.0 - hs / 100.0
+    return 1.0 - (1.0 - hr / 100.0) / left if left > 0 else 0.0
 
 
-def _material(richer: Candidate, simpler: Candidate, physical: bool) -> bool:
+def _of_spring(c: Candidate) -> bool:
+    """`c` is a second cause of the spring's law, tested over the link equation too
+    (candidates.second_of_spring), with its held-out errors."""
+    return (c.effect in EFFECTS and second_of_spring(EFFECTS[c.effect], c.base)
+            and c.heldout_errors is not None and c.reference_errors is not None)
+
+
+def _material(richer: Candidate, simpler: Candidate, physical: bool, n: int = 0) -> bool:
     """Parsimony yields to the naming rule (the named cause explains the most held-out):
     `richer` explains materially more than `simpler` (it removes more than MATERIAL of what
     `simpler` leaves, the margin of identification.discrepancy.heldout) and its fit on top
     of `simpler` is physical. The segment test of what it adds can then miss it because it
     acts in a few segments (a hardening engaging only at the large deflections near the
     mode)."""
-    return physical and beyond(richer, simpler) > MATERIAL
+    return physical and beyond(richer, simpler, n) > MATERIAL
 
 
 def _simplest_first(ranked: list[Candidate], nom: Nominal,
@@ -531,8 +552,8 @@ def _simplest_first(ranked: list[Candidate], nom: Nominal,
         t, p, physical = _on_top(nom, first, s, m)
         if p < alpha:
             continue
-        if _material(first, s, physical):
-            note, alt = _apart(s, first, t, alpha, more=True), None
+        if _material(first, s, physical, len(nom.sig.index)):
+            note, alt = _apart(s, first, t, alpha, more=True, n=len(nom.sig.index)), None
             continue
         note = _apart(s, first, t, alpha, unphysical=not physical)
         alt = _nested(s, first, t, float("nan"), note)
@@ -615,17 +636,20 @@ def _which(nom: Nominal, simpler: Candidate, richer: Candidate,
 
 def _apart(simpler: Candidate, richer: Candidate, t: float, alpha: float,
            converse: float | None = None, more: bool = False, unphysical: bool = False,
-           both: bool = False) -> str:
+           both: bool = False, n: int = 0) -> str:
     """The ambiguity note: `simpler` named (or `richer`, with `more`: it removes more than
     MATERIAL of `simpler`'s held-out residual, _material); `unphysical`: `richer` fitted on
     top of `simpler` is not physical, whatever its t; `both`: each adds to the other (_which),
     `simpler` named first. Where the log cannot choose (neither), the note opens with "one of
-    A or B"."""
+    A or B". `n`: the instants of a block, for the share `richer` removes beyond `simpler`
+    (beyond)."""
     back = ("" if converse is None else
             f", what {simpler.effect} adds to {richer.effect} t = {converse:.3g}")
     fit = " (an unphysical fit)" if unphysical else ""
-    named = (f"{richer.effect}, which removes {100 * beyond(richer, simpler):.3g} % of what "
-             f"{simpler.effect} leaves, is named" if more else
+    link = (" over the link equation" if n and _of_spring(richer) and _of_spring(simpler)
+            else "")
+    named = (f"{richer.effect}, which removes {100 * beyond(richer, simpler, n):.3g} % of what "
+             f"{simpler.effect} leaves{link}, is named" if more else
              f"the simpler, {simpler.effect}, is named" + (" first" if both else
                                                             " for the two"))
     what = ("this log carries a part of each that the other cannot follow" if both else

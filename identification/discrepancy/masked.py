@@ -19,8 +19,11 @@ and three tests are run:
   round tested, whichever two the ranking picks, so that on a log without any unmodelled
   effect the chance that a pair passes stays under ALPHA / 2 whatever the ranking;
 - each of the two on top of the other (the other's value searched against the nominal, held),
-  at ALPHA / (m (m - 1)): Bonferroni over the ordered pairs. An effect that passes on top of
-  a reference holding another explains something that reference, and so the nominal, cannot.
+  at ALPHA / (m (m - 1)): Bonferroni over the ordered pairs (split again over the views its
+  test has there: a second cause of the spring's law on top of a cause of the spring over
+  both equations and the link equation, identification.discrepancy.candidates._test). An
+  effect that passes on top of a reference holding another explains something that
+  reference, and so the nominal, cannot.
 
 When the pair passes and each of the two passes on top of the other (and explains more than
 MATERIAL of the held-out residual of the equations it acts in there, the rounds' floor), both

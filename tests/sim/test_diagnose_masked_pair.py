@@ -15,6 +15,7 @@ import pytest
 from jointbench.bench.analysis.diagnose import diagnose
 from jointbench.bench.analysis.diagnose.claims import failing_claims
 from jointbench.bench.campaign.battery import Place
+from jointbench.identification.discrepancy.candidates import ROW_VIEWS
 from jointbench.identification.discrepancy.heldout import ALPHA
 from jointbench.identification.output_values import finite_json
 from jointbench.testing import IndepRunner
@@ -51,11 +52,14 @@ def test_the_pair_is_inconclusive_not_none(pair):
 
 def test_the_tests_are_at_the_pairs_levels(pair):
     """Bonferroni over the m (m - 1) ordered pairs of the m effects tested, and over the
-    unordered pairs for the pair's own test; a passing test is one under its level."""
+    unordered pairs for the pair's own test; a passing test is one under its level. The
+    backlash on top of the damping, a second cause of the spring, is tested over the link
+    equation too, each of its two sets of rows at half its level (candidates._test)."""
     m = len([c for c in pair.inverse.candidates if c.testable])
     mp = pair.inverse.masked
-    for t in (mp.second_on_first, mp.first_on_second):
-        assert t.level == pytest.approx(ALPHA / (m * (m - 1)))
+    rows = {"backlash": ROW_VIEWS, "spring_damping": 1}
+    for t, name in ((mp.second_on_first, mp.second), (mp.first_on_second, mp.first)):
+        assert t.level == pytest.approx(ALPHA / (m * (m - 1)) / rows[name])
         assert t.passes == (t.heldout_pct > 0 and t.p < t.level)
     assert mp.pair.level == pytest.approx(2 * ALPHA / (m * (m - 1)))
     assert any(t.passes for t in (mp.pair, mp.second_on_first, mp.first_on_second))
