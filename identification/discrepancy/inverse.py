@@ -51,7 +51,10 @@ with the share each explains, in its text and as the named cause's alternative, 
 choosing silently. So does the effect a named cause reduces to, where it passed its own test
 in that round and the log holds no information on it beside the named cause's parts
 (_shared: an offset beside an asymmetric friction whose motor never rests, the asymmetry's
-Coulomb part then a constant on every row).
+Coulomb part then a constant on every row). So does the other of two laws of the spring that
+differ only inside their band (a backlash and a hardening), fitted in the named one's round,
+where the segment test does not find the named one's held-out errors smaller than its own at
+DECIDE, whether it passed its own test or not (_spring_alternatives).
 
 **The weaker of a pair against the model holding the stronger.** A round whose top ties
 with another significant candidate (_tied: the test above cannot separate them) cannot choose
@@ -157,9 +160,10 @@ class Alternative:
     t: float        # the named's held-out errors smaller than the other's
     t_back: float   # the converse
     round: int = 1
-    how: str = "direct"   # "direct" (_alternatives), "nested" (the parsimony choice) or
-    #                       "shared" (the part two effects share, _shared)
-    text: str = ""        # the note, for "nested" and "shared"
+    how: str = "direct"   # "direct" (_alternatives), "nested" (the parsimony choice),
+    #                       "shared" (the part two effects share, _shared) or "same_law"
+    #                       (two laws of the spring, _spring_alternatives)
+    text: str = ""        # the note, for "nested", "shared" and "same_law"
 
     def describe(self) -> str:
         if self.text:
@@ -721,6 +725,10 @@ def diagnose_inverse(log: Log, settings: FilterSettings, effects: tuple[str, ...
                           if not any({a.named, a.other} == {b.named, b.other}
                                      for b in alternatives)
                           and frozenset((a.named, a.other)) not in settled)
+    alternatives += tuple(a for a in _spring_alternatives(rounds, causes, len(nom.sig.index))
+                          if not any({a.named, a.other} == {b.named, b.other}
+                                     for b in alternatives)
+                          and frozenset((a.named, a.other)) not in settled)
     alternatives += _shared(nom, causes, rounds, alternatives)
     if masked is not None and masked.named:   # two that pass only together (masked)
         causes = masked.causes
@@ -982,6 +990,58 @@ def _alternatives(rounds: list[list[Candidate]], causes: tuple[Candidate, ...],
             if p >= DECIDE and p2 >= DECIDE:
                 out.append(Alternative(a.effect, b.effect, a.heldout_pct, b.heldout_pct,
                                        t, t2, k))
+    return tuple(out)
+
+
+def _same_law(a: str, b: str) -> bool:
+    """`a` and `b` are two laws of the spring that differ only inside their band: their
+    designs tend to the same columns as the band narrows (registry Effect.limit, a torque of
+    the spring's sign: identification.effects.base.spring_sign)."""
+    lim = EFFECTS[a].limit if a in EFFECTS else None
+    return a != b and lim is not None and b in EFFECTS and EFFECTS[b].limit is lim
+
+
+def _spring_alternatives(rounds: list[list[Candidate]], causes: tuple[Candidate, ...],
+                         n: int) -> tuple[Alternative, ...]:
+    """One of A or B for two laws of the spring (_same_law: a backlash and a hardening). A
+    backlash of stiffness K + Kh and half-width (K b + Kh d0) / (K + Kh) is a hardening's
+    spring law K d + Kh dz(d, d0) wherever |d| > d0 (identification.effects.base.deadzone):
+    the log tells the two apart only by the rows inside the band, a dead zone near zero
+    deflection that a hardening cannot make, or a stiffness K there that a backlash cannot.
+    In each round that named a cause A, the candidate B of that law, not named in the end,
+    its own fit physical (a hardening whose stiffness below the engagement falls to 0 is a
+    dead band, which is backlash), is compared with A directly: where the segment test
+    without margin (_better) does not find A's held-out errors smaller than B's at DECIDE,
+    the log does not exclude B as the description of what A explains, and the answer says
+    "one of A or B" with the share each explains, whether B passed its own test or not.
+    Once A passes at its round's level, the guard against naming an effect the log does not
+    carry is spent; which of two laws of one spring torque the log supports is a single
+    two-way decision, at DECIDE (as _which). Where A's errors are the smaller there, the
+    log shows the difference and A is named alone."""
+    named = {c.effect for c in causes}
+    out: list[Alternative] = []
+    for k, r in enumerate(rounds, start=1):
+        if not r or r[0].effect not in named or r[0].heldout_errors is None:
+            continue
+        a = r[0]
+        for b in r[1:]:
+            if (b.effect in named or not _same_law(a.effect, b.effect) or not b.testable
+                    or b.unphysical or b.heldout_errors is None):
+                continue
+            t, p = _better(b, a, n)
+            if p < DECIDE:
+                continue
+            t2, _ = _better(a, b, n)
+            passes = "passes" if b.significant else "does not pass"
+            text = (f"one of {a.effect} or {b.effect}: the two spring laws differ only "
+                    f"inside the band, and held out {a.effect} explains {a.heldout_pct:.3g} "
+                    f"%, {b.effect} fitted in its place {b.heldout_pct:.3g} % of the residual "
+                    f"(round {k}); the segment test does not find {a.effect}'s errors "
+                    f"smaller than {b.effect}'s (t = {t:.3g}, the converse t = {t2:.3g}, the "
+                    f"bar t > {t_bar(DECIDE):.3g}); {a.effect} is named, {b.effect} "
+                    f"{passes} its own test ({b.test.describe() if b.test else b.why_not})")
+            out.append(Alternative(a.effect, b.effect, a.heldout_pct, b.heldout_pct, t, t2,
+                                   k, how="same_law", text=text))
     return tuple(out)
 
 
