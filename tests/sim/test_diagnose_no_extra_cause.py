@@ -70,7 +70,14 @@ def test_a_spring_pair_names_no_dead_band(spring_pair):
     doc = finite_json(spring_pair.to_json())
     assert failing_claims(doc) == []
     backlash = next(n for n in doc["not_named"] if n["effect"] == "backlash")
-    assert backlash["kind"] == "failed" and not backlash["test"]["passes"]
+    assert not backlash["test"]["passes"]
+    # over the link equation, where both laws of the spring are read beside the damping, the
+    # segment test cannot rule the dead band out against the hardening: it may stand as the
+    # named hardening's alternative, never named
+    assert backlash["kind"] in ("failed", "alternative")
+    if backlash["kind"] == "alternative":
+        hardening = next(c for c in doc["causes"] if c["effect"] == "hardening")
+        assert [a["effect"] for a in hardening["alternatives"]] == ["backlash"]
     # the named causes' values are the hidden ones, within 15 % (a check of what is named,
     # not a precision figure: no torque noise, the spring law's search on a geometric grid)
     p = spring_pair.extended_parameters
