@@ -102,7 +102,7 @@ class _Rows:
 def apply(base: Stacked, effect: str, fixed: dict) -> tuple[Stacked, Design]:
     """`base` with one more effect (nonlinear values `fixed`), and its design."""
     effects = base.effects + ((effect, dict(fixed)),)
-    key = (effect, tuple(sorted(fixed.items())))
+    key = (effect, tuple(sorted(fixed.items())), _beside_simpler(base, effect))
     added = _added(base.nom, key)
     if added is not None:
         after = dataclasses.replace(base, extra=base.extra + added, effects=effects)
@@ -114,9 +114,20 @@ def apply(base: Stacked, effect: str, fixed: dict) -> tuple[Stacked, Design]:
     return dataclasses.replace(rows.after, effects=effects), d
 
 
+def _beside_simpler(base: Stacked, effect: str) -> bool:
+    """Whether `base` holds the effect `effect` reduces to (registry `reduces_to`): the one
+    thing besides the signals and its values an effect's design reads (an asymmetric
+    friction beside an offset keeps the reference's viscous-to-Coulomb split whatever its
+    searched share, identification.effects.asymmetric_friction.design), and so a part of the
+    key of the columns kept for it (_added)."""
+    simpler = EFFECTS[effect].reduces_to if effect in EFFECTS else ""
+    return bool(simpler) and any(name == simpler for name, _ in base.effects)
+
+
 # The decimated columns an effect added (extend) with given values, kept on the Nominal (its
 # `memo`): they depend on the log's signals and those values alone (identification.effects:
-# `design` reads `rows.sig`, `rows.value` of the nominal and `fixed`), and every round of
+# `design` reads `rows.sig`, `rows.value` of the nominal and `fixed`; and, for an effect that
+# reduces to another, whether the base holds that one: _beside_simpler), and every round of
 # `diagnose` searches the same grid again on top of the causes named, as do the parsimony
 # checks (two thirds of the ripple's and the hardening's decimations on a 60 s log). Least
 # recently used first out beyond _BYTES; they go with the Nominal.

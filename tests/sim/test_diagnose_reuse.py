@@ -70,6 +70,30 @@ def test_reused_designs_are_the_designs(log, monkeypatch):
     assert not dataclasses.replace(nom, weights=2 * nom.weights).memo
 
 
+def test_an_asymmetry_kept_beside_an_offset_is_not_reused_without_it(log, monkeypatch):
+    """An asymmetric friction's design reads whether the base holds an offset (beside it, the
+    reference's split, whatever its searched share): the columns kept for it beside an offset
+    are not its columns without one. Without the offset, its column at a share 0 is the
+    Coulomb part alone, FS_ref |sign qm'| (constant while the motor moves), as computed
+    afresh; the split kept beside the offset carries a viscous part that the offset would
+    then appear to complete."""
+    settings, _ = diagnosis_settings(log)
+    nom = nominal(log, settings)
+    fixed = {"FV_ref": nom.value("FVm"), "FS_ref": nom.value("FSm"), "viscous_share": 0.0}
+    beside, _ = st.apply(st.Stacked(nom), "offset", {})
+    _, (_, W_beside, names) = st.apply(beside, "asymmetric_friction", fixed)
+    _, (_, W_alone, _) = st.apply(st.Stacked(nom), "asymmetric_friction", fixed)
+    with monkeypatch.context() as m:
+        _nothing_reused(m)
+        _, (_, fresh, _) = st.apply(st.Stacked(nom), "asymmetric_friction", fixed)
+    assert np.array_equal(W_alone, fresh)
+    sig = nom.sig
+    coulomb = stack(sig, fixed["FS_ref"] * np.abs(np.sign(np.nan_to_num(sig.qmd))), None)
+    assert np.allclose(W_alone[:, -1], coulomb, rtol=1e-12, atol=0.0)
+    # beside the offset the column is another (the reference's split)
+    assert names[-2:] == ("offset", "a") and not np.allclose(W_beside[:, -1], W_alone[:, -1])
+
+
 def test_a_spring_columns_link_row_is_exactly_the_decimated_negative(log):
     settings, _ = diagnosis_settings(log)
     sig = nominal(log, settings).sig
