@@ -896,6 +896,16 @@ def _passes(c: Candidate) -> bool:
     return c.significant and (c.round <= 1 or c.test.own_share > 100 * FLOOR)
 
 
+def _at_bound(c: Candidate) -> Candidate:
+    """`c`, a fit unphysical by less than the round's bar of its own standard errors (_near),
+    as a physical one: the standard error of its distance beyond the bound holds the folds'
+    noise alone, not the error of the split the bound is read from (an asymmetric friction's
+    Coulomb part against the Coulomb friction, whose viscous-to-Coulomb split the log
+    identifies worst), and a cause the rounds named is dropped as no physical instance of it
+    only with the strength that naming a cause asks."""
+    return replace(c, unphysical="") if c.unphysical and _near(c) else c
+
+
 def _why_fails(c: Candidate) -> str:
     if not c.significant:
         return c.why_not
@@ -910,14 +920,15 @@ def _chain(nom: Nominal, causes: tuple[Candidate, ...],
     top of them, until no more pass; one that never passes is not named (with why). A cause
     named on top of the one left out (a spring damping named on top of an offset that was
     an asymmetric friction's Coulomb part) is then tested against the causes that hold what
-    that one held, not against a model that misses it."""
+    that one held, not against a model that misses it. A fit beyond its physical bound by
+    less than the round's bar of its standard errors counts as physical there (_at_bound)."""
     chain: tuple[Candidate, ...] = ()
     pending = list(causes)
     failed: dict[str, Candidate] = {}
     while pending:
         kept = []
         for o in pending:
-            again = _against(nom, o, _model(chain), band)
+            again = _at_bound(_against(nom, o, _model(chain), band))
             if _passes(again):
                 chain += (again,)
                 kept.append(o)
