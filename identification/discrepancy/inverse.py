@@ -79,6 +79,7 @@ Every effect tested and not named is listed apart with why (NotNamed).
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -982,20 +983,28 @@ def _in_place(causes: tuple[Candidate, ...], i: int) -> tuple[Candidate, ...]:
 
 
 
+def _beside_named(rounds: list[list[Candidate]], causes: tuple[Candidate, ...]
+                  ) -> Iterator[tuple[int, Candidate, Candidate]]:
+    """(round, A, B): in each round whose first candidate A was named in the end, every
+    other candidate B not named, both with held-out errors (the pairs a "one of A or B"
+    statement can be about)."""
+    named = {c.effect for c in causes}
+    for k, r in enumerate(rounds, start=1):
+        if not r or r[0].effect not in named or r[0].heldout_errors is None:
+            continue
+        for b in r[1:]:
+            if b.effect not in named and b.heldout_errors is not None:
+                yield k, r[0], b
+
+
 def _alternatives(rounds: list[list[Candidate]], causes: tuple[Candidate, ...],
                   n: int) -> tuple[Alternative, ...]:
     """One of A or B: in each round that named a cause, every other significant candidate
     not named in the end whose held-out errors the segment test without margin (_better)
     cannot separate from the named cause's in either direction at DECIDE."""
-    named = {c.effect for c in causes}
     out: list[Alternative] = []
-    for k, r in enumerate(rounds, start=1):
-        if not r or r[0].effect not in named or r[0].heldout_errors is None:
-            continue
-        a = r[0]
-        for b in r[1:]:
-            if b.effect in named or not b.significant or b.heldout_errors is None:
-                continue
+    for k, a, b in _beside_named(rounds, causes):
+        if b.significant:
             t, p = _better(b, a, n)
             t2, p2 = _better(a, b, n)
             if p >= DECIDE and p2 >= DECIDE:
@@ -1029,16 +1038,9 @@ def _spring_alternatives(rounds: list[list[Candidate]], causes: tuple[Candidate,
     carry is spent; which of two laws of one spring torque the log supports is a single
     two-way decision, at DECIDE (as _which). Where A's errors are the smaller there, the
     log shows the difference and A is named alone."""
-    named = {c.effect for c in causes}
     out: list[Alternative] = []
-    for k, r in enumerate(rounds, start=1):
-        if not r or r[0].effect not in named or r[0].heldout_errors is None:
-            continue
-        a = r[0]
-        for b in r[1:]:
-            if (b.effect in named or not _same_law(a.effect, b.effect) or not b.testable
-                    or b.unphysical or b.heldout_errors is None):
-                continue
+    for k, a, b in _beside_named(rounds, causes):
+        if _same_law(a.effect, b.effect) and b.testable and not b.unphysical:
             t, p = _better(b, a, n)
             if p < DECIDE:
                 continue
