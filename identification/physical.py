@@ -109,10 +109,10 @@ def _start(X: dict[str, float]) -> dict[str, float]:
 
 def invert_motor_only(ls: LSResult, g: float = 9.81, qc: float = 0.0) -> PhysicalResult:
     """Physical parameters with standard deviations from the motor-only X's (weighted
-    nonlinear least squares, covariance propagated). Raises InversionError when X1 or X3 is
-    not identified or nearly zero."""
+    nonlinear least squares, covariance propagated). Raises InversionError when an X its
+    start reads (X1..X5, X7) is not identified, or X1 or X3 is nearly zero."""
     names = tuple(n for n in ls.names if n not in ls.unidentifiable)
-    for need in ("X1", "X2", "X3", "X5"):
+    for need in ("X1", "X2", "X3", "X4", "X5", "X7"):
         if need not in names:
             raise InversionError(f"{need} is not identified ({ls.reasons.get(need, '')}): "
                                  "the physical parameters cannot be computed")

@@ -123,12 +123,15 @@ def test_table3_refuses_a_zero_or_insignificant_x1():
         table3({k: v for k, v in X.items() if k != "X1"})
 
 
-def test_weighted_inversion_needs_x1_x2_x3_x5():
+@pytest.mark.parametrize("name", ["X1", "X2", "X3", "X4", "X5", "X7"])
+def test_weighted_inversion_needs_the_xs_it_starts_from(name):
+    # The start reads X1..X5 and X7 (FVm from X4, FSm = X7): a dropped one is a stated
+    # InversionError, not a KeyError from inside the inversion.
     X = forward(THETA)
     ls = ls_result(X, MOTOR_ONLY)
-    dropped = dataclasses.replace(ls, unidentifiable=("X3",),
-                                  reasons={"X3": "its column is zero"})
-    with pytest.raises(InversionError, match="X3 is not identified"):
+    dropped = dataclasses.replace(ls, unidentifiable=(name,),
+                                  reasons={name: "its column is zero"})
+    with pytest.raises(InversionError, match=f"{name} is not identified"):
         invert_motor_only(dropped)
 
 
