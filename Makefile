@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo check test bench bench-peers bench-campaign bench-diagnose battery validate clean
+.PHONY: demo check test fuzz bench bench-peers bench-campaign bench-diagnose battery validate clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -31,6 +31,11 @@ check: $(STAMP)
 # Everything: unit, cli, sim and validation (what CI runs).
 test: $(STAMP)
 	$(BIN)/python -m pytest -q $(XDIST)
+
+# The property tests (hypothesis) with fresh random examples; `make test` draws the same ones
+# on every run. A failing example is kept in .hypothesis/ and replayed first next time.
+fuzz: $(STAMP)
+	HYPOTHESIS_PROFILE=explore $(BIN)/python -m pytest -q $(XDIST) tests -m hypothesis
 
 # The speed figures, then the estimator's cost ratios (benchmarks/speed_ratios.py), written
 # with the commit, date and machine into docs/validation.md (section speed-ratios).
