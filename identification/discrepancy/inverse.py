@@ -952,11 +952,9 @@ def _leave_one_out(nom: Nominal, causes: tuple[Candidate, ...],
     so on while more than two are left."""
     out: list[NotNamed] = []
     while len(causes) > 2:
-        values = dict(_model(causes))
         fails = []
-        for i, c in enumerate(causes):
-            others = tuple((o.effect, values[o.effect]) for o in causes[:i] + causes[i + 1:])
-            again = _against(nom, c, others, band)
+        for i in range(len(causes)):
+            again = against_others(nom, causes, i, band)
             if not _passes(again):
                 fails.append((again.test.t, i, again))
         if not fails:
@@ -969,6 +967,22 @@ def _leave_one_out(nom: Nominal, causes: tuple[Candidate, ...],
         causes, lost = _chain(nom, _in_place(causes, i), band)
         out += lost
     return causes, out
+
+
+def against_others(nom: Nominal, causes: tuple[Candidate, ...], i: int,
+                   band: LagBand) -> Candidate:
+    """causes[i] fitted and tested again on its own against the model holding all the other
+    causes (their values as the joint fit has them: _model), at the level of the round it
+    entered (_against)."""
+    values = dict(_model(causes))
+    others = tuple((o.effect, values[o.effect]) for o in causes[:i] + causes[i + 1:])
+    return _against(nom, causes[i], others, band)
+
+
+def passes(c: Candidate) -> bool:
+    """`c` passes its test: significant and, for a cause of a later round, above the floor
+    (_passes)."""
+    return _passes(c)
 
 
 def _in_place(causes: tuple[Candidate, ...], i: int) -> tuple[Candidate, ...]:

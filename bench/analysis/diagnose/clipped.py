@@ -39,9 +39,25 @@ top of the sweep, which the chooser's band cuts: on every row of a pendulum clip
 the wide band's t is several times the chooser's. A cause the second view names is then judged by
 the forward view as any other (bench.analysis.diagnose.verdict.gain_reason: the replay
 applies the same clip), and must be confirmed there: the extended model's replay reaches the
-limit more as the log does than the nominal's, or, for a lag named first, the loop
+limit more as the log does than the nominal's, or, for a lag named first (or after the
+causes below), the loop
 linearised with it grows where the nominal's decays, at the frequency of the log's clipped
-oscillation (verdict.every_row_reason, bench.analysis.diagnose.stability). When the second
+oscillation (verdict.every_row_reason, bench.analysis.diagnose.stability).
+
+**A cause before the lag.** On every row a cause whose column the lag's leaves nearly
+untouched (a constant torque) can pass first, against the nominal, and the lag after it: the
+two describe the log together, and a replay from rest that does not reach the limit cycle
+judges the cause before the lag no better than the lag itself. Tested against the nominal, that
+cause might have taken part of the lag's own misfit at the cycle; so each cause the every-row
+view names before its lag, and the first view does not name, is fitted and tested again on
+top of the model holding the lag and the other named causes, at the same split level
+(`held_before_lag`, identification.discrepancy.inverse.against_others: the rule for a set of
+causes, each against the model holding all the others). When each passes there, the loop's
+stability with the lag confirms the set as it confirms a lag named first; otherwise it
+confirms nothing. The bound above holds: the set is named only when its every-row
+tests pass at their split level, and the on-top tests add a condition to those.
+
+When the second
 view names nothing either, or cannot be run (a flat
 top, no `tau_max`), the answer is "inconclusive" with the share of clipped samples, the rows
 each view used, and the held-out share each candidate explains in each.
@@ -55,7 +71,8 @@ import numpy as np
 
 from jointbench.identification.discrepancy import InverseDiagnosis, diagnose_inverse
 from jointbench.identification.discrepancy.candidates import Candidate
-from jointbench.identification.discrepancy.inverse import NotNamed, not_named
+from jointbench.identification.discrepancy.inverse import (NotNamed, against_others, not_named,
+                                                           passes)
 from jointbench.identification.discrepancy.lag_band import LagBand, second_view
 from jointbench.identification.filtering import FilterSettings
 from jointbench.identification.log import Log
@@ -83,6 +100,9 @@ class ClippedViews:
     # the loop's stability that confirms a lag named on every row (diagnose.stability)
     loop: dict | None = None
     first_named: tuple[str, ...] = ()   # the causes the first view names (stopped_short)
+    # the causes named on every row before a torque lag, not by the first view, each passing
+    # on top of the model holding the lag and the others: (effect, t, t_bar) (held_before_lag)
+    before_lag: tuple[tuple[str, float, float], ...] = ()
 
     def text(self) -> str:
         """The shares in words, for the inconclusive reason and the report."""
@@ -99,6 +119,16 @@ class ClippedViews:
             out += f"; the named causes are named on {self.named_by}"
         return out
 
+    def held_text(self) -> str:
+        """The causes named before the lag on every row, each on top of the model holding
+        the lag and the others (held_before_lag), in words; "" when there are none."""
+        if not self.before_lag:
+            return ""
+        tests = ", ".join(f"{e} t = {t:.3g} (bar {bar:.3g})" for e, t, bar in self.before_lag)
+        return (f"named before the lag on every row, {tests} on top of the model holding the "
+                f"lag and the other named causes: the loop's stability with the lag confirms "
+                f"the set")
+
     def to_json(self) -> dict:
         out: dict = {"clipped_pct": self.clipped_pct, "how": self.how,
                      "rows_kept": self.rows_kept, "rows": self.rows,
@@ -111,6 +141,9 @@ class ClippedViews:
             out["named_by"] = self.named_by
         if self.loop is not None:
             out["loop_stability"] = self.loop
+        if self.before_lag:
+            out["before_lag"] = [{"effect": e, "t": t, "t_bar": bar}
+                                 for e, t, bar in self.before_lag]
         return out
 
 
@@ -201,6 +234,26 @@ def split_level(inv: InverseDiagnosis, band: LagBand | None = None) -> InverseDi
     return replace(out, not_named=not_named(out, tuple(dropped) + given))
 
 
+def held_before_lag(every: InverseDiagnosis, first_named: tuple[str, ...],
+                    band: LagBand) -> tuple[tuple[str, float, float], ...]:
+    """The causes the every-row view `every` names before its torque lag that the first view
+    does not name, each fitted and tested again on top of the model holding the lag and the
+    other named causes (inverse.against_others) at 1/VIEWS of its round's level
+    (_split_cause): (effect, t, t_bar) of each, () when there is no lag after such a cause or
+    one of them does not pass there (module docstring: a cause before the lag)."""
+    names = [c.effect for c in every.causes]
+    if "torque_lag" not in names:
+        return ()
+    i = names.index("torque_lag")
+    out = []
+    for j in (j for j in range(i) if names[j] not in first_named):
+        s = _split_cause(against_others(every.nominal, every.causes, j, band), band)
+        if not passes(s):
+            return ()
+        out.append((names[j], float(s.test.t), float(s.test.bar)))
+    return tuple(out)
+
+
 def clipped_inverse(log: Log, settings: FilterSettings,
                     inv: InverseDiagnosis) -> tuple[InverseDiagnosis, ClippedViews | None]:
     """The inverse view the answer rests on, and what the clipped log's views found (None
@@ -225,9 +278,10 @@ def clipped_inverse(log: Log, settings: FilterSettings,
         return inv, replace(views, why="the clip is not at the metadata's tau_max (a flat "
                             "top, not the controller's own clip): its torque is not known to "
                             "be the one applied, so its rows stay out")
-    every = split_level(diagnose_inverse(log, settings, limit_applied=True),
-                        LagBand(log, settings, limit_applied=True))
+    band = LagBand(log, settings, limit_applied=True)
+    every = split_level(diagnose_inverse(log, settings, limit_applied=True), band)
     views = replace(views, second=heldout_shares(every))
     if every.causes and (not inv.causes or names_more(every, inv)):
-        return every, replace(views, named_by="every row")
+        return every, replace(views, named_by="every row",
+                              before_lag=held_before_lag(every, views.first_named, band))
     return inv, views

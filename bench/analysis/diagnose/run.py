@@ -200,7 +200,9 @@ def _verdict(d: Diagnosis, before: ForwardView | None = None) -> Diagnosis:
                     or clipped_reason(d) or masked_reason(d))
     cycle = loop_cycle(d) if not d.overruled else None
     if cycle is not None and cycle.confirms:   # what confirms a lag named on every row
-        d = replace(d, forward_note="; ".join(n for n in (d.forward_note, cycle.text()) if n),
+        held = d.clipped.held_text()
+        d = replace(d, forward_note="; ".join(n for n in (d.forward_note, cycle.text(), held)
+                                              if n),
                     clipped=replace(d.clipped, loop=cycle.to_json()))
     if d.overruled:   # nothing named: no extended model
         d = replace(d, extended_parameters={})

@@ -291,14 +291,16 @@ def cycle_only(d: Diagnosis) -> bool:
 def lag_at(d: Diagnosis) -> int | None:
     """Where a torque lag stands among the causes named on every row, when every cause before
     it is one the first view names on its own rows (clipped.stopped_short: those stand
-    without the every-row reading); None when there is no such lag. With nothing named on
-    the first view, only a lag named first."""
+    without the every-row reading) or one that passes again on top of the model holding the
+    lag and the other named causes (clipped.held_before_lag: the set the log supports
+    together); None when there is no such lag."""
     views = getattr(d, "clipped", None)
     names = [c.effect for c in d.inverse.causes]
     if views is None or "torque_lag" not in names:
         return None
     i = names.index("torque_lag")
-    return i if set(names[:i]) <= set(views.first_named) else None
+    held = set(views.first_named) | {e for e, _, _ in views.before_lag}
+    return i if set(names[:i]) <= held else None
 
 
 def loop_cycle(d: Diagnosis) -> LimitCycle | None:
