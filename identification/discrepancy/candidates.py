@@ -446,17 +446,45 @@ def _test(e: Effect, ref: Reference, errors: np.ndarray, n: int,
     segment log-ratios have a negative mean as every row's do (heldout). The first cause of
     the law, tested against the nominal, is tested over every row: the nominal's link
     equation spread is then its own misfit. `units`: the units an engaging effect's t is
-    over (_units), None for the segments."""
+    over (_units), None for the segments. A torque lag beside a named spring damping is
+    tested over the link equation too, where the damping's refit shows it
+    (lead_beside_parallel)."""
     def test(blocks: tuple[int, ...]) -> Evidence:
         ev = evidence(ref.scores.errors, errors, n, blocks)
         return (ev if units is None
                 else over_engagements(ev, ref.scores.errors, errors, n, blocks, units))
 
     ev = test(acts)
+    if lead_beside_parallel(e, ref.base.effects) and acts == (0,):
+        split = test((1,))
+        return (split, ROW_VIEWS, OWN_ROWS) if split.p < ev.p else (ev, ROW_VIEWS, "")
     if not (second_of_spring(e, ref.base.effects) and e.block in acts and len(acts) > 1):
         return ev, 1, ""
     own = test((e.block,))
     return (own, ROW_VIEWS, OWN_ROWS) if own.p < ev.p else (ev, ROW_VIEWS, "")
+
+
+def lead_beside_parallel(e: Effect, base: tuple[tuple[str, dict], ...]) -> bool:
+    """`e` leads the motor equation's columns (LEADS: a torque lag) and a named cause in
+    `base` acts in parallel with the spring (PARALLEL: a spring damping): the lag's evidence
+    is then in the link equation as well as in the motor equation it acts in (_test).
+
+    The lag's led motor equation holds T K (qm' - q'), the damping's own motor column (_beside).
+    Against the model holding the damping alone, its one D (qm' - q') in both equations, with
+    opposite signs (action and reaction), takes that term up in the motor equation, and the
+    link equation, which has no lag, then carries D's compromise between the two: D too large
+    by a share of T K there. The lag, fitted beside it, takes the motor equation's T K and
+    frees D to take the link equation's own value: what the lag adds shows where it does not
+    act, in the link equation's held-out residual, through the refit of the parameter the
+    two share. Over the motor equation alone, its rows read only the lag's phase beyond
+    the damping's column, T (Jm qm''' + FVm qm'' + ...), small on an axis whose motor inertia
+    and friction are small against the spring's. The test runs over both sets of rows, the
+    motor equation and the link equation, each at half the hypothesis' level (ROW_VIEWS,
+    Bonferroni, as for a second cause of the spring law), fixed by the causes named, never
+    by what either test finds. Under the null hypothesis (no lag) the lag's column adds only
+    estimation variance, the shared parameters' refit included, on the link equation's rows
+    as on every row: their segment log-ratios have a negative mean (heldout)."""
+    return e.name in LEADS and any(name in PARALLEL for name, _ in base)
 
 
 def second_of_spring(e: Effect, base: tuple[tuple[str, dict], ...]) -> bool:
