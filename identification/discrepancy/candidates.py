@@ -330,7 +330,7 @@ def _evaluate(nom: Nominal, ref: Reference, e: Effect, fixed: dict,
     errors = held_out(records, ref.folds)
     acts = acts_in(nom, (y0, W0, names0), (y, W, names))
     ev, views, rows = _test(e, ref, errors, len(nom.sig.index), acts,
-                            _units(nom, e, fold_values))
+                            _units(nom, e, fold_values), _past_first_step(nom, e, fixed))
     values = dict(zip(names, X))
     best = min(records, key=lambda r: r.full)
     folds = (() if best.fold_X is None
@@ -410,8 +410,8 @@ def _units(nom: Nominal, e: Effect, fold_values: tuple[float, ...]) -> np.ndarra
 
 
 def _test(e: Effect, ref: Reference, errors: np.ndarray, n: int,
-          acts: tuple[int, ...],
-          units: np.ndarray | None = None) -> tuple[Evidence, int, str]:
+          acts: tuple[int, ...], units: np.ndarray | None = None,
+          resolved: bool = True) -> tuple[Evidence, int, str]:
     """The held-out evidence of `e` (its `errors` against `ref`'s, over the `acts` blocks of
     n instants each), the views its level is split over and the rows it is over ("" for every
     row it acts in). A second cause of the spring law (second_of_spring: a named cause in
@@ -448,7 +448,7 @@ def _test(e: Effect, ref: Reference, errors: np.ndarray, n: int,
     equation spread is then its own misfit. `units`: the units an engaging effect's t is
     over (_units), None for the segments. A torque lag beside a named spring damping is
     tested over the link equation too, where the damping's refit shows it
-    (lead_beside_parallel)."""
+    (lead_beside_parallel), when `resolved` (_past_first_step)."""
     def test(blocks: tuple[int, ...]) -> Evidence:
         ev = evidence(ref.scores.errors, errors, n, blocks)
         return (ev if units is None
@@ -456,6 +456,8 @@ def _test(e: Effect, ref: Reference, errors: np.ndarray, n: int,
 
     ev = test(acts)
     if lead_beside_parallel(e, ref.base.effects) and acts == (0,):
+        if not resolved:
+            return ev, ROW_VIEWS, ""
         split = test((1,))
         return (split, ROW_VIEWS, OWN_ROWS) if split.p < ev.p else (ev, ROW_VIEWS, "")
     if not (second_of_spring(e, ref.base.effects) and e.block in acts and len(acts) > 1):
@@ -485,6 +487,22 @@ def lead_beside_parallel(e: Effect, base: tuple[tuple[str, dict], ...]) -> bool:
     estimation variance, the shared parameters' refit included, on the link equation's rows
     as on every row: their segment log-ratios have a negative mean (heldout)."""
     return e.name in LEADS and any(name in PARALLEL for name, _ in base)
+
+
+def _past_first_step(nom: Nominal, e: Effect, fixed: dict) -> bool:
+    """`e`'s searched value lies at or beyond the first step of its search grid (the first
+    trial after none), or `e` has no search: the link equation's view of a lag beside a
+    damping (lead_beside_parallel) reads the lag only through D's split between the two
+    equations, and any phase between the motor torque and the positions splits it too (the
+    log's own sampling and numerics: a clean bench log fits a lag of a few hundredths of its
+    sample period). A lag below the grid's first trial, the refinement between no lag and
+    that trial, is not told from that phase there: its test stays the motor equation's (its
+    level split as the design fixes it), as a hardening engaged in the first step of its grid
+    is no physical instance of one (lag_band)."""
+    if not e.search or e.grid is None or e.search not in fixed:
+        return True
+    g = e.grid(nom)
+    return len(g) < 2 or float(fixed[e.search]) >= float(g[1])
 
 
 def second_of_spring(e: Effect, base: tuple[tuple[str, dict], ...]) -> bool:
