@@ -330,7 +330,7 @@ def _evaluate(nom: Nominal, ref: Reference, e: Effect, fixed: dict,
     errors = held_out(records, ref.folds)
     acts = acts_in(nom, (y0, W0, names0), (y, W, names))
     ev, views, rows = _test(e, ref, errors, len(nom.sig.index), acts,
-                            _units(nom, e, fold_values))
+                            _units(nom, e, fold_values), _past_first_step(nom, e, fixed))
     values = dict(zip(names, X))
     best = min(records, key=lambda r: r.full)
     folds = (() if best.fold_X is None
@@ -410,8 +410,8 @@ def _units(nom: Nominal, e: Effect, fold_values: tuple[float, ...]) -> np.ndarra
 
 
 def _test(e: Effect, ref: Reference, errors: np.ndarray, n: int,
-          acts: tuple[int, ...],
-          units: np.ndarray | None = None) -> tuple[Evidence, int, str]:
+          acts: tuple[int, ...], units: np.ndarray | None = None,
+          resolved: bool = True) -> tuple[Evidence, int, str]:
     """The held-out evidence of `e` (its `errors` against `ref`'s, over the `acts` blocks of
     n instants each), the views its level is split over and the rows it is over ("" for every
     row it acts in). A second cause of the spring law (second_of_spring: a named cause in
@@ -446,17 +446,63 @@ def _test(e: Effect, ref: Reference, errors: np.ndarray, n: int,
     segment log-ratios have a negative mean as every row's do (heldout). The first cause of
     the law, tested against the nominal, is tested over every row: the nominal's link
     equation spread is then its own misfit. `units`: the units an engaging effect's t is
-    over (_units), None for the segments."""
+    over (_units), None for the segments. A torque lag beside a named spring damping is
+    tested over the link equation too, where the damping's refit shows it
+    (lead_beside_parallel), when `resolved` (_past_first_step)."""
     def test(blocks: tuple[int, ...]) -> Evidence:
         ev = evidence(ref.scores.errors, errors, n, blocks)
         return (ev if units is None
                 else over_engagements(ev, ref.scores.errors, errors, n, blocks, units))
 
     ev = test(acts)
+    if lead_beside_parallel(e, ref.base.effects) and acts == (0,):
+        if not resolved:
+            return ev, ROW_VIEWS, ""
+        split = test((1,))
+        return (split, ROW_VIEWS, OWN_ROWS) if split.p < ev.p else (ev, ROW_VIEWS, "")
     if not (second_of_spring(e, ref.base.effects) and e.block in acts and len(acts) > 1):
         return ev, 1, ""
     own = test((e.block,))
     return (own, ROW_VIEWS, OWN_ROWS) if own.p < ev.p else (ev, ROW_VIEWS, "")
+
+
+def lead_beside_parallel(e: Effect, base: tuple[tuple[str, dict], ...]) -> bool:
+    """`e` leads the motor equation's columns (LEADS: a torque lag) and a named cause in
+    `base` acts in parallel with the spring (PARALLEL: a spring damping): the lag's evidence
+    is then in the link equation as well as in the motor equation it acts in (_test).
+
+    The lag's led motor equation holds T K (qm' - q'), the damping's own motor column (_beside).
+    Against the model holding the damping alone, its one D (qm' - q') in both equations, with
+    opposite signs (action and reaction), takes that term up in the motor equation, and the
+    link equation, which has no lag, then carries D's compromise between the two: D too large
+    by a share of T K there. The lag, fitted beside it, takes the motor equation's T K and
+    frees D to take the link equation's own value: what the lag adds shows where it does not
+    act, in the link equation's held-out residual, through the refit of the parameter the
+    two share. Over the motor equation alone, its rows read only the lag's phase beyond
+    the damping's column, T (Jm qm''' + FVm qm'' + ...), small on an axis whose motor inertia
+    and friction are small against the spring's. The test runs over both sets of rows, the
+    motor equation and the link equation, each at half the hypothesis' level (ROW_VIEWS,
+    Bonferroni, as for a second cause of the spring law), fixed by the causes named, never
+    by what either test finds. Under the null hypothesis (no lag) the lag's column adds only
+    estimation variance, the shared parameters' refit included, on the link equation's rows
+    as on every row: their segment log-ratios have a negative mean (heldout)."""
+    return e.name in LEADS and any(name in PARALLEL for name, _ in base)
+
+
+def _past_first_step(nom: Nominal, e: Effect, fixed: dict) -> bool:
+    """`e`'s searched value lies at or beyond the first step of its search grid (the first
+    trial after none), or `e` has no search: the link equation's view of a lag beside a
+    damping (lead_beside_parallel) reads the lag only through D's split between the two
+    equations, and any phase between the motor torque and the positions splits it too (the
+    log's own sampling and numerics: a clean bench log fits a lag of a few hundredths of its
+    sample period). A lag below the grid's first trial, the refinement between no lag and
+    that trial, is not told from that phase there: its test stays the motor equation's (its
+    level split as the design fixes it), as a hardening engaged in the first step of its grid
+    is no physical instance of one (lag_band)."""
+    if not e.search or e.grid is None or e.search not in fixed:
+        return True
+    g = e.grid(nom)
+    return len(g) < 2 or float(fixed[e.search]) >= float(g[1])
 
 
 def second_of_spring(e: Effect, base: tuple[tuple[str, dict], ...]) -> bool:

@@ -20,7 +20,7 @@ import jointbench.testing.simulator as indep
 from jointbench.bench.analysis.diagnose.claims import failing_claims
 from jointbench.bench.analysis.diagnose.report import dumps, summary_text
 from jointbench.bench.analysis.diagnose.run import diagnose
-from jointbench.identification.discrepancy.candidates import CHOOSER
+from jointbench.identification.discrepancy.candidates import CHOOSER, ROW_VIEWS
 from jointbench.identification.discrepancy.lag_band import WIDE_VIEWS
 from jointbench.testing.hidden_effects import as_hidden, plant
 
@@ -65,12 +65,14 @@ def test_the_lab_rig_lag_is_named_on_the_test_that_passed(lab):
     doc = _checked(lab)
     assert doc["named_causes"] == ["spring_damping", "torque_lag"]
     lag = lab.causes[1]
-    # its own band's test fails; the wide band's passes at a quarter of the round's level
-    # (the wide band's half shared by its two views, lag_band), over every segment: the
-    # lab rig's multisine holds every frequency in every segment
+    # its own band's test fails; the wide band's passes at an eighth of the round's level
+    # (beside the damping the lag's level is split over the motor and the link equation,
+    # candidates.lead_beside_parallel; each band's half of that, the wide band's shared by
+    # its two views, lag_band), over every segment: the lab rig's multisine holds every
+    # frequency in every segment
     assert not lag.own_test.passes and lag.own_test.view == CHOOSER
     assert lag.test.view.startswith("wide band") and lag.test.passes
-    assert lag.test.level == pytest.approx(lag.alpha / 2 / WIDE_VIEWS)
+    assert lag.test.level == pytest.approx(lag.alpha / ROW_VIEWS / 2 / WIDE_VIEWS)
     assert "over every segment" in lag.test.view
     entry = doc["causes"][1]
     assert entry["round"] == 2 and entry["t"] == lag.test.t > entry["test"]["t_bar"]
