@@ -776,12 +776,13 @@ def _searched(nom: Nominal, e: Effect, ref: Reference, coupled: list[int],
 
     under = base
     if e.search:
-        _search(cost, e.grid(nom))
+        grid = e.grid(_Left(nom, base) if base.effects else nom)
+        _search(cost, grid)
         for i in coupled:
             v, under = best()
             again(i, v, under)
             under = best()[1]
-            _search(lambda w: cost(w, under), e.grid(nom))
+            _search(lambda w: cost(w, under), grid)
         v, under = best()
         fixed = {**fixed, e.search: float(v)}
     else:
@@ -798,6 +799,27 @@ def _searched(nom: Nominal, e: Effect, ref: Reference, coupled: list[int],
             cost(None)
     values = (tuple(float(trials[j][0]) for j in preferred(records)) if e.search else ())
     return _evaluate(nom, ref, e, fixed, records, under, values)
+
+
+class _Left:
+    """`nom`'s rows with the residual that the causes of `base` (a round's reference, the
+    nominal extended by the causes named before it) leave: its design fitted on every row
+    with the nominal's block weights, r = y - W X. What an effect's search grid reads from
+    a residual (torque_ripple's periodogram of the motor equation's residual over the motor
+    angle) is what the round's candidate is fitted to explain, the residual of its reference,
+    not the nominal's: there a named cause's own torque (a hardening's K misfit at large
+    deflections, a function of the deflection that the binned periodogram spreads over every
+    wavenumber) sits beside the ripple and may take the periodogram's highest peaks, so
+    that the period of a ripple tested second is missing from its grid. Every other
+    attribute (the signals, the nominal's parameters) is `nom`'s."""
+
+    def __init__(self, nom: Nominal, base: Stacked):
+        y, W, _ = base.design()
+        self._nom = nom
+        self.residual = y - W @ nom.fit(y, W)[0]
+
+    def __getattr__(self, name: str):
+        return getattr(self._nom, name)
 
 
 class _Fitted:

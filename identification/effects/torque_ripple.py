@@ -31,7 +31,8 @@ BINS = 8
 
 def _periodogram_peaks(rows: Rows, span: float) -> np.ndarray:
     """The wavenumbers k = 2 pi / p of the PEAKS highest local maxima of the periodogram
-    |sum r(q_m) e^(-i k q_m)|^2 of the nominal's motor-equation residual r as a function of
+    |sum r(q_m) e^(-i k q_m)|^2 of the motor-equation residual r of `rows` (the nominal's,
+    or what the causes named before leave: discrepancy.candidates._Left) as a function of
     the motor angle q_m of its rows, on a uniform grid of step pi / (2 span): a period p off
     by dp drifts by span dp / p^2 periods over the span, and a quarter period is where the
     column stops following the torque, dk = 2 pi dp / p^2 < pi / (2 span). A coarse geometric
