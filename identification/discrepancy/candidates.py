@@ -604,44 +604,64 @@ def beyond_limit(nom: Nominal, e: Effect, ref: Reference, c: Candidate) -> Candi
     sign) where that evidence is the weaker (the larger p); `c` itself otherwise, or for an
     effect without a limit. The claim is that it explains what both references leave: the
     larger of the two p-values is a valid p-value of that claim at the round's level, with no
-    split of the level (an intersection-union test), and a reference with one column more
+    split of the level (an intersection-union test), and a reference with a column or two more
     never makes a cause easier to name than the round's own reference does.
 
-    It is the reference of a later round only, on top of causes none of which acts in the
-    spring (Effect.in_spring): the question there is what is left beyond the named causes,
-    and their residual misfit joins the nominal's near zero speed (a ripple that makes the
-    motor stick, the link creeping behind it). In the first round the candidates are weighed
-    against the nominal and each other (ranking, parsimony); beside a named cause of the
-    spring, the spring's torque at its reversals is that cause's model, whose own first
-    order (a dead band's K b s(qm - q)) or reversal torque (a damping's) the column would
-    duplicate.
+    It is the reference of a later round only: the question there is what is left beyond the
+    named causes, and their residual misfit joins the nominal's near zero speed (a ripple
+    that makes the motor stick, the link creeping behind it). In the first round the
+    candidates are weighed against the nominal and each other (ranking, parsimony).
 
     The limit is a linear column that the nominal's own misfit near zero speed also takes
     (a sticking link held by friction against the spring: identification.effects.base.
     spring_sign), so a cause credited with it would be named for that misfit. The extended model
     is the same (its fit, parameters and held-out errors); only the reference it is weighed
-    against holds one column more, fitted on the same folds, so that what it is credited
-    with is what its searched value adds beyond its first order: for a dead band, the band
-    itself. The equations it acts in stay those it changes against `ref`. The reference
-    holds its own link friction law (nominal.with_link_law), searched on its design with the
-    limit, as the extended model holds its own (_own_law): the limit and the law near zero
-    speed share the rows where the link sticks.
+    against holds the column, fitted on the same folds, so that what it is credited with is
+    what its searched value adds beyond its first order: for a dead band, the band itself.
+    The equations it acts in stay those it changes against `ref`. The reference holds its own
+    link friction law (nominal.with_link_law), searched on its design with the limit, as the
+    extended model holds its own (_own_law): the limit and the law near zero speed share the
+    rows where the link sticks.
 
-    The column stands for the spring's torque at its reversals, so it is kept on the segments
-    where the deflection reverses (`reversing`) and is zero on the others. Where a static load
-    holds the deflection on one side for a whole segment (a pendulum resting on its spring
-    against gravity), the spring's sign is that load's sign on every row: the column is a
-    constant torque there, an offset, and it takes up K's misfit at the static deflection
-    K (qm - q), which a spring law stiffer at large deflections leaves (the nominal's K fitted
-    where the stiffer spring acts is too stiff at rest): the hardening's own image, not the
-    misfit near zero speed the column is for."""
+    The column is kept apart on two sets of instants, each with its own coefficient, and is
+    zero elsewhere:
+    - where the axis stands (`standing`: motor and link each within one encoder count over a
+      segment): the deflection takes one value there, so the spring law is seen at one
+      deflection only, and the link's friction holds whatever the spring carries, up to FS,
+      where the law claims none (tanh(0) = 0). An axis that comes to rest with the spring
+      holding a few encoder counts of deflection leaves the link equation a constant misfit
+      over every segment it stands in, which a dead band just under that deflection removes
+      (K dz(d, b) = K (d - b s(d)) there); the held-out test counts each such segment as one
+      more where the band explains most of the residual. Its level is the friction's at
+      rest, not the spring's torque at its reversals: a column of its own. Kept beside any
+      named cause, a cause of the spring included: one deflection tells no spring law apart.
+      Where the link stands while the motor moves (through a dead band) the deflection
+      changes and the segment is not standing.
+    - where the deflection reverses (`reversing`), the link moving: the column stands for the
+      spring's torque at its reversals, on top of causes none of which acts in the spring
+      (Effect.in_spring). Beside a named cause of the spring, the spring's torque at its
+      reversals is that cause's model, whose own first order (a dead band's K b s(qm - q)) or
+      reversal torque (a damping's) the column would duplicate. On the segments where the
+      deflection does not reverse it is zero: where a static load holds the deflection on
+      one side for a whole segment (a pendulum resting on its spring against gravity, the
+      link following the sweep), the spring's sign is that load's sign on every row, the
+      column is a constant torque there, an offset, and it takes up K's misfit at the static
+      deflection K (qm - q), which a spring law stiffer at large deflections leaves (the
+      nominal's K fitted where the stiffer spring acts is too stiff at rest): the hardening's
+      own image, not the misfit near zero speed the column is for."""
     named = ref.base.effects
-    if (e.limit is None or not c.testable or c.heldout_errors is None or not named
-            or any(EFFECTS[name].in_spring for name, _ in named)):
+    if e.limit is None or not c.testable or c.heldout_errors is None or not named:
         return c
     sig = nom.sig
-    on = reversing(nom)
-    cols = tuple((name, _kept(stack(sig, m, li), on)) for name, m, li in e.limit(nom))
+    still = standing(nom)
+    # the reversals' column only on top of causes none of which acts in the spring
+    on = ~still & (np.zeros_like(still) if any(EFFECTS[name].in_spring for name, _ in named)
+                   else reversing(nom))
+    cols = tuple((f"{name}{label}", _kept(stack(sig, m, li), rows))
+                 for label, rows in (("", on), ("_standing", still)) if rows.any()
+                 for name, m, li in e.limit(nom))
+    if not cols:
+        return c
     base = dataclasses.replace(ref.base, extra=ref.base.extra + cols)
     law = with_link_law(nom, base.design())
     if law is not nom:
@@ -673,6 +693,26 @@ def reversing(nom: Nominal) -> np.ndarray:
     up = np.bincount(seg, s > 0, SEGMENTS) > 0
     down = np.bincount(seg, s < 0, SEGMENTS) > 0
     return (up & down)[seg]
+
+
+def standing(nom: Nominal) -> np.ndarray:
+    """The instants (a mask over `nom`'s rows of one block) of the segments (heldout.
+    segment_of_rows) where the axis stands: the motor's and the link's positions over the
+    whole segment each within one count of its encoder (Signals.qm_step, q_step, read from
+    the log), so that the deflection qm - q takes one value there as far as the log tells
+    (beyond_limit); no instant for a log without the link."""
+    sig = nom.sig
+    n = len(sig.index)
+    if sig.q is None:
+        return np.zeros(n, bool)
+    seg = segment_of_rows(n)
+    still = np.ones(SEGMENTS, bool)
+    for x, step in ((sig.qm, sig.qm_step), (sig.q, sig.q_step)):
+        top, low = np.full(SEGMENTS, -np.inf), np.full(SEGMENTS, np.inf)
+        np.maximum.at(top, seg, x[sig.index])
+        np.minimum.at(low, seg, x[sig.index])
+        still &= top - low <= step
+    return still[seg]
 
 
 def _kept(column: np.ndarray, instants: np.ndarray) -> np.ndarray:

@@ -35,6 +35,9 @@ class Signals:
     sl: slice                # raw samples that every derivative defines
     index: np.ndarray        # raw index of each decimated row (kept rows only)
     keep: np.ndarray | None = None   # decimated rows kept (None: all): clipped torque out
+    # the encoders' counts, motor and link (count; 0 for the link without q)
+    qm_step: float = 0.0
+    q_step: float = 0.0
     # dec's results by the content of the column: the rounds rebuild the same trial columns
     # from fresh arrays (each look-ahead chain, each refit), and a decimation costs a
     # thousand times a hash. init=False: a dataclasses.replace gets an empty one.
@@ -148,7 +151,15 @@ def signals(log: Log, settings: FilterSettings, limit_applied: bool = False) -> 
     keep = _unclipped(log, s, index, limit_applied)
     return Signals(ts=s.ts, g=log.gravity, qm=qm, qmd=qmd, qmdd=qmdd, tau=tau_f,
                    tau_raw=np.asarray(log.tau_m, float), q=q, qd=qd, qdd=qdd, qs=qs,
-                   settings=s, sl=sl, index=index if keep is None else index[keep], keep=keep)
+                   settings=s, sl=sl, index=index if keep is None else index[keep], keep=keep,
+                   qm_step=count(log.q_m), q_step=count(log.q) if log.q is not None else 0.0)
+
+
+def count(x: np.ndarray) -> float:
+    """An encoder's count read from its log: the least step between the distinct positions
+    it logged (0 where it logged one)."""
+    steps = np.diff(np.unique(np.asarray(x, float)))
+    return float(steps.min()) if len(steps) else 0.0
 
 
 def _unclipped(log: Log, s: FilterSettings, index: np.ndarray,
