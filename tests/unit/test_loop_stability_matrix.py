@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from jointbench.bench.analysis.diagnose.stability import (LimitCycle, band_hz, closed_loop,
-                                                          crossover_hz, dominant_mode, plant)
+                                                          crossover_hz, dominant_mode,
+                                                          over_spread, plant)
 from jointbench.bench.sim.controller import Gains, PIController, gains_rule
 
 T = 1.0 / 350.87
@@ -88,3 +89,39 @@ def test_the_band_over_the_fitted_values_spread_holds_the_true_loops_cycle():
     assert r_true > 1 and f_true > max(f_fit, c_fit) + 1.0
     assert not LimitCycle(**cycle).confirms
     assert LimitCycle(**cycle, band_hz=(lo, hi)).confirms
+
+
+def test_a_lag_fitted_short_of_the_onset_grows_over_its_spread_at_the_logs_cycle():
+    """Near the onset the loop's growth turns on a few percent of the fitted values: a lag
+    fitted 13 % short (2.26 ms against 2.6) with the motor inertia 4 % heavy and its viscous
+    friction high (as on a clipped log, where both are fitted mostly at the cycle) leaves the
+    point estimate's loop decaying, while the true loop grows. Over the lag's spread (its
+    half-width of 3 standard errors holding the truth) the loop grows, and the band of the
+    growing loops' mode and crossover holds the true loop's mode: the check confirms. A log
+    cycling far from any growing loop's frequencies is not confirmed, though it lies between
+    the decaying point estimate's low crossover and its mode; nor is a lag whose spread does
+    not reach the onset."""
+    gains = gains_rule(P["Jm"], P["JL"], P["K"], 1e9, T)
+    k = (gains.kp, gains.kv, gains.ki, T)
+    true = {**P, "lag_s": 2.6e-3}
+    fitted = {**P, "Jm": 1.04 * P["Jm"], "FVm": 1.15, "lag_s": 2.26e-3}
+    spread = {"lag_s": 0.88e-3}
+    r_true, f_true = dominant_mode(closed_loop(true, *k[:3], T, true["lag_s"]), T)
+    r_fit, f_fit = dominant_mode(closed_loop(fitted, *k[:3], T, fitted["lag_s"]), T)
+    c_fit = crossover_hz(fitted, *k, fitted["lag_s"])
+    assert r_true > 1 > r_fit
+    largest, lo, hi = over_spread(fitted, *k, spread)
+    assert largest > 1 and lo <= f_true <= hi
+    point = dict(nominal_radius=0.998, extended_radius=r_fit, lag_s=fitted["lag_s"],
+                 mode_hz=f_fit, crossover_hz=c_fit, resolution_hz=1.0)
+    assert not LimitCycle(**point, cycle_hz=f_true).confirms
+    assert LimitCycle(**point, cycle_hz=f_true, band_hz=(lo, hi),
+                      spread_radius=largest).confirms
+    # between the point estimate's low crossover and its mode, far from the growing loops'
+    far = 0.5 * (lo + min(c_fit, f_fit))
+    assert min(c_fit, f_fit) < far < lo - 1.0
+    assert not LimitCycle(**point, cycle_hz=far, band_hz=(lo, hi),
+                          spread_radius=largest).confirms
+    short = {**fitted, "lag_s": 1.0e-3}
+    largest, lo, hi = over_spread(short, *k, {"lag_s": 0.5e-3})
+    assert largest < 1 and math.isnan(lo) and math.isnan(hi)

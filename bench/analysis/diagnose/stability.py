@@ -31,8 +31,13 @@ and the crossover move fast with them (a lag a tenth off moves the pendulum's mo
 hertz). So the band the log's frequency is asked to lie in is the one the fitted values allow:
 the span of the mode's and the crossover's frequencies over the corners of the box T +- dT,
 D +- dD (`spread`), each half-width the fit's own standard error at the agreement level of two
-estimates (verdict.loop_cycle), the point estimate's two frequencies included. The loop's
-growth is judged at the point estimate.
+estimates (verdict.loop_cycle), the point estimate's two frequencies included where its loop
+grows. The loop's growth is judged over the same box: near the onset the growth turns on a
+few percent of T and of the inertias it is fitted with (the pendulum's onset moves by a fifth
+of T for 4 % of Jm), so a point estimate a standard error short of the onset does not say the
+lag leaves the loop stable. The log's cycle is a growing loop's, so the band is taken over the part of the box
+where the loop grows, edged by the corners and, on the line from the point estimate to a
+corner where the loop's growth changes sign, by the onset (bisection on the spectral radius).
 
 Only a torque lag changes the loop's linear phase among docs/effects.md's effects (the
 others act through the deflection's nonlinearity, low speed or the link), so only a named lag
@@ -71,24 +76,37 @@ class LimitCycle:
     cycle_hz: float
     resolution_hz: float
     band_hz: tuple[float, float] = (math.nan, math.nan)
+    spread_radius: float = math.nan
+
+    @property
+    def grows(self) -> bool:
+        """The extended loop grows at the point estimate or somewhere over the fitted
+        values' spread (`spread_radius`, module docstring)."""
+        return max(self.extended_radius, self.spread_radius) > 1.0 if \
+            math.isfinite(self.spread_radius) else self.extended_radius > 1.0
 
     @property
     def confirms(self) -> bool:
-        """The nominal's loop is stable, the extended one's unstable, and the log's torque
-        at the limit oscillates between the phase crossover and the growing mode over the
-        fitted values' spread (module docstring), within the resolution."""
-        lo, hi = sorted((self.mode_hz, self.crossover_hz))
+        """The nominal's loop is stable, the extended one's unstable (over the fitted
+        values' spread), and the log's torque at the limit oscillates between the phase
+        crossover and the growing mode of the growing loops over that spread (module
+        docstring), within the resolution."""
         if all(math.isfinite(b) for b in self.band_hz):
-            lo, hi = min(lo, self.band_hz[0]), max(hi, self.band_hz[1])
-        return (self.nominal_radius < 1.0 < self.extended_radius
+            lo, hi = self.band_hz
+        else:
+            lo, hi = sorted((self.mode_hz, self.crossover_hz))
+        return (self.nominal_radius < 1.0 and self.grows
                 and lo - self.resolution_hz <= self.cycle_hz <= hi + self.resolution_hz)
 
     def text(self) -> str:
         return (f"the loop linearised under the logged PI cascade grows by a factor "
                 f"{self.extended_radius:.4g} a sample with the lag of {1e3 * self.lag_s:.3g} ms "
                 f"(mode {self.mode_hz:.3g} Hz, phase crossover {self.crossover_hz:.3g} Hz"
-                + (f"; {self.band_hz[0]:.3g}-{self.band_hz[1]:.3g} Hz over the fitted values' "
-                   f"spread" if all(math.isfinite(b) for b in self.band_hz) else "")
+                + (f"; {self.band_hz[0]:.3g}-{self.band_hz[1]:.3g} Hz where it grows over the "
+                   f"fitted values' spread, by up to {self.spread_radius:.4g} a sample"
+                   if all(math.isfinite(b) for b in self.band_hz) else
+                   f"; at most {self.spread_radius:.4g} over the fitted values' spread"
+                   if math.isfinite(self.spread_radius) else "")
                 + "), "
                 f"{self.nominal_radius:.4g} without it; the log's torque at the limit "
                 f"oscillates at {self.cycle_hz:.3g} +- {self.resolution_hz:.2g} Hz")
@@ -99,6 +117,8 @@ class LimitCycle:
                 "crossover_hz": self.crossover_hz, "cycle_hz": self.cycle_hz,
                 "resolution_hz": self.resolution_hz,
                 "band_hz": [b if math.isfinite(b) else None for b in self.band_hz],
+                "spread_radius": (self.spread_radius if math.isfinite(self.spread_radius)
+                                  else None),
                 "confirms": self.confirms}
 
 
@@ -192,23 +212,69 @@ def cycle_hz(log: Log) -> tuple[float, float] | None:
     return float(f[int(np.argmax(S[1:])) + 1]), float(f[1] - f[0])
 
 
-def band_hz(p: dict[str, float], kp: float, kv: float, ki: float, ts: float,
-            spread: dict[str, float]) -> tuple[float, float]:
-    """The lowest and highest of the growing mode's and the phase crossover's frequencies
-    [Hz] of the loop with `p` (its lag p["lag_s"]) over the corners of the box p[k] +-
-    spread[k] (each value kept positive) and at p itself (module docstring: the fitted
-    values' spread); the crossover left out where there is none."""
+def _loop(q: dict[str, float], kp: float, kv: float, ki: float,
+          ts: float) -> tuple[float, float, float]:
+    """(spectral radius, growing mode's frequency, phase crossover) of the loop with `q` (its
+    lag q["lag_s"])."""
+    lag = float(q.get("lag_s", 0.0))
+    r, f = dominant_mode(closed_loop(q, kp, kv, ki, ts, lag), ts)
+    return r, f, crossover_hz(q, kp, kv, ki, ts, lag)
+
+
+def _onset(p: dict[str, float], q: dict[str, float], kp: float, kv: float, ki: float,
+           ts: float, steps: int = 30) -> tuple[float, float, float]:
+    """The loop on the line from `p` to `q`, one growing and one not, at its onset: the
+    growing end of the bracket left by `steps` bisections on the spectral radius (a
+    2**-steps share of the line)."""
+    keys = [k for k in q if k in p]
+
+    def at(x: float) -> dict[str, float]:
+        return {**p, **{k: p[k] + x * (q[k] - p[k]) for k in keys}}
+
+    grows = _loop(p, kp, kv, ki, ts)[0] > 1.0
+    a, b = 0.0, 1.0          # a: p's side, b: q's side
+    for _ in range(steps):
+        m = 0.5 * (a + b)
+        if (_loop(at(m), kp, kv, ki, ts)[0] > 1.0) == grows:
+            a = m
+        else:
+            b = m
+    return _loop(at(a if grows else b), kp, kv, ki, ts)
+
+
+def over_spread(p: dict[str, float], kp: float, kv: float, ki: float, ts: float,
+                spread: dict[str, float]) -> tuple[float, float, float]:
+    """(largest spectral radius, lowest and highest frequency [Hz]) of the loop with `p` (its
+    lag p["lag_s"]) over the box p[k] +- spread[k] (each value kept positive; its corners,
+    the middles of its edges and p itself): the frequencies are the growing mode's and the
+    phase crossover's of the loops that grow, the crossover left out where there is none,
+    and, on the line from p to a point of the box where the loop's growth differs from p's,
+    those at the onset (_onset; module docstring); nan when no loop grows."""
     keys = [k for k, w in spread.items() if k in p and w > 0]
-    found: list[float] = []
+    here = _loop(p, kp, kv, ki, ts)
+    largest, found = here[0], list(here[1:]) if here[0] > 1.0 else []
     for signs in itertools.product((-1.0, 0.0, 1.0), repeat=len(keys)):
+        if not any(signs):
+            continue
         q = dict(p)
         for k, s in zip(keys, signs):
             q[k] = max(p[k] + s * spread[k], 0.0)
-        lag = float(q.get("lag_s", 0.0))
-        found.append(dominant_mode(closed_loop(q, kp, kv, ki, ts, lag), ts)[1])
-        found.append(crossover_hz(q, kp, kv, ki, ts, lag))
+        there = _loop(q, kp, kv, ki, ts)
+        largest = max(largest, there[0])
+        if there[0] > 1.0:
+            found += there[1:]
+        if (there[0] > 1.0) != (here[0] > 1.0):
+            found += _onset(p, q, kp, kv, ki, ts)[1:]
     found = [f for f in found if math.isfinite(f)]
-    return min(found), max(found)
+    return (largest, min(found), max(found)) if found else (largest, math.nan, math.nan)
+
+
+def band_hz(p: dict[str, float], kp: float, kv: float, ki: float, ts: float,
+            spread: dict[str, float]) -> tuple[float, float]:
+    """The lowest and highest of the growing mode's and the phase crossover's frequencies
+    [Hz] where the loop with `p` (its lag p["lag_s"]) grows over the box p[k] +- spread[k]
+    (over_spread; module docstring: the fitted values' spread)."""
+    return over_spread(p, kp, kv, ki, ts, spread)[1:]
 
 
 def limit_cycle(log: Log, nominal: dict[str, float], extended: dict[str, float],
@@ -226,8 +292,8 @@ def limit_cycle(log: Log, nominal: dict[str, float], extended: dict[str, float],
     ext = {**nominal, **extended}
     rn, _ = dominant_mode(closed_loop(nominal, kp, kv, ki, ts), ts)
     re, fe = dominant_mode(closed_loop(ext, kp, kv, ki, ts, lag), ts)
+    largest, lo, hi = over_spread(ext, kp, kv, ki, ts, spread) if spread else (math.nan,) * 3
     return LimitCycle(nominal_radius=rn, extended_radius=re, lag_s=lag, mode_hz=fe,
                       crossover_hz=crossover_hz(ext, kp, kv, ki, ts, lag),
-                      cycle_hz=cycle[0], resolution_hz=cycle[1],
-                      band_hz=band_hz(ext, kp, kv, ki, ts, spread) if spread
-                      else (math.nan, math.nan))
+                      cycle_hz=cycle[0], resolution_hz=cycle[1], band_hz=(lo, hi),
+                      spread_radius=largest)
