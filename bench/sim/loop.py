@@ -16,7 +16,10 @@ Per control tick k (period T, docs/controller.md):
      The first step of each tick therefore takes the mean of the held and the new torque
      (and link disturbance), the impulse of the zero-order hold over that half-open step;
      the others take the new one. An actuator with dynamics (a filter's state, continuous)
-     takes the new torque at once;
+     takes the new torque at once. The bench-loop effects are mechanical, on the rotor after
+     the drive (docs/effects.md): beside such an actuator (torque_lag's filter) their torque
+     goes into qfrc_applied on the motor dof, blended as the link force, not through the
+     filter;
   5. a tick in which the motor or the link velocity changes sign is stepped again one physics
      step at a time, and the Coulomb friction of the step where the velocity slips through
      zero is switched at the crossing (`CoulombSwitch`).
@@ -64,8 +67,10 @@ class LoopTrace:
     """The signals of one run, one value per tick: `q_m`, `q` the encoder readings [rad or m]
     (`q` reads the motor joint on a rigid axis), `tau_m` the torque a log records (the
     controller's output plus a disturbance at the motor) [N m or N], `q_m_true`, `q_true` the
-    exact positions, `tau_applied` the torque the actuator received; `saturated` ticks clipped
-    at tau_max, `clamped` ticks whose applied torque exceeded `LoopChecks.ctrl_limit`."""
+    exact positions, `tau_applied` the torque the rotor received before any actuator lag (the
+    command plus noise plus the bench-loop effects'); `saturated` ticks clipped at tau_max,
+    `clamped` ticks whose actuator input (the loop effects' torque with it when the actuator
+    has no dynamics) exceeded `LoopChecks.ctrl_limit`."""
 
     q_m: np.ndarray
     q: np.ndarray
@@ -184,6 +189,15 @@ def first_warning(data: mujoco.MjData) -> tuple[str, int] | None:
     return None
 
 
+def _add_rotor(qfrc: np.ndarray, dm: int, dl: int, rotor: float) -> None:
+    """Put the loop effects' torque `rotor` on the motor dof of `qfrc` (qfrc_applied), after
+    the link force was written: added to it on a rigid axis (one dof), set otherwise."""
+    if dm == dl:
+        qfrc[dm] += rotor
+    else:
+        qfrc[dm] = rotor
+
+
 def run_loop(model: mujoco.MjModel, data: mujoco.MjData, axis: Axis,
              gains: Gains | PositionGains,
              period: float, tau0: float, q_ref: Sequence[float], *, substeps: int = 1,
@@ -211,8 +225,13 @@ def run_loop(model: mujoco.MjModel, data: mujoco.MjData, axis: Axis,
     step = CoulombSwitch(model, (axis.motor_dof, axis.link_dof)).step
     leapfrog = int(model.opt.integrator) != int(mujoco.mjtIntegrator.mjINT_RK4)
     # an actuator with dynamics (torque_lag's filter) applies its continuous state: no switch
-    blend = leapfrog and int(model.actuator_dyntype[act]) == int(mujoco.mjtDyn.mjDYN_NONE)
-    held, held_link = float(tau0), float(qfrc[dl])
+    lagged = int(model.actuator_dyntype[act]) != int(mujoco.mjtDyn.mjDYN_NONE)
+    blend = leapfrog and not lagged
+    # the loop effects act on the rotor (docs/effects.md): beside the lag's filter, not
+    # through it (qfrc_applied on the motor dof, blended on the first step as the link force)
+    rotor_force = lagged and loop is not None
+    # the loop torque starts at tick 0, as in the actuator's held tau0 without a lag
+    held, held_link, held_rotor = float(tau0), float(qfrc[dl]), 0.0
     refs = np.asarray(q_ref, dtype=float).tolist()  # Python floats: the fast scalar path
     dist = None if disturbance is None else np.asarray(disturbance, dtype=float).tolist()
     at_motor = disturbance_at == "motor"
@@ -243,25 +262,38 @@ def run_loop(model: mujoco.MjModel, data: mujoco.MjData, axis: Axis,
             else:
                 link_force = dist[k]
         applied = u + noise[k]
-        if loop is not None:
-            applied += loop.torque(qm_k, qvel[dm])
+        if rotor_force:
+            rotor = loop.torque(qm_k, qvel[dm])
+            tau_app[k] = applied + rotor
+        else:
+            if loop is not None:
+                applied += loop.torque(qm_k, qvel[dm])
+            tau_app[k] = applied
         if abs(applied) > ctrl_limit:
             clamped += 1
         q_m[k], q[k], tau[k] = meas_m, meas_l, u
-        q_m_true[k], q_true[k], tau_app[k] = qm_k, ql_k, applied
+        q_m_true[k], q_true[k] = qm_k, ql_k
         if leapfrog:
             ctrl_arr[act] = 0.5 * (held + applied) if blend else applied
             qfrc[dl] = 0.5 * (held_link + link_force)
+            if rotor_force:
+                _add_rotor(qfrc, dm, dl, 0.5 * (held_rotor + rotor))
             step(model, data, 1)
             if substeps > 1:
                 ctrl_arr[act] = applied
                 qfrc[dl] = link_force
+                if rotor_force:
+                    _add_rotor(qfrc, dm, dl, rotor)
                 step(model, data, substeps - 1)
         else:
             ctrl_arr[act] = applied
             qfrc[dl] = link_force
+            if rotor_force:
+                _add_rotor(qfrc, dm, dl, rotor)
             step(model, data, substeps)
         held, held_link = applied, link_force
+        if rotor_force:
+            held_rotor = rotor
         if bad_qpos.number or bad_qvel.number or bad_qacc.number:
             checks.mujoco_unstable(k + 1)
         if progress is not None and k % every == 0:

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
@@ -21,6 +21,7 @@ from jointbench.identification.discrepancy.nominal import Nominal
 from jointbench.identification.discrepancy.signals import stack
 from jointbench.identification.effects import EFFECTS
 from jointbench.identification.effects.base import Column, Design
+from jointbench.identification.filtering import derivatives
 
 
 @dataclass(frozen=True)
@@ -33,14 +34,58 @@ class Stacked:
     deflection: np.ndarray | None = None   # the spring deflection they are built with
     lead: float = 0.0                      # the motor columns' lead [s] (torque lag)
     extra: tuple[tuple[str, np.ndarray], ...] = ()   # added columns, stacked rows
+    # for each added column in order, its motor rows' derivative (a function giving the
+    # decimated 3-point derivative, None for a column without motor rows); the columns added
+    # past its end have none
+    rates: tuple[Callable[[], np.ndarray] | None, ...] = ()
 
     def design(self) -> Design:
-        """y, W and the column names: nominal columns, then the effects' columns."""
+        """y, W and the column names: nominal columns, then the effects' columns, their
+        motor rows led by `lead` as the nominal's are (`led_extra`)."""
         y, W, names = _core(self)
         if not self.extra:
             return y, W, names
-        return (y, np.column_stack([W, *(c for _, c in self.extra)]),
+        return (y, np.column_stack([W, *led_extra(self)]),
                 names + tuple(n for n, _ in self.extra))
+
+
+def led_extra(s: Stacked) -> list[np.ndarray]:
+    """The added columns of `s`, each one's motor rows x led by the torque lag's T = s.lead
+    as the nominal's motor columns are (Nominal.columns): x + T x'. The lag acts between the
+    command and the rotor (effects.torque_lag: the command is (1 + T d/dt) of the torque the
+    motor equation needs), and an effect's motor column is a torque on the rotor as the
+    nominal's are, a ripple periodic in the motor angle, a friction, a spring's: the command
+    holds T times its rate too. Left unled, a ripple's column cannot follow what the lag
+    makes of it (T 2 pi qm' / p of the ripple, many times the ripple itself on a slow
+    current loop), and the lag tested on top of a named ripple is fitted against a
+    reference that holds the ripple in a form the lagged rotor never sees. The decimation
+    is linear: dec(x + T x') = dec(x) + T dec(x'), the derivative decimated once."""
+    cols = [c for _, c in s.extra]
+    if not s.lead:
+        return cols
+    n = len(s.nom.sig.index)
+    out = []
+    for i, c in enumerate(cols):
+        rate = s.rates[i] if i < len(s.rates) else None
+        if rate is not None:
+            c = c.copy()
+            c[:n] += s.lead * rate()
+        out.append(c)
+    return out
+
+
+def _rate(sig, motor: np.ndarray | None) -> Callable[[], np.ndarray] | None:
+    """A function giving dec(x') of the raw-rate motor column `motor` (3-point difference,
+    0 at the ends the decimation drops, as nominal._led), computed once on first call."""
+    if motor is None:
+        return None
+    kept: list[np.ndarray] = []
+
+    def rate() -> np.ndarray:
+        if not kept:
+            kept.append(sig.dec(np.nan_to_num(derivatives(motor, sig.ts, 1, 3)[1])))
+        return kept[0]
+    return rate
 
 
 # The nominal columns of the last few states (tau, deflection, lead), most recent first, kept
@@ -85,7 +130,9 @@ class _Rows:
     def extend(self, *columns: Column) -> Design:
         cols = tuple((n, stack(self.sig, m, li)) for n, m, li in columns)
         self.added = cols
-        self.after = dataclasses.replace(self.base, extra=self.base.extra + cols)
+        self.after = dataclasses.replace(
+            self.base, extra=self.base.extra + cols,
+            rates=_rates_of(self.base) + tuple(_rate(self.sig, m) for _, m, _ in columns))
         return self.after.design()
 
     def columns(self, tau: np.ndarray | None = None,
@@ -105,13 +152,38 @@ def apply(base: Stacked, effect: str, fixed: dict) -> tuple[Stacked, Design]:
     key = (effect, tuple(sorted(fixed.items())), _beside_simpler(base, effect))
     added = _added(base.nom, key)
     if added is not None:
-        after = dataclasses.replace(base, extra=base.extra + added, effects=effects)
+        rates = tuple(_recomputed(base, effect, fixed, k) for k in range(len(added)))
+        after = dataclasses.replace(base, extra=base.extra + added, effects=effects,
+                                    rates=_rates_of(base) + rates)
         return after, after.design()
     rows = _Rows(base)
     d = EFFECTS[effect].design(rows, fixed)
     if rows.added is not None:
         _keep_added(base.nom, key, rows.added)
     return dataclasses.replace(rows.after, effects=effects), d
+
+
+def _rates_of(base: Stacked) -> tuple[Callable[[], np.ndarray] | None, ...]:
+    """`base`'s rates, padded with None to one per added column."""
+    return base.rates + (None,) * (len(base.extra) - len(base.rates))
+
+
+def _recomputed(base: Stacked, effect: str, fixed: dict,
+                k: int) -> Callable[[], np.ndarray] | None:
+    """The rate (Stacked.rates) of the k-th column `effect` adds on `base`, for columns kept
+    decimated (_added) without their raw-rate rows: the effect's design run again on first
+    call, only when a lag leads them."""
+    kept = base.nom.memo.setdefault("rates", {})
+    key = (effect, tuple(sorted(fixed.items())), _beside_simpler(base, effect), k)
+
+    def rate() -> np.ndarray:
+        if key not in kept:
+            rows = _Rows(base)
+            EFFECTS[effect].design(rows, fixed)
+            r = rows.after.rates[len(base.extra) + k] if rows.added is not None else None
+            kept[key] = np.zeros(len(base.nom.sig.index)) if r is None else r()
+        return kept[key]
+    return rate
 
 
 def _beside_simpler(base: Stacked, effect: str) -> bool:

@@ -13,6 +13,7 @@ from jointbench.bench.sim.controller import Gains
 from jointbench.bench.sim.loop import LoopChecks, first_warning, run_loop
 from jointbench.bench.sim.nominal import compile_axis, rigid_axis, two_mass_axis
 from jointbench.bench.sim.sensors import Sensors
+from jointbench.bench.effects import torque_lag
 
 T = 1.0 / 350.87
 J = 0.5          # kg m^2, the rotor
@@ -134,3 +135,34 @@ def test_static_positions_of_a_spring_under_gravity():
     qpos[axis.link_qpos] = 0.2
     qm = static_position(model, axis, qpos, "motor")  # link at 0.2
     assert K * (qm - 0.2) == pytest.approx(MX * 9.81 * math.cos(0.2), rel=1e-8)
+
+
+@pytest.mark.parametrize("integrator", ["RK4", "Euler"])
+@pytest.mark.parametrize("two_mass", [False, True])
+def test_loop_effects_act_on_the_rotor_beside_a_torque_lag(two_mass, integrator):
+    """docs/effects.md: a bench-loop torque (a ripple, an offset, an asymmetric friction) is
+    mechanical, on the rotor, after the drive's torque lag. With the command at zero the lag's
+    filter stays at zero, so a lagged and an unlagged axis under the same loop torque move
+    alike (to rounding), on a rigid axis (one dof) and on a two-mass one (the motor dof)."""
+    class Constant:
+        def torque(self, q_m, qd_m):
+            return -0.5
+
+    mode = getattr(mujoco.mjtIntegrator, f"mjINT_{integrator.upper()}")
+    runs = []
+    for lag in (0.0, 0.05):
+        spec = (two_mass_axis(J, 0.0, 0.0, 1000.0, 1.0, timestep=T / 2, integrator=mode,
+                              gravity=0.0) if two_mass else
+                rigid_axis(J, 0.0, 0.0, timestep=T / 2, integrator=mode))
+        torque_lag.mjcf(spec, "axis1", lag, {}, 0.0)
+        model, axis = compile_axis(spec)
+        data = mujoco.MjData(model)
+        mujoco.mj_forward(model, data)
+        runs.append(run_loop(model, data, axis, OPEN, T, 0.0, np.zeros(100), substeps=2,
+                             loop=Constant()))
+    free, lagged = runs
+    assert np.all(lagged.tau_m == 0.0) and np.all(lagged.tau_applied == -0.5)
+    # 100 ticks of -0.5 N m on J: |q_m| ~ 0.5 / (2 J) (100 T)^2 = 0.04 rad; lagged by 0.05 s
+    # (the filter's lag) it would fall short by about 0.5 / J 0.05 (100 T) = 0.014 rad
+    np.testing.assert_allclose(lagged.q_m, free.q_m, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(lagged.q, free.q, rtol=1e-9, atol=1e-12)
