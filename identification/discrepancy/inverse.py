@@ -373,7 +373,9 @@ def _ahead(nom: Nominal, round_: list[Candidate], note: str, alt: Alternative | 
     top with its own (the segment test without margin over every row, at DECIDE, and the
     converse not). So is a significant candidate that acts only in equations the top does not
 (_elsewhere: an offset on the motor, gravity on the link): each is measured where the other
-acts only through the refit, and the round's ranking cannot choose between them. So are the
+acts only through the refit, and the round's ranking cannot choose between them; where
+neither chain does better and neither holds the other, the answer says "one of A or B" with
+the share each explains. So are the
 round's other significant candidates when the cause the top's
     next round names passes only by turning the top into another effect (_still_physical:
     that chain is the top alone). Returns the round (the chosen first), its note and
@@ -433,6 +435,20 @@ round's other significant candidates when the cause the top's
         if b is best or b.effect not in chains:
             continue
         t, p, t2, p2 = compare(b, best)
+        if (p >= DECIDE and p2 >= DECIDE and alt is None and not note
+                and _elsewhere(best, b, later)
+                and best.effect != chains[b.effect][2] and b.effect != next_best):
+            # neither chain predicts the held-out rows better, and neither holds the other:
+            # the log cannot say which of the two equations carries what they explain, and
+            # the answer says so
+            note = (f"one of {best.effect} or {b.effect}: they act in different equations, "
+                    f"held out {best.effect} explains {best.heldout_pct:.3g} %, {b.effect} "
+                    f"{b.heldout_pct:.3g} % of the residual (round {k}), and neither, with "
+                    f"the cause its next round names, predicts the held-out rows better "
+                    f"(t = {t:.3g}, the converse t = {t2:.3g}, the bar t > "
+                    f"{t_bar(DECIDE):.3g}); {best.effect} is named")
+            alt = _nested(best, b, t2, t, note)
+            continue
         if not p < DECIDE <= p2:
             continue
         next_b = chains[b.effect][2]
