@@ -372,15 +372,14 @@ def _ahead(nom: Nominal, round_: list[Candidate], note: str, alt: Alternative | 
     when it with the cause its next round names predicts the held-out rows better than the
     top with its own (the segment test without margin over every row, at DECIDE, and the
     converse not). So is a significant candidate that acts only in equations the top does not
-(_elsewhere: an offset on the motor, gravity on the link): each is measured where the other
-acts only through the refit, and the round's ranking cannot choose between them; where
-neither chain does better and neither holds the other, the answer says "one of A or B" with
-the share each explains. So are the
-round's other significant candidates when the cause the top's
-    next round names passes only by turning the top into another effect (_still_physical:
-    that chain is the top alone). Returns the round (the chosen first), its note and
-    alternative (dropped when about the top left), the next round on the chosen and the top
-    left, listed with why."""
+    (_elsewhere: an offset on the motor, gravity on the link): each is measured where the
+    other acts only through the refit, and the round's ranking cannot choose between them;
+    where neither chain does better and neither holds the other, the answer says "one of A
+    or B" with the share each explains. So are the round's other significant candidates
+    when the cause the top's next round names passes only by turning the top into another
+    effect (_still_physical: that chain is the top alone). Returns the round (the chosen
+    first), its note and alternative (dropped when about the top left), the next round on
+    the chosen and the top left, listed with why."""
     top, n = round_[0], len(nom.sig.index)
     later = bool(causes)
     tied = any(_tied(top, b, n, later) or _elsewhere(top, b, later) for b in round_[1:])
