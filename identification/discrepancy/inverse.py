@@ -57,7 +57,9 @@ where the segment test does not find the named one's held-out errors smaller tha
 DECIDE, whether it passed its own test or not (_spring_alternatives).
 
 **The weaker of a pair against the model holding the stronger.** A round whose top ties
-with another significant candidate (_tied: the test above cannot separate them) cannot choose
+with another significant candidate (_tied: the test above cannot separate them), or with one
+that acts only in equations the top does not (_elsewhere: each is measured where the other
+acts only through the shared parameters' refit), cannot choose
 alone, but the two may lead to different next rounds: a gravity torque left out shrinks the
 homogeneous link equation, and the torque of the mean deflection then reappears in the motor
 equation as a constant that an offset takes up as well as gravity does. The next round is
@@ -278,6 +280,23 @@ def _tied(top: Candidate, b: Candidate, n: int, later: bool) -> bool:
     return _better(b, top, n)[1] >= DECIDE and _better(top, b, n)[1] >= DECIDE
 
 
+def _elsewhere(top: Candidate, b: Candidate, later: bool) -> bool:
+    """`b` passes its own test (in a later round, above the floor too) and acts only in
+    equations the round's `top` does not (a gravity torque on the link, an offset on the
+    motor): neither reduces to the other, and each is measured on rows the other changes
+    only through the shared parameters' refit. The round's reference holds neither, so the
+    misfit the one left out leaves in the shared parameters is what the other takes up (the
+    link equation shrunk by a gravity left out puts its mean deflection's torque in the
+    motor equation as a constant): the round's ranking alone does not choose between them,
+    and the next round on top of each does (_ahead)."""
+    if not b.significant or (later and not b.test.own_share > 100 * FLOOR):
+        return False
+    if not top.acts or not b.acts or set(top.acts) & set(b.acts):
+        return False
+    return not (top.effect == EFFECTS[b.effect].reduces_to
+                or b.effect == EFFECTS[top.effect].reduces_to)
+
+
 def _chain_errors(nom: Nominal, first: Candidate, after: Round) -> tuple[np.ndarray, str]:
     """The held-out errors of `first` with the cause the next round names on top of it (if
     its test passes there, above the floor, and `first` stays a physical instance of its
@@ -352,14 +371,18 @@ def _ahead(nom: Nominal, round_: list[Candidate], note: str, alt: Alternative | 
     the next round is run on top of each, and a tied candidate is named in the top's place
     when it with the cause its next round names predicts the held-out rows better than the
     top with its own (the segment test without margin over every row, at DECIDE, and the
-    converse not). So are the round's other significant candidates when the cause the top's
-    next round names passes only by turning the top into another effect (_still_physical:
-    that chain is the top alone). Returns the round (the chosen first), its note and
-    alternative (dropped when about the top left), the next round on the chosen and the top
-    left, listed with why."""
+    converse not). So is a significant candidate that acts only in equations the top does not
+    (_elsewhere: an offset on the motor, gravity on the link): each is measured where the
+    other acts only through the refit, and the round's ranking cannot choose between them;
+    where neither chain does better and neither holds the other, the answer says "one of A
+    or B" with the share each explains. So are the round's other significant candidates
+    when the cause the top's next round names passes only by turning the top into another
+    effect (_still_physical: that chain is the top alone). Returns the round (the chosen
+    first), its note and alternative (dropped when about the top left), the next round on
+    the chosen and the top left, listed with why."""
     top, n = round_[0], len(nom.sig.index)
     later = bool(causes)
-    tied = any(_tied(top, b, n, later) for b in round_[1:])
+    tied = any(_tied(top, b, n, later) or _elsewhere(top, b, later) for b in round_[1:])
 
     def after(c: Candidate) -> Round:
         rest = [x.effect for x in round_ if x is not c and x.testable]
@@ -387,7 +410,8 @@ def _ahead(nom: Nominal, round_: list[Candidate], note: str, alt: Alternative | 
         return round_, note, alt, chains[top.effect][0], []
 
     def rival(best: Candidate, b: Candidate) -> bool:
-        return _tied(best, b, n, later) or (broken and best is top and b.significant)
+        return (_tied(best, b, n, later) or _elsewhere(best, b, later)
+                or (broken and best is top and b.significant))
 
     best = top
     while True:   # the candidates tied with the one chosen so far, until none does better
@@ -410,6 +434,20 @@ def _ahead(nom: Nominal, round_: list[Candidate], note: str, alt: Alternative | 
         if b is best or b.effect not in chains:
             continue
         t, p, t2, p2 = compare(b, best)
+        if (p >= DECIDE and p2 >= DECIDE and alt is None and not note
+                and _elsewhere(best, b, later)
+                and best.effect != chains[b.effect][2] and b.effect != next_best):
+            # neither chain predicts the held-out rows better, and neither holds the other:
+            # the log cannot say which of the two equations carries what they explain, and
+            # the answer says so
+            note = (f"one of {best.effect} or {b.effect}: they act in different equations, "
+                    f"held out {best.effect} explains {best.heldout_pct:.3g} %, {b.effect} "
+                    f"{b.heldout_pct:.3g} % of the residual (round {k}), and neither, with "
+                    f"the cause its next round names, predicts the held-out rows better "
+                    f"(t = {t:.3g}, the converse t = {t2:.3g}, the bar t > "
+                    f"{t_bar(DECIDE):.3g}); {best.effect} is named")
+            alt = _nested(best, b, t2, t, note)
+            continue
         if not p < DECIDE <= p2:
             continue
         next_b = chains[b.effect][2]
@@ -430,7 +468,9 @@ def _ahead(nom: Nominal, round_: list[Candidate], note: str, alt: Alternative | 
             continue
         alone = (f"with {chains[b.effect][0][0][0].effect} on top of it, its fit is not a "
                  f"{b.effect} ({turned})" if turned else
-                 f"alone the log cannot tell it from {best.effect}")
+                 f"alone the log cannot tell it from {best.effect}" if _tied(best, b, n, later)
+                 else f"alone it acts in other equations than {best.effect}, whose misfit "
+                 f"left out it takes up")
         out.append(NotNamed(b.effect, "left_out", (
             f"round {k}: {alone} (held out "
             f"{b.effect} explains {b.heldout_pct:.3g} %, {best.effect} {best.heldout_pct:.3g} "
