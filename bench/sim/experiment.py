@@ -4,8 +4,9 @@ Per control tick k (period T = 1 / PAPER_RATE by default; `bench.sim.loop.run_lo
   1. the encoders sample the motor and link angles (quantised);
   2. the docs/controller.md controller computes tau_m[k] from the motor encoder;
   3. the log records (t_k, q_m, q, tau_m, q_ref);
-  4. the rotor receives tau_m[k] + current-loop noise (+ bench-loop effects), held over the
-     tick (zero-order hold) while MuJoCo integrates `substeps` steps.
+  4. the rotor receives tau_m[k] + current-loop noise, held over the tick (zero-order hold)
+     while MuJoCo integrates `substeps` steps, and the bench-loop effects' torque, a function
+     of the rotor's state at each step.
 """
 
 from __future__ import annotations

@@ -6,8 +6,8 @@ Per control tick k (period T, docs/controller.md):
      computes tau_m[k] from the encoders and q_ref[k];
   3. a disturbance, when given, adds to tau_m[k] (at the motor) or goes into qfrc_applied
      (at the link);
-  4. the rotor receives tau_m[k] + torque noise (+ bench-loop effects of the rotor state),
-     held over the tick (zero-order hold) while MuJoCo integrates `substeps` steps.
+  4. the rotor receives tau_m[k] + torque noise, held over the tick (zero-order hold) while
+     MuJoCo integrates `substeps` steps.
      Semi-implicit Euler (the shipped models') is the leapfrog scheme: the force of step n
      moves the velocity of [t_n - h/2, t_n + h/2], so a force switched at t_n acts h/2
      early, a lead of the torque over the positions first order in h, which the estimator
@@ -16,10 +16,13 @@ Per control tick k (period T, docs/controller.md):
      The first step of each tick therefore takes the mean of the held and the new torque
      (and link disturbance), the impulse of the zero-order hold over that half-open step;
      the others take the new one. An actuator with dynamics (a filter's state, continuous)
-     takes the new torque at once. The bench-loop effects are mechanical, on the rotor after
-     the drive (docs/effects.md): beside such an actuator (torque_lag's filter) their torque
-     goes into qfrc_applied on the motor dof, blended as the link force, not through the
-     filter;
+     takes the new torque at once. The bench-loop effects (a ripple, an offset, an
+     asymmetric friction) are mechanical, functions of the rotor's state, on the rotor after
+     the drive (docs/effects.md): their torque goes into qfrc_applied on the motor dof, not
+     through the actuator (nor torque_lag's filter), evaluated at every physics step from
+     that step's motor angle and velocity, as the continuous law is (a ripple held at the
+     tick's angle lags the rotor by about half a tick); a run with them is stepped one
+     physics step at a time;
   5. a tick in which the motor or the link velocity changes sign is stepped again one physics
      step at a time, and the Coulomb friction of the step where the velocity slips through
      zero is switched at the crossing (`CoulombSwitch`).
@@ -68,9 +71,9 @@ class LoopTrace:
     (`q` reads the motor joint on a rigid axis), `tau_m` the torque a log records (the
     controller's output plus a disturbance at the motor) [N m or N], `q_m_true`, `q_true` the
     exact positions, `tau_applied` the torque the rotor received before any actuator lag (the
-    command plus noise plus the bench-loop effects'); `saturated` ticks clipped at tau_max,
-    `clamped` ticks whose actuator input (the loop effects' torque with it when the actuator
-    has no dynamics) exceeded `LoopChecks.ctrl_limit`."""
+    command plus noise plus the bench-loop effects' at the tick's state); `saturated` ticks
+    clipped at tau_max, `clamped` ticks whose actuator input (the command plus noise)
+    exceeded `LoopChecks.ctrl_limit`."""
 
     q_m: np.ndarray
     q: np.ndarray
@@ -164,6 +167,16 @@ class CoulombSwitch:
                 if v * qvel[d] < 0:
                     self._switch(model, data, d, v, h)
 
+    def step_one(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
+        """One physics step with a velocity's sign change in it switched at the crossing: the
+        same step as `step(model, data, 1)`, without its save and replay of the state."""
+        qvel = data.qvel
+        before = [qvel[d] for d in self.dofs]
+        mujoco.mj_step(model, data)
+        for v, d in zip(before, self.dofs):
+            if v * qvel[d] < 0:
+                self._switch(model, data, d, v, model.opt.timestep)
+
     def _switch(self, model: mujoco.MjModel, data: mujoco.MjData, d: int, v: float,
                 h: float) -> None:
         fs = float(model.dof_frictionloss[d])
@@ -222,16 +235,13 @@ def run_loop(model: mujoco.MjModel, data: mujoco.MjData, axis: Axis,
     qpos, qvel, ctrl_arr, qfrc = data.qpos, data.qvel, data.ctrl, data.qfrc_applied
     im, il, dm, dl, act = (axis.motor_qpos, axis.link_qpos, axis.motor_dof, axis.link_dof,
                            axis.actuator)
-    step = CoulombSwitch(model, (axis.motor_dof, axis.link_dof)).step
+    switch = CoulombSwitch(model, (axis.motor_dof, axis.link_dof))
+    step, step_one = switch.step, switch.step_one
     leapfrog = int(model.opt.integrator) != int(mujoco.mjtIntegrator.mjINT_RK4)
     # an actuator with dynamics (torque_lag's filter) applies its continuous state: no switch
     lagged = int(model.actuator_dyntype[act]) != int(mujoco.mjtDyn.mjDYN_NONE)
     blend = leapfrog and not lagged
-    # the loop effects act on the rotor (docs/effects.md): beside the lag's filter, not
-    # through it (qfrc_applied on the motor dof, blended on the first step as the link force)
-    rotor_force = lagged and loop is not None
-    # the loop torque starts at tick 0, as in the actuator's held tau0 without a lag
-    held, held_link, held_rotor = float(tau0), float(qfrc[dl]), 0.0
+    held, held_link = float(tau0), float(qfrc[dl])
     refs = np.asarray(q_ref, dtype=float).tolist()  # Python floats: the fast scalar path
     dist = None if disturbance is None else np.asarray(disturbance, dtype=float).tolist()
     at_motor = disturbance_at == "motor"
@@ -262,38 +272,36 @@ def run_loop(model: mujoco.MjModel, data: mujoco.MjData, axis: Axis,
             else:
                 link_force = dist[k]
         applied = u + noise[k]
-        if rotor_force:
-            rotor = loop.torque(qm_k, qvel[dm])
-            tau_app[k] = applied + rotor
-        else:
-            if loop is not None:
-                applied += loop.torque(qm_k, qvel[dm])
-            tau_app[k] = applied
+        # the loop effects act on the rotor (docs/effects.md), a function of its state at
+        # each physics step, beside the actuator (and torque_lag's filter), not through it
+        tau_app[k] = applied if loop is None else applied + loop.torque(qm_k, qvel[dm])
         if abs(applied) > ctrl_limit:
             clamped += 1
         q_m[k], q[k], tau[k] = meas_m, meas_l, u
         q_m_true[k], q_true[k] = qm_k, ql_k
-        if leapfrog:
+        if loop is not None:
+            ctrl_arr[act] = 0.5 * (held + applied) if blend else applied
+            qfrc[dl] = 0.5 * (held_link + link_force) if leapfrog else link_force
+            for j in range(substeps):
+                if j == 1:
+                    ctrl_arr[act] = applied
+                if j:
+                    qfrc[dl] = link_force
+                _add_rotor(qfrc, dm, dl, loop.torque(qpos[im], qvel[dm]))
+                step_one(model, data)
+        elif leapfrog:
             ctrl_arr[act] = 0.5 * (held + applied) if blend else applied
             qfrc[dl] = 0.5 * (held_link + link_force)
-            if rotor_force:
-                _add_rotor(qfrc, dm, dl, 0.5 * (held_rotor + rotor))
             step(model, data, 1)
             if substeps > 1:
                 ctrl_arr[act] = applied
                 qfrc[dl] = link_force
-                if rotor_force:
-                    _add_rotor(qfrc, dm, dl, rotor)
                 step(model, data, substeps - 1)
         else:
             ctrl_arr[act] = applied
             qfrc[dl] = link_force
-            if rotor_force:
-                _add_rotor(qfrc, dm, dl, rotor)
             step(model, data, substeps)
         held, held_link = applied, link_force
-        if rotor_force:
-            held_rotor = rotor
         if bad_qpos.number or bad_qvel.number or bad_qacc.number:
             checks.mujoco_unstable(k + 1)
         if progress is not None and k % every == 0:

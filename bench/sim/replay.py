@@ -141,7 +141,8 @@ def replay(model: mujoco.MjModel, axis: Axis, log: Log, disturbance: np.ndarray 
     the recorded tau_m includes it, as the drive's own log would). `tau0`: the integrator's
     initial state, default tau_m[0] (docs/controller.md). `loop`: bench-loop effects
     (bench.effects.LoopEffects, e.g. from an extended MJCF's numerics) whose torque, a function
-    of the rotor angle and velocity, adds to the applied motor torque. `sensors`: measure as
+    of the rotor angle and velocity, acts on the rotor at each physics step
+    (`bench.sim.loop`). `sensors`: measure as
     the virtual experiment does (`bench.experiment`): the controller and the returned q_m, q
     see the quantised encoders, and white torque noise (seeded by `seed`, as an experiment's)
     adds to the applied torque but not to the recorded tau_m; default: exact measurements, no

@@ -10,7 +10,7 @@ import pytest
 
 from jointbench.bench.sim.axes import static_link_position, static_position
 from jointbench.bench.sim.controller import Gains
-from jointbench.bench.sim.loop import LoopChecks, first_warning, run_loop
+from jointbench.bench.sim.loop import CoulombSwitch, LoopChecks, first_warning, run_loop
 from jointbench.bench.sim.nominal import compile_axis, rigid_axis, two_mass_axis
 from jointbench.bench.sim.sensors import Sensors
 from jointbench.bench.effects import torque_lag
@@ -166,3 +166,101 @@ def test_loop_effects_act_on_the_rotor_beside_a_torque_lag(two_mass, integrator)
     # (the filter's lag) it would fall short by about 0.5 / J 0.05 (100 T) = 0.014 rad
     np.testing.assert_allclose(lagged.q_m, free.q_m, rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(lagged.q, free.q, rtol=1e-9, atol=1e-12)
+
+
+def _ripple_rotor(substeps: int):
+    """A rigid frictionless rotor J, semi-implicit Euler (the shipped models' integrator)."""
+    model, axis = compile_axis(rigid_axis(J, 0.0, 0.0, timestep=T / substeps, gravity=0.0,
+                                          integrator=mujoco.mjtIntegrator.mjINT_EULER))
+    data = mujoco.MjData(model)
+    return model, data, axis
+
+
+class _Ripple:
+    """A cogging torque R(q_m) = A sin(2 pi q_m / p + pi) (a restoring well at q_m = 0) that
+    records, at each call, the time, the angle it is given, the rotor's angle and the torque
+    that moved the rotor over the last physics step (its inertia times MuJoCo's qacc)."""
+
+    A, p = 2.0, 0.02   # N m, rad: well stiffness 2 pi A / p = 628 N m/rad, f 5.6 Hz on J
+
+    def __init__(self, model, data, axis):
+        self.data, self.axis, self.calls = data, axis, []
+        d = axis.motor_dof
+        data.qfrc_applied[d] = 1.0   # the rotor's inertia: the torque of a unit acceleration
+        mujoco.mj_forward(model, data)
+        self.inertia = 1.0 / float(data.qacc[d])
+        data.qfrc_applied[d] = 0.0
+        mujoco.mj_forward(model, data)
+
+    def torque(self, q_m, qd_m):
+        d = self.data
+        r = self.A * math.sin(2 * math.pi * q_m / self.p + math.pi)
+        self.calls.append((d.time, q_m, float(d.qpos[self.axis.motor_qpos]),
+                           self.inertia * float(d.qacc[self.axis.motor_dof]), r))
+        return r
+
+
+def test_a_ripple_acts_at_each_physics_step_from_that_steps_angle():
+    """docs/effects.md: a ripple is a torque of the rotor's angle, continuous in time. Under a
+    constant (zero) command each physics step applies A sin(2 pi q_m / p + phase) of that
+    step's q_m (not the tick's, held over the tick), so the rotor oscillates in the ripple's
+    well with the energy of the continuous law: the amplitude stays q0. (A torque held at the
+    tick's angle lags it by about T / 2, a negative damping (2 pi A / p) T / 2 that grows the
+    amplitude as exp(pi A T t / (2 p J)), 14 fold in 3 s while the well is linear; the rotor
+    leaves the well.)"""
+    substeps, n = 4, 1050          # 3 s, 17 periods of the well
+    model, data, axis = _ripple_rotor(substeps)
+    q0 = _Ripple.p / 8
+    data.qpos[axis.motor_qpos] = q0
+    mujoco.mj_forward(model, data)
+    ripple = _Ripple(model, data, axis)
+    trace = run_loop(model, data, axis, OPEN, T, 0.0, np.zeros(n), substeps=substeps,
+                     loop=ripple)
+    calls = np.array(ripple.calls)
+    assert len(calls) == n * (1 + substeps)   # tau_applied's at the tick, then each step's
+    steps = calls.reshape(n, 1 + substeps, 5)[:, 1:].reshape(-1, 5)
+    time, q_given, q_rotor, applied, r = steps.T
+    h = model.opt.timestep
+    # every physics step evaluates the ripple at its own angle ...
+    np.testing.assert_allclose(time / h, np.arange(n * substeps), atol=1e-6)
+    np.testing.assert_array_equal(q_given, q_rotor)
+    # ... and the rotor moves under what that evaluation gave
+    np.testing.assert_allclose(applied[1:], r[:-1], rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(trace.tau_applied,
+                               _Ripple.A * np.sin(2 * np.pi * trace.q_m_true / _Ripple.p
+                                                  + np.pi), rtol=1e-12, atol=1e-12)
+    # the continuous law keeps the amplitude; semi-implicit Euler keeps a modified energy
+    # within O(omega h) (omega h = 0.025 here), and the tick's samples catch the peak within
+    # 1 - cos(omega T / 2) = 0.1 %
+    last = np.max(np.abs(trace.q_m_true[-n // 17:]))
+    assert last == pytest.approx(q0, rel=0.03)
+
+
+def test_a_zero_loop_torque_steps_as_no_loop_effect():
+    """A run with loop effects is stepped one physics step at a time; that alone changes
+    nothing: a loop torque of zero gives the bit-identical run of none, on a two-mass axis
+    with Coulomb friction on both sides (its reversals switched at the crossing,
+    `CoulombSwitch`) under the PI cascade, noise and quantised encoders."""
+    class Zero:
+        def torque(self, q_m, qd_m):
+            return 0.0
+
+    n, substeps = 700, 4
+    q_ref = 0.02 * np.sin(2 * np.pi * 3.0 * np.arange(n) * T)
+    gains = Gains(kp=40.0, kv=2500.0, ki=25000.0, tau_max=3000.0)
+    sensors = Sensors(motor_resolution=1e-5, link_resolution=1e-5, torque_noise_std=0.5)
+    runs = []
+    for loop in (None, Zero()):
+        model, axis = compile_axis(two_mass_axis(
+            J, 0.5, 3.0, 20000.0, 1.0, 0.2, 2.0, timestep=T / substeps, gravity=0.0,
+            friction_timeconst=2 * T / substeps,
+            integrator=mujoco.mjtIntegrator.mjINT_EULER))
+        assert CoulombSwitch(model, (axis.motor_dof, axis.link_dof)).dofs
+        data = mujoco.MjData(model)
+        mujoco.mj_forward(model, data)
+        runs.append(run_loop(model, data, axis, gains, T, 0.0, q_ref, substeps=substeps,
+                             sensors=sensors, seed=3, loop=loop))
+    none, zero = runs
+    assert np.count_nonzero(np.diff(np.sign(np.diff(none.q_m_true)))) >= 10   # reversals
+    for name in ("q_m", "q", "tau_m", "q_m_true", "q_true", "tau_applied"):
+        np.testing.assert_array_equal(getattr(zero, name), getattr(none, name))
