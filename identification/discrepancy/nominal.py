@@ -184,8 +184,10 @@ class Nominal:
         ref = self.reference_rms[b]
         return 100.0 * self.block_rms(residual, b) / ref if ref > 0 else float("nan")
 
-    def extend(self, *columns: Column) -> Design:
-        """y, W and names with raw-rate (name, motor, link) columns added (an effect)."""
+    def extend(self, *columns: Column,
+               rated: tuple[np.ndarray | None, ...] | None = None) -> Design:
+        """y, W and names with raw-rate (name, motor, link) columns added (an effect); the
+        nominal leads none of them (`rated`: identification.effects.base.Rows.extend)."""
         cols = [stack(self.sig, motor, link) for _, motor, link in columns]
         return (self.y, np.column_stack([self.W, *cols]),
                 self.names + tuple(name for name, _, _ in columns))

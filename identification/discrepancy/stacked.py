@@ -127,12 +127,14 @@ class _Rows:
     def value(self, name: str) -> float:
         return self.base.nom.value(name)
 
-    def extend(self, *columns: Column) -> Design:
+    def extend(self, *columns: Column,
+               rated: tuple[np.ndarray | None, ...] | None = None) -> Design:
         cols = tuple((n, stack(self.sig, m, li)) for n, m, li in columns)
         self.added = cols
+        rated = rated if rated is not None else tuple(m for _, m, _ in columns)
         self.after = dataclasses.replace(
             self.base, extra=self.base.extra + cols,
-            rates=_rates_of(self.base) + tuple(_rate(self.sig, m) for _, m, _ in columns))
+            rates=_rates_of(self.base) + tuple(_rate(self.sig, r) for r in rated))
         return self.after.design()
 
     def columns(self, tau: np.ndarray | None = None,

@@ -29,8 +29,12 @@ class Rows(Protocol):
     def value(self, name: str) -> float:
         """A nominal parameter."""
 
-    def extend(self, *columns: Column) -> Design:
-        """The nominal columns plus these raw-rate columns (motor and link equation rows)."""
+    def extend(self, *columns: Column,
+               rated: tuple[np.ndarray | None, ...] | None = None) -> Design:
+        """The nominal columns plus these raw-rate columns (motor and link equation rows).
+        `rated`: for each column, the raw-rate motor rows whose 3-point difference is the
+        rate a torque lag leads it by (identification.discrepancy.stacked.led_extra); None:
+        its motor rows themselves."""
 
     def columns(self, tau: np.ndarray | None = None,
                 deflection: np.ndarray | None = None, lead: float | None = None) -> Design:

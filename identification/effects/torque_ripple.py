@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Callable
+
 import numpy as np
 
 from jointbench.identification.effects.base import Design, Effect, Rows
@@ -10,8 +12,35 @@ ORDER = 30
 
 
 def design(rows: Rows, fixed: dict) -> Design:
+    """The columns sin and cos of 2 pi qm / p as the aligned torque holds them (held), and
+    their pointwise samples as the rate a torque lag leads them by (`rated`).
+
+    The aligned torque (identification.filtering.zoh_align) is the mean of the held command
+    over [t_k-1, t_k+1]; a ripple acts on the rotor continuously in the motor angle, so the
+    torque holds the ripple's mean over that window, not its sample at t_k. Where the motor
+    turns a sizeable part of a period in a sample the two differ: the mean shrinks as
+    sinc, the sample keeps its size and, past half a period a sample, aliases. A lag's
+    command is u + T u' on each hold exactly (torque_lag), whose mean over the window is
+    T (u(t_k+1) - u(t_k-1)) / 2 ts: the lead is the 3-point difference of the pointwise
+    samples (stacked.led_extra), whatever the ripple's frequency."""
     ph = 2 * np.pi * rows.sig.qm / fixed["ripple_period_rad"]
-    return rows.extend(("As", np.sin(ph), None), ("Ac", np.cos(ph), None))
+    return rows.extend(("As", held(np.sin, ph), None), ("Ac", held(np.cos, ph), None),
+                       rated=(np.sin(ph), np.cos(ph)))
+
+
+def held(f: Callable[[np.ndarray], np.ndarray], ph: np.ndarray) -> np.ndarray:
+    """The mean of f(phase) (sin or cos) over [t_k-1, t_k+1] from the sampled phases `ph`,
+    the phase linear between samples: over [t_k, t_k+1] the mean is f(m) sinc(d / 2), m the
+    interval's middle phase and d its step (the mean of sin(m + x) over |x| < d / 2); the
+    window's, the mean of two intervals'. f(ph) itself at the ends and where a neighbour's
+    phase is undefined."""
+    d = np.diff(ph)
+    interval = f(ph[:-1] + d / 2) * np.sinc(d / (2 * np.pi))
+    window = 0.5 * (interval[:-1] + interval[1:])
+    out = f(ph)
+    known = np.isfinite(window)
+    out[1:-1][known] = window[known]
+    return out
 
 
 # Periods from encoder-scale steps to the motion span: the span over this many.
