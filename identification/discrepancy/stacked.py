@@ -149,9 +149,9 @@ class _Rows:
 def apply(base: Stacked, effect: str, fixed: dict) -> tuple[Stacked, Design]:
     """`base` with one more effect (nonlinear values `fixed`), and its design. An effect
     applied on top of one that reduces to it (registry `reduces_to`: an offset on top of an
-    asymmetric friction) is stacked under it (_under_richer): the richer's design reads
-    whether the simpler is beside it, and the model holding both is then the same whichever
-    entered first."""
+    asymmetric friction on a physical reference, _richer_in) is stacked under it
+    (_under_richer): the richer's design reads whether the simpler is beside it, and the
+    model holding both is then the same whichever entered first."""
     effects = base.effects + ((effect, dict(fixed)),)
     if _richer_in(base, effect):
         return _under_richer(base, effect, fixed)
@@ -169,10 +169,20 @@ def apply(base: Stacked, effect: str, fixed: dict) -> tuple[Stacked, Design]:
     return dataclasses.replace(rows.after, effects=effects), d
 
 
+# The suffix of an effect's reference values in its fixed values (Effect.reference).
+REFERENCE = "_ref"
+
+
 def _richer_in(base: Stacked, effect: str) -> bool:
-    """`base` holds an effect that reduces to `effect` (registry `reduces_to`)."""
+    """`base` holds an effect that reduces to `effect` (registry `reduces_to`) on a physical
+    reference: its reference values (Effect.reference: an asymmetric friction's FV_ref,
+    FS_ref, the friction it scales) all positive. The (1 + a s) law's tie orders the
+    viscous and Coulomb parts the same way only when both frictions are; where the nominal
+    fits a negative FVm the tie asks the opposite of the law, and an offset beside it would
+    be credited with the law's own viscous part."""
     return any(name in EFFECTS and EFFECTS[name].reduces_to == effect
-               for name, _ in base.effects)
+               and all(v > 0 for k, v in fixed.items() if k.endswith(REFERENCE))
+               for name, fixed in base.effects)
 
 
 def _under_richer(base: Stacked, effect: str, fixed: dict) -> tuple[Stacked, Design]:
