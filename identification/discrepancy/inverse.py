@@ -1169,7 +1169,8 @@ def _shared(nom: Nominal, causes: tuple[Candidate, ...], rounds: list[list[Candi
         if t > t_bar(DECIDE):
             continue
         held = (f"its column lies in the span of {c.effect}'s parts and the nominal's on "
-                "every row of this log" if t == 0 else
+                "every row the inverse view fits, where the filtered motor speed is never 0"
+                if t == 0 else
                 f"beside {c.effect}'s parts and the nominal's columns it has t = {t:.3g}, "
                 f"the bar t > {t_bar(DECIDE):.3g}")
         text = (f"one of {c.effect} or {simpler}: the part they share, which {simpler} "

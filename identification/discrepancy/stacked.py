@@ -149,8 +149,14 @@ class _Rows:
 
 
 def apply(base: Stacked, effect: str, fixed: dict) -> tuple[Stacked, Design]:
-    """`base` with one more effect (nonlinear values `fixed`), and its design."""
+    """`base` with one more effect (nonlinear values `fixed`), and its design. An effect
+    applied on top of one that reduces to it (registry `reduces_to`: an offset on top of an
+    asymmetric friction on a physical reference, _richer_in) is stacked under it
+    (_under_richer): the richer's design reads whether the simpler is beside it, and the
+    model holding both is then the same whichever entered first."""
     effects = base.effects + ((effect, dict(fixed)),)
+    if _richer_in(base, effect):
+        return _under_richer(base, effect, fixed)
     key = (effect, tuple(sorted(fixed.items())), _beside_simpler(base, effect))
     added = _added(base.nom, key)
     if added is not None:
@@ -163,6 +169,40 @@ def apply(base: Stacked, effect: str, fixed: dict) -> tuple[Stacked, Design]:
     if rows.added is not None:
         _keep_added(base.nom, key, rows.added)
     return dataclasses.replace(rows.after, effects=effects), d
+
+
+# The suffix of an effect's reference values in its fixed values (Effect.reference).
+REFERENCE = "_ref"
+
+
+def _richer_in(base: Stacked, effect: str) -> bool:
+    """`base` holds an effect that reduces to `effect` (registry `reduces_to`) on a physical
+    reference: its reference values (Effect.reference: an asymmetric friction's FV_ref,
+    FS_ref, the friction it scales) all positive. The (1 + a s) law's tie orders the
+    viscous and Coulomb parts the same way only when both frictions are; where the nominal
+    fits a negative FVm the tie asks the opposite of the law, and an offset beside it would
+    be credited with the law's own viscous part."""
+    return any(name in EFFECTS and EFFECTS[name].reduces_to == effect
+               and all(v > 0 for k, v in fixed.items() if k.endswith(REFERENCE))
+               for name, fixed in base.effects)
+
+
+def _under_richer(base: Stacked, effect: str, fixed: dict) -> tuple[Stacked, Design]:
+    """`base` with `effect` applied before the effects of `base` that reduce to it, and
+    after the rest; its `effects` in the order given (`base`'s, then `effect`). While the
+    motor moves an asymmetric friction's Coulomb part is a constant torque, and its design
+    beside an offset keeps the (1 + a s) law's viscous-to-Coulomb split
+    (identification.effects.asymmetric_friction.design); stacked after it, an offset would
+    find the asymmetry's column at the split it took alone, which is the offset's own
+    constant where the asymmetry's search chose no viscous part (a constant opposing the
+    viscous part, which the (1 + a s) law cannot hold), and the offset could add nothing on
+    top of it by construction: the model holding both depended on which was named first."""
+    richer = tuple(e for e in base.effects
+                   if e[0] in EFFECTS and EFFECTS[e[0]].reduces_to == effect)
+    rest = tuple(e for e in base.effects if e not in richer)
+    s = stacked(base.nom, rest + ((effect, fixed),) + richer)
+    after = dataclasses.replace(s, effects=base.effects + ((effect, dict(fixed)),))
+    return after, after.design()
 
 
 def _rates_of(base: Stacked) -> tuple[Callable[[], np.ndarray] | None, ...]:
