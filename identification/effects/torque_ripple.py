@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from typing import Callable
-
 import numpy as np
 
 from jointbench.identification.effects.base import Design, Effect, Rows
@@ -24,23 +22,34 @@ def design(rows: Rows, fixed: dict) -> Design:
     T (u(t_k+1) - u(t_k-1)) / 2 ts: the lead is the 3-point difference of the pointwise
     samples (stacked.led_extra), whatever the ripple's frequency."""
     ph = 2 * np.pi * rows.sig.qm / fixed["ripple_period_rad"]
-    return rows.extend(("As", held(np.sin, ph), None), ("Ac", held(np.cos, ph), None),
-                       rated=(np.sin(ph), np.cos(ph)))
+    s, c = np.sin(ph), np.cos(ph)
+    hs, hc = held(ph, s, c)
+    return rows.extend(("As", hs, None), ("Ac", hc, None), rated=(s, c))
 
 
-def held(f: Callable[[np.ndarray], np.ndarray], ph: np.ndarray) -> np.ndarray:
-    """The mean of f(phase) (sin or cos) over [t_k-1, t_k+1] from the sampled phases `ph`,
-    the phase linear between samples: over [t_k, t_k+1] the mean is f(m) sinc(d / 2), m the
-    interval's middle phase and d its step (the mean of sin(m + x) over |x| < d / 2); the
-    window's, the mean of two intervals'. f(ph) itself at the ends and where a neighbour's
-    phase is undefined."""
+def held(ph: np.ndarray, s: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The means of sin and cos of the phase over [t_k-1, t_k+1] from the sampled phases `ph`
+    (`s`, `c` their sin and cos), the phase linear between samples: over [t_k, t_k+1] the mean
+    is f(m) sinc(d / 2), m the interval's middle phase and d its step (the mean of sin(m + x)
+    over |x| < d / 2); the window's, the mean of two intervals'. The sample itself at the ends
+    and where a neighbour's phase is undefined."""
+    if len(ph) < 3:
+        return s, c
     d = np.diff(ph)
-    interval = f(ph[:-1] + d / 2) * np.sinc(d / (2 * np.pi))
-    window = 0.5 * (interval[:-1] + interval[1:])
-    out = f(ph)
-    known = np.isfinite(window)
-    out[1:-1][known] = window[known]
-    return out
+    m = ph[:-1] + d / 2
+    g = np.sinc(d / (2 * np.pi))
+    finite = bool(np.isfinite(d).all())
+    out = []
+    for f, at in ((np.sin, s), (np.cos, c)):
+        interval = f(m)
+        interval *= g
+        window = at.copy()
+        np.add(interval[:-1], interval[1:], out=window[1:-1])
+        window[1:-1] *= 0.5
+        if not finite:
+            window[1:-1] = np.where(np.isfinite(window[1:-1]), window[1:-1], at[1:-1])
+        out.append(window)
+    return out[0], out[1]
 
 
 # Periods from encoder-scale steps to the motion span: the span over this many.
