@@ -231,9 +231,23 @@ class Candidate:
                     f"residual; that it explains more than {100 * MATERIAL:g} % has t = "
                     f"{self.t_stat:.3g} (p = {self.p_heldout:.3g}); the bar is p < "
                     f"{self.level:.2g} (t > {t_bar(self.level, self.segments):.3g}"
-                    f"{self.units})"
+                    f"{self.units})" + self.share_note
                     + (f"; {self.second_note}" if self.second else ""))
         return ""
+
+    @property
+    def share_note(self) -> str:
+        """Why a t above its bar does not pass ("" otherwise): a cause must also explain a
+        positive share of the held-out residual over every row (`significant`). The segment
+        test weighs every segment alike and the share every row by its error, so an effect
+        that helps the quiet segments and costs the loud ones more has a large t and no
+        share."""
+        if self.heldout_pct > 0 or not self.p_heldout < self.level:
+            return ""
+        return ("; its t passes the bar, but a cause must also explain a positive share of "
+                "the held-out residual over every row: the t weighs every segment alike, the "
+                "share every row by its error, and where the residual is loud it predicts "
+                "worse than the reference")
 
     @property
     def second_note(self) -> str:

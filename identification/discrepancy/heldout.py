@@ -68,7 +68,9 @@ segment's has. The shares stay those over every row.
 
 **Rule.** An effect is significant when its one-sided p-value P(T_nu >= t) is under ALPHA / m,
 m the number of effects its round tests (identification.discrepancy.inverse: Holm's step-down
-Bonferroni): on a log without any unmodelled effect the chance that any effect is named is at
+Bonferroni), and it explains a positive share of the held-out residual over every row (the t
+weighs every segment alike, the share every row by its error: an effect that helps the quiet
+segments and costs the loud ones more has a large t and no share): on a log without any unmodelled effect the chance that any effect is named is at
 most about ALPHA = 0.1 %, whatever the log's length, noise or sample rate. The level is set
 from that rate alone. (With the 8 effects a log with q tests in the first round the bar is
 t > 4.23, 7 in the second t > 4.18; 4 effects without q, t > 3.97.) A torque lag on a log
