@@ -196,7 +196,7 @@ def _under_richer(base: Stacked, effect: str, fixed: dict) -> tuple[Stacked, Des
     find the asymmetry's column at the split it took alone, which is the offset's own
     constant where the asymmetry's search chose no viscous part (a constant opposing the
     viscous part, which the (1 + a s) law cannot hold), and the offset could add nothing on
-    top of it by construction: the model holding both depended on which was named first."""
+    top of it by construction, and the model holding both would depend on which was named first."""
     richer = tuple(e for e in base.effects
                    if e[0] in EFFECTS and EFFECTS[e[0]].reduces_to == effect)
     rest = tuple(e for e in base.effects if e not in richer)
